@@ -1,0 +1,63 @@
+#pragma once
+
+#include <string>
+
+namespace cblox {
+
+/// How much one measurement counts in a voxel's running average.
+enum class WeightModel {
+  kConstant,       ///< every measurement has weight 1
+  kInverseSquare,  ///< weight 1/z^2, z = measurement depth along the camera axis (metres)
+};
+
+/// How voxel colours combine measurements.
+enum class ColorBlending {
+  kWeightedAverage,  ///< colour averaged with the same weights as the distance
+  kOverwrite,        ///< last measurement wins
+  kNone,             ///< colours are not integrated
+};
+
+/// Settings shared by the simple, fast and projective TSDF integrators.
+/// All lengths in metres; defaults follow the paper's 7-Scenes set-up
+/// (2 cm voxels, 4-voxel truncation).
+struct IntegratorConfig {
+  /// Distances beyond +-truncation are clamped; voxels further than this behind the
+  /// surface are not updated. Must be >= the layer's voxel size.
+  float truncation_distance_m = 0.08f;
+  /// Weights saturate here so the map stays responsive to change.
+  float max_weight = 10000.0f;
+  /// Points closer than this to the sensor (ray length) are skipped and counted.
+  float min_ray_length_m = 0.1f;
+  /// Points further than this from the sensor (ray length) are skipped and counted.
+  float max_ray_length_m = 5.0f;
+  WeightModel weight_model = WeightModel::kInverseSquare;
+  /// Linear weight drop-off behind the surface (from -voxel_size to -truncation), as in
+  /// voxblox; reduces the thickening of thin objects.
+  bool use_weight_dropoff = true;
+  /// Ray-casting integrators: also update the free space between the sensor and the
+  /// truncation band (clamped to +truncation). Off: only the band is updated.
+  bool voxel_carving_enabled = true;
+  ColorBlending color_blending = ColorBlending::kWeightedAverage;
+  /// Worker threads for one frame (1 = the calling thread only).
+  int num_threads = 2;
+
+  // --- fast ray-casting integrator only ---
+  /// The start-voxel set has cells of voxel_size / factor: a point whose cell was already
+  /// used by an earlier ray of the same frame is skipped. 2 = twice the voxel resolution.
+  float start_voxel_subsampling_factor = 2.0f;
+  /// A ray stops after it updated more than this many consecutive voxels that other rays
+  /// of the same frame had already updated.
+  int max_consecutive_ray_collisions = 2;
+  /// Time budget per frame in seconds, checked inside the ray loops; 0 = unlimited.
+  /// Points are visited in an order that covers the image evenly, so a cut frame leaves
+  /// a sparser, not a partial, update.
+  double max_integration_time_s = 0.0;
+  /// log2 of the bucket count of each approximate set (start set, visited-voxel set).
+  int approx_set_log2_buckets = 20;
+
+  /// Empty when valid, otherwise a message naming the offending field. `voxel_size` is
+  /// the layer's voxel size, needed to check the truncation distance.
+  std::string validate(float voxel_size) const;
+};
+
+}  // namespace cblox

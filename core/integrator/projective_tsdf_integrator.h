@@ -1,0 +1,50 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/geometry/image.h"
+#include "core/geometry/pinhole_camera.h"
+#include "core/geometry/se3.h"
+#include "core/integrator/approx_hash_set.h"
+#include "core/integrator/integration_stats.h"
+#include "core/integrator/integrator_config.h"
+#include "core/tsdf/tsdf_layer.h"
+
+namespace cblox {
+
+/// Integrates depth images by voxel projection (KinectFusion / Open3D style): each voxel
+/// of the blocks within truncation of the measured surface is visited once per frame,
+/// projected into the image (nearest pixel), and updated with the distance to the
+/// measured surface along the pixel's ray, (d - z) * |p_C| / z.
+///
+/// Compared with the ray-casting integrators it maps no free space outside the blocks
+/// of the truncation band, and it is much faster. Every voxel is owned by exactly one
+/// thread per frame (work is split by block), so results do not depend on num_threads.
+/// Uses truncation, weights, ray-length limits, colour blending and num_threads from
+/// IntegratorConfig; the fast-integrator settings and voxel carving do not apply.
+///
+/// Thread safety: one call at a time per integrator, and nothing else may touch the layer
+/// during the call.
+class ProjectiveTsdfIntegrator {
+ public:
+  /// Throws std::invalid_argument naming the invalid field, or if layer is null.
+  ProjectiveTsdfIntegrator(const IntegratorConfig& config, TsdfLayer* layer);
+
+  /// `depth` holds z along the optical axis in metres (0, negative or non-finite =
+  /// no measurement; counted as invalid). `color`, when not null, must be registered to
+  /// the depth image and have its size. `camera` must match the depth image size.
+  /// Throws std::invalid_argument on size mismatches.
+  IntegrationStats integrateDepthImage(const Transformation& T_G_C, const DepthImage& depth,
+                                       const PinholeCamera& camera, const ColorImage* color);
+
+  const IntegratorConfig& config() const { return config_; }
+
+ private:
+  IntegratorConfig config_;
+  TsdfLayer* layer_;
+  ApproxHashSet block_set_;
+  DepthImage valid_depth_;  // the frame's depth with rejected pixels set to 0
+};
+
+}  // namespace cblox

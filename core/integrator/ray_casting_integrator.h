@@ -1,0 +1,87 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "core/geometry/point_cloud.h"
+#include "core/geometry/se3.h"
+#include "core/integrator/approx_hash_set.h"
+#include "core/integrator/integration_stats.h"
+#include "core/integrator/integrator_config.h"
+#include "core/tsdf/tsdf_layer.h"
+
+namespace cblox {
+
+/// Integrates point clouds with a sensor origin into a TSDF layer by casting one ray per
+/// point from one truncation distance behind the point back towards the sensor (to the
+/// sensor when voxel carving is on, else to one truncation in front of the point) and
+/// updating every voxel the ray crosses with the distance along the ray.
+///
+/// Two modes share this engine (SimpleTsdfIntegrator and FastTsdfIntegrator below):
+/// - kSimple: every ray, every voxel: the accuracy reference.
+/// - kFast: the paper's integrator. A point is skipped when its cell of the start-voxel
+///   set (cell = voxel_size / start_voxel_subsampling_factor) was used earlier in the
+///   frame; a ray stops after more than max_consecutive_ray_collisions consecutive voxels
+///   already updated this frame (visited-voxel set); both sets are lock-free
+///   ApproxHashSets cleared per frame in O(1); points are visited in evenCoverageOrder
+///   and the max_integration_time_s budget is checked inside both loops.
+///
+/// One frame runs in two parallel phases over the same point order:
+///  1. accept points (range checks, start set) and collect the blocks their rays cross
+///     (a block-level DDA deduplicated through a small ApproxHashSet);
+///  2. allocate those blocks single-threaded, then walk the rays voxel by voxel in
+///     parallel. A ray looks the hash map up only when it crosses into another block,
+///     and holds that block's spin lock while it updates the block's voxels.
+/// Blocks allocated in phase 1 that no ray updated (rays stopped early or cut by the
+/// budget) are removed again, so the layer never keeps empty blocks from a frame.
+///
+/// Thread safety: one integratePointCloud call at a time per integrator, and nothing
+/// else may touch the layer during that call. Internally uses config.num_threads threads.
+class RayCastingIntegrator {
+ public:
+  enum class Mode { kSimple, kFast };
+
+  /// Throws std::invalid_argument naming the invalid field, or if layer is null.
+  RayCastingIntegrator(Mode mode, const IntegratorConfig& config, TsdfLayer* layer);
+  virtual ~RayCastingIntegrator();
+
+  /// `cloud_C` holds points in the sensor frame C (sensor at the origin); `T_G_C` places
+  /// the sensor in the layer frame. Invalid points (non-finite) and points outside
+  /// [min_ray_length, max_ray_length] are skipped and counted.
+  IntegrationStats integratePointCloud(const Transformation& T_G_C, const PointCloud& cloud_C);
+
+  const IntegratorConfig& config() const { return config_; }
+  Mode mode() const { return mode_; }
+
+ private:
+  struct ThreadState;
+  struct Frame;
+  void acceptPointsAndCollectBlocks(Frame& frame, ThreadState* state);
+  void castRays(Frame& frame, ThreadState* state);
+
+  Mode mode_;
+  IntegratorConfig config_;
+  TsdfLayer* layer_;
+  std::unique_ptr<ApproxHashSet> start_voxel_set_;
+  std::unique_ptr<ApproxHashSet> visited_voxel_set_;
+  ApproxHashSet block_set_;
+  std::vector<uint32_t> order_;
+  std::vector<uint8_t> accepted_;
+};
+
+/// Every ray, every voxel (the accuracy reference). See RayCastingIntegrator.
+class SimpleTsdfIntegrator : public RayCastingIntegrator {
+ public:
+  SimpleTsdfIntegrator(const IntegratorConfig& config, TsdfLayer* layer)
+      : RayCastingIntegrator(Mode::kSimple, config, layer) {}
+};
+
+/// The paper's fast, time-budgeted integrator. See RayCastingIntegrator.
+class FastTsdfIntegrator : public RayCastingIntegrator {
+ public:
+  FastTsdfIntegrator(const IntegratorConfig& config, TsdfLayer* layer)
+      : RayCastingIntegrator(Mode::kFast, config, layer) {}
+};
+
+}  // namespace cblox

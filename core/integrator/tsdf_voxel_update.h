@@ -1,0 +1,76 @@
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/geometry/color.h"
+#include "core/integrator/integrator_config.h"
+#include "core/tsdf/voxel.h"
+
+namespace cblox {
+
+/// The per-voxel fusion rule shared by every integrator (voxblox's rule):
+/// weighted running average of the signed distance, clamped to +-truncation, weight
+/// saturating at max_weight, linear weight drop-off behind the surface, colour blended
+/// per ColorBlending. Not thread-safe: the caller owns the voxel (see Block).
+class TsdfVoxelUpdater {
+ public:
+  TsdfVoxelUpdater(const IntegratorConfig& config, float voxel_size)
+      : truncation_(config.truncation_distance_m),
+        max_weight_(config.max_weight),
+        dropoff_start_(voxel_size),
+        dropoff_scale_(1.0f / (config.truncation_distance_m - voxel_size)),
+        use_dropoff_(config.use_weight_dropoff && config.truncation_distance_m > voxel_size),
+        inverse_square_(config.weight_model == WeightModel::kInverseSquare),
+        blending_(config.color_blending) {}
+
+  /// Truncation distance, metres.
+  float truncation() const { return truncation_; }
+
+  /// Weight of a measurement at camera depth `z` (metres, > 0).
+  float measurementWeight(float z) const { return inverse_square_ ? 1.0f / (z * z) : 1.0f; }
+
+  /// Fuses one measurement: `sdf` is the signed distance of the voxel centre to the
+  /// measured surface along the ray (metres, positive on the sensor side). Voxels more
+  /// than one truncation behind the surface are not touched. Returns true if updated.
+  bool update(float sdf, float weight, const Color& color, TsdfVoxel* voxel) const {
+    if (sdf < -truncation_) return false;
+    if (use_dropoff_ && sdf < -dropoff_start_) {
+      weight *= (truncation_ + sdf) * dropoff_scale_;
+      if (weight <= 0.0f) return false;
+    }
+    const float old_weight = voxel->weight;
+    const float new_weight = old_weight + weight;
+    const float fused = (voxel->distance * old_weight + std::min(sdf, truncation_) * weight) /
+                        new_weight;
+    voxel->distance = std::clamp(fused, -truncation_, truncation_);
+    voxel->weight = std::min(new_weight, max_weight_);
+    switch (blending_) {
+      case ColorBlending::kWeightedAverage: {
+        const float a = old_weight / new_weight;
+        const float b = weight / new_weight;
+        voxel->color.r = static_cast<uint8_t>(a * voxel->color.r + b * color.r + 0.5f);
+        voxel->color.g = static_cast<uint8_t>(a * voxel->color.g + b * color.g + 0.5f);
+        voxel->color.b = static_cast<uint8_t>(a * voxel->color.b + b * color.b + 0.5f);
+        break;
+      }
+      case ColorBlending::kOverwrite:
+        voxel->color = color;
+        break;
+      case ColorBlending::kNone:
+        break;
+    }
+    return true;
+  }
+
+ private:
+  float truncation_;
+  float max_weight_;
+  float dropoff_start_;
+  float dropoff_scale_;
+  bool use_dropoff_;
+  bool inverse_square_;
+  ColorBlending blending_;
+};
+
+}  // namespace cblox

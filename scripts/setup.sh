@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Installs every Debian package cblox needs to build, test and run (Debian 12, as root).
+# Idempotent: safe to run again. Usage: scripts/setup.sh [--bench]
+#   --bench   also install the benchmark peers (Open3D, Google Benchmark is always in).
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build ccache pkg-config git
+  libeigen3-dev libabsl-dev libyaml-cpp-dev libopencv-dev
+  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jdk-headless
+  libgtest-dev libgmock-dev libbenchmark-dev
+  iproute2 util-linux python3
+)
+if [[ "${1:-}" == "--bench" ]]; then
+  packages+=(libopen3d-dev)
+fi
+
+SUDO=""
+if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [[ ${#missing[@]} -eq 0 ]]; then
+  echo "setup: all ${#packages[@]} packages already installed"
+  exit 0
+fi
+echo "setup: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,282 @@
+#include "drivers/dataset/seven_scenes_reader.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+namespace cblox {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kSevenScenesDir = std::string(CBLOX_SHARED_DATA_DIR) + "/7scenes-rgbd-50";
+
+testing::AssertionResult contains(const std::string& haystack, const std::string& needle) {
+  if (haystack.find(needle) != std::string::npos) return testing::AssertionSuccess();
+  return testing::AssertionFailure() << "'" << haystack << "' does not contain '" << needle << "'";
+}
+
+TEST(SevenScenesReaderTest, ParsesRealData) {
+  if (!fs::is_directory(kSevenScenesDir)) {
+    GTEST_SKIP() << "shared data not present at " << kSevenScenesDir
+                 << " (only available next to the project checkout)";
+  }
+  std::string error;
+  const std::optional<SevenScenesReader> reader = SevenScenesReader::open(kSevenScenesDir, &error);
+  ASSERT_TRUE(reader.has_value()) << error;
+  ASSERT_EQ(reader->size(), 50u);
+  EXPECT_EQ(reader->frameIndex(0), 150);
+  EXPECT_EQ(reader->frameIndex(49), 199);
+  const PinholeIntrinsics& in = reader->depthIntrinsics();
+  EXPECT_DOUBLE_EQ(in.fx, 585.0);
+  EXPECT_DOUBLE_EQ(in.fy, 585.0);
+  EXPECT_DOUBLE_EQ(in.cx, 320.0);
+  EXPECT_DOUBLE_EQ(in.cy, 240.0);
+  EXPECT_EQ(in.width, 640);
+  EXPECT_EQ(in.height, 480);
+
+  SevenScenesFrame frame;
+  ASSERT_TRUE(reader->read(0, &frame, &error)) << error;
+  EXPECT_EQ(frame.index, 150);
+
+  // Pose equals the file's matrix.
+  std::ifstream pose_file(kSevenScenesDir + "/frame-000150.pose.txt");
+  Eigen::Matrix4d expected;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) ASSERT_TRUE(pose_file >> expected(r, c));
+  }
+  // The translation is kept exactly. KinectFusion's rotations are orthonormal only to ~1e-4
+  // (this one is scaled by ~0.99994), and SE3 stores the nearest rotation, so the rotation
+  // entries match to that level.
+  const Eigen::Matrix3d R_file = expected.topLeftCorner<3, 3>();
+  const double non_orthonormality =
+      (R_file.transpose() * R_file - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  EXPECT_LT(non_orthonormality, 1e-3);
+  EXPECT_EQ(frame.T_G_C.translation(), Eigen::Vector3d(expected.topRightCorner<3, 1>()));
+  EXPECT_LT((frame.T_G_C.rotationMatrix() - R_file).cwiseAbs().maxCoeff(),
+            std::max(1e-6, non_orthonormality))
+      << frame.T_G_C.matrix() << "\nvs\n"
+      << expected;
+  RecordProperty("pose_non_orthonormality", std::to_string(non_orthonormality));
+  EXPECT_NEAR(expected(0, 3), -0.91287065, 1e-9);  // sanity: the file is what we think
+
+  // Depth in metres: compare with the raw 16-bit value read by OpenCV directly.
+  const cv::Mat raw = cv::imread(kSevenScenesDir + "/frame-000150.depth.png", cv::IMREAD_ANYDEPTH);
+  ASSERT_EQ(raw.type(), CV_16UC1);
+  ASSERT_EQ(frame.depth.width, 640);
+  ASSERT_EQ(frame.depth.height, 480);
+  const uint16_t centre_mm = raw.at<uint16_t>(240, 320);
+  ASSERT_GT(centre_mm, 0) << "expected a valid depth at the centre pixel";
+  ASSERT_LT(centre_mm, 65535);
+  EXPECT_FLOAT_EQ(frame.depth(320, 240), centre_mm / 1000.0f);
+  int invalid = 0;
+  for (int v = 0; v < raw.rows; ++v) {
+    for (int u = 0; u < raw.cols; ++u) {
+      const uint16_t mm = raw.at<uint16_t>(v, u);
+      if (mm == 0 || mm == 65535) {
+        ++invalid;
+        ASSERT_EQ(frame.depth(u, v), 0.0f);
+      } else {
+        ASSERT_FLOAT_EQ(frame.depth(u, v), mm / 1000.0f);
+      }
+    }
+  }
+  RecordProperty("invalid_depth_pixels", invalid);
+
+  // Colour is RGB (OpenCV reads BGR).
+  const cv::Mat bgr = cv::imread(kSevenScenesDir + "/frame-000150.color.png", cv::IMREAD_COLOR);
+  ASSERT_EQ(frame.color.width, bgr.cols);
+  const cv::Vec3b px = bgr.at<cv::Vec3b>(100, 200);
+  EXPECT_EQ(frame.color(200, 100), (Color{px[2], px[1], px[0]}));
+
+  // Every frame reads (poses pass validation); out of range is an error.
+  for (size_t i = 0; i < reader->size(); ++i) {
+    ASSERT_TRUE(reader->read(i, &frame, &error)) << error;
+    EXPECT_EQ(frame.index, 150 + static_cast<int64_t>(i));
+  }
+  EXPECT_FALSE(reader->read(50, &frame, &error));
+}
+
+// Writes a small valid 7-Scenes folder into a fresh temporary directory.
+class SevenScenesMalformedTest : public testing::Test {
+ protected:
+  void SetUp() override {
+    std::string pattern = (fs::temp_directory_path() / "cblox_7scenes_XXXXXX").string();
+    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+    writeIntrinsics();
+    for (const int n : {3, 10, 7}) writeFrame(n);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  static std::string frameName(int n, const std::string& suffix) {
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), "frame-%06d%s", n, suffix.c_str());
+    return buf;
+  }
+
+  void writeText(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name)) << text;
+  }
+  void writeIntrinsics() const { writeText("camera-intrinsics.txt", "10 0 4\n0 10 3\n0 0 1\n"); }
+  void writeFrame(int n) const {
+    cv::Mat depth(kHeight, kWidth, CV_16UC1, cv::Scalar(1500));
+    depth.at<uint16_t>(0, 0) = 0;
+    depth.at<uint16_t>(0, 1) = 65535;
+    depth.at<uint16_t>(1, 2) = static_cast<uint16_t>(n);
+    ASSERT_TRUE(cv::imwrite(path(frameName(n, ".depth.png")), depth));
+    cv::Mat color(kHeight, kWidth, CV_8UC3, cv::Scalar(10, 20, 30));  // B, G, R
+    ASSERT_TRUE(cv::imwrite(path(frameName(n, ".color.png")), color));
+    writeText(frameName(n, ".pose.txt"),
+              "0 -1 0 1\n1 0 0 2\n0 0 1 " + std::to_string(n) + "\n0 0 0 1\n");
+  }
+
+  static constexpr int kWidth = 8;
+  static constexpr int kHeight = 6;
+  fs::path dir_;
+};
+
+TEST_F(SevenScenesMalformedTest, ValidFolderReadsWithGapsSorted) {
+  std::string error;
+  const auto reader = SevenScenesReader::open(dir_.string(), &error);
+  ASSERT_TRUE(reader.has_value()) << error;
+  ASSERT_EQ(reader->size(), 3u);
+  EXPECT_EQ(reader->frameIndex(0), 3);
+  EXPECT_EQ(reader->frameIndex(1), 7);
+  EXPECT_EQ(reader->frameIndex(2), 10);
+  EXPECT_EQ(reader->depthIntrinsics().width, kWidth);
+  EXPECT_EQ(reader->depthIntrinsics().height, kHeight);
+  EXPECT_DOUBLE_EQ(reader->depthIntrinsics().fx, 10.0);
+  SevenScenesFrame frame;
+  ASSERT_TRUE(reader->read(1, &frame, &error)) << error;
+  EXPECT_EQ(frame.index, 7);
+  EXPECT_NEAR((frame.T_G_C.translation() - Eigen::Vector3d(1, 2, 7)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((frame.T_G_C * Eigen::Vector3d::UnitX() - Eigen::Vector3d(1, 3, 7)).norm(), 0.0,
+              1e-12);
+  EXPECT_EQ(frame.depth(0, 0), 0.0f);  // 0 mm: invalid
+  EXPECT_EQ(frame.depth(1, 0), 0.0f);  // 65535 mm: invalid
+  EXPECT_FLOAT_EQ(frame.depth(2, 1), 0.007f);
+  EXPECT_FLOAT_EQ(frame.depth(5, 5), 1.5f);
+  EXPECT_EQ(frame.color(3, 3), (Color{30, 20, 10}));
+}
+
+TEST_F(SevenScenesMalformedTest, RejectsBadPoseFiles) {
+  const std::string name = frameName(7, ".pose.txt");
+  const std::pair<std::string, std::string> cases[] = {
+      {"0 -1 0 1\n1 0 0 2\n0 0 1 7\n0 0 0\n", "expected 16 numbers"},
+      {"0 -1 0 1\n1 0 0 2\n0 0 1 7\n0 0 0 1 5\n", "expected 16 numbers"},
+      {"0 -1 0 1\n1 0 0 2\n0 0 1 seven\n0 0 0 1\n", "not a number"},
+      {"0 -1 0 1\n1 0 0 2\n0 0 1 7\n0 0 1 1\n", "last row"},
+      {"0 -1.01 0 1\n1 0 0 2\n0 0 1 7\n0 0 0 1\n", "orthonormal"},
+      {"0 -1 0 1\n1 0 0 2\n0 0 -1 7\n0 0 0 1\n", "reflection"},
+      {"", "expected 16 numbers"},
+  };
+  for (const auto& [text, reason] : cases) {
+    writeText(name, text);
+    std::string error;
+    const auto reader = SevenScenesReader::open(dir_.string(), &error);
+    ASSERT_TRUE(reader.has_value()) << error;
+    SevenScenesFrame frame;
+    frame.index = -42;
+    EXPECT_FALSE(reader->read(1, &frame, &error)) << text;
+    EXPECT_TRUE(contains(error, path(name))) << text;
+    EXPECT_TRUE(contains(error, reason)) << text;
+    EXPECT_EQ(frame.index, -42);                            // untouched
+    EXPECT_TRUE(reader->read(0, &frame, &error)) << error;  // other frames still fine
+  }
+}
+
+TEST_F(SevenScenesMalformedTest, RejectsMissingOrBadIntrinsics) {
+  fs::remove(path("camera-intrinsics.txt"));
+  std::string error;
+  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
+  EXPECT_TRUE(contains(error, path("camera-intrinsics.txt")));
+
+  writeText("camera-intrinsics.txt", "10 0 4\n0 10 3\n");
+  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
+  EXPECT_TRUE(contains(error, path("camera-intrinsics.txt")));
+
+  writeText("camera-intrinsics.txt", "10 0 4\n0 10 3\n1 0 1\n");
+  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
+  EXPECT_TRUE(contains(error, path("camera-intrinsics.txt")));
+
+  writeText("camera-intrinsics.txt", "-10 0 4\n0 10 3\n0 0 1\n");
+  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
+  EXPECT_TRUE(contains(error, path("camera-intrinsics.txt")));
+  EXPECT_TRUE(contains(error, "fx"));
+}
+
+TEST_F(SevenScenesMalformedTest, RejectsEightBitDepth) {
+  const cv::Mat eight_bit(kHeight, kWidth, CV_8UC1, cv::Scalar(100));
+  ASSERT_TRUE(cv::imwrite(path(frameName(10, ".depth.png")), eight_bit));
+  std::string error;
+  const auto reader = SevenScenesReader::open(dir_.string(), &error);
+  ASSERT_TRUE(reader.has_value()) << error;
+  SevenScenesFrame frame;
+  EXPECT_FALSE(reader->read(2, &frame, &error));
+  EXPECT_TRUE(contains(error, path(frameName(10, ".depth.png"))));
+  EXPECT_TRUE(contains(error, "16-bit single-channel"));
+  EXPECT_TRUE(contains(error, "8-bit"));
+
+  // The first frame's depth is read by open(): rejected there.
+  ASSERT_TRUE(cv::imwrite(path(frameName(3, ".depth.png")), eight_bit));
+  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
+  EXPECT_TRUE(contains(error, path(frameName(3, ".depth.png"))));
+
+  // A 16-bit three-channel image is rejected too.
+  const cv::Mat rgb16(kHeight, kWidth, CV_16UC3, cv::Scalar(1000, 1000, 1000));
+  ASSERT_TRUE(cv::imwrite(path(frameName(3, ".depth.png")), rgb16));
+  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
+  EXPECT_TRUE(contains(error, "3 channel"));
+}
+
+TEST_F(SevenScenesMalformedTest, RejectsMismatchedSizes) {
+  const cv::Mat big_color(kHeight + 2, kWidth, CV_8UC3, cv::Scalar(0, 0, 0));
+  ASSERT_TRUE(cv::imwrite(path(frameName(7, ".color.png")), big_color));
+  const cv::Mat big_depth(kHeight, kWidth + 1, CV_16UC1, cv::Scalar(1000));
+  ASSERT_TRUE(cv::imwrite(path(frameName(10, ".depth.png")), big_depth));
+  std::string error;
+  const auto reader = SevenScenesReader::open(dir_.string(), &error);
+  ASSERT_TRUE(reader.has_value()) << error;
+  SevenScenesFrame frame;
+  EXPECT_FALSE(reader->read(1, &frame, &error));
+  EXPECT_TRUE(contains(error, path(frameName(7, ".color.png"))));
+  EXPECT_TRUE(contains(error, "8x8"));
+  EXPECT_FALSE(reader->read(2, &frame, &error));
+  EXPECT_TRUE(contains(error, path(frameName(10, ".depth.png"))));
+  EXPECT_TRUE(contains(error, "9x6"));
+}
+
+TEST_F(SevenScenesMalformedTest, RejectsIncompleteOrEmptyFolders) {
+  fs::remove(path(frameName(7, ".pose.txt")));
+  std::string error;
+  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
+  EXPECT_TRUE(contains(error, path(frameName(7, ".pose.txt"))));
+
+  for (const int n : {3, 7, 10}) {
+    for (const char* suffix : {".depth.png", ".color.png", ".pose.txt"}) {
+      fs::remove(path(frameName(n, suffix)));
+    }
+  }
+  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
+  EXPECT_TRUE(contains(error, "no frame"));
+
+  EXPECT_FALSE(SevenScenesReader::open(path("does-not-exist"), &error).has_value());
+  EXPECT_TRUE(contains(error, "does-not-exist"));
+  EXPECT_FALSE(SevenScenesReader::open(path("does-not-exist"), nullptr).has_value());
+}
+
+}  // namespace
+}  // namespace cblox

@@ -43,6 +43,31 @@ class ApproxHashSet {
     return false;
   }
 
+  /// The same set semantics for keys made of a cluster key and a member index in
+  /// [0, 2^member_bits): the members of one cluster (e.g. the voxels of one block) occupy
+  /// consecutive buckets, so spatially coherent queries stay in cache. Identity: the
+  /// bucket holds the member and the low (log2_buckets - member_bits) bits of the
+  /// cluster's bijective hash, the entry its top 48 bits; two different keys can only be
+  /// confused if their cluster hashes agree on all of those (>= 59 of 64 bits for the
+  /// integrators' settings). `member_bits` < log2_buckets.
+  bool insertInCluster(uint64_t cluster_key, uint32_t member, int member_bits) {
+    const uint64_t hash = mixHash(cluster_key);
+    const uint64_t entry = (epoch_ << kFingerprintBits) | (hash >> (64 - kFingerprintBits));
+    std::atomic<uint64_t>& bucket = buckets_[((hash << member_bits) | member) & mask_];
+    uint64_t current = bucket.load(std::memory_order_relaxed);
+    while (current != entry) {
+      if (bucket.compare_exchange_weak(current, entry, std::memory_order_relaxed)) return true;
+    }
+    return false;
+  }
+
+  /// Hints the CPU to fetch the bucket insertInCluster(cluster_key, member, member_bits)
+  /// will touch, so a batch of lookups can overlap their cache misses. Thread-safe.
+  void prefetchInCluster(uint64_t cluster_key, uint32_t member, int member_bits) const {
+    const uint64_t hash = mixHash(cluster_key);
+    __builtin_prefetch(&buckets_[((hash << member_bits) | member) & mask_], 1);
+  }
+
   /// Empties the set.
   void clear() {
     if (++epoch_ == (uint64_t{1} << (64 - kFingerprintBits))) {

@@ -13,6 +13,7 @@ struct IntegrationStats {
   size_t points_not_reached = 0;    ///< fast: not visited because the time budget ran out
   size_t rays_cast = 0;             ///< rays whose voxels were walked
   size_t rays_stopped_early = 0;    ///< fast: rays ended by max_consecutive_ray_collisions
+  size_t rays_cut_by_budget = 0;    ///< fast: rays cast but left unfinished by the budget
   size_t voxel_updates = 0;         ///< voxel updates applied
   size_t blocks_allocated = 0;      ///< blocks added to the layer by this frame
   bool budget_exhausted = false;    ///< fast: the time budget cut this frame short
@@ -26,6 +27,7 @@ struct IntegrationStats {
     points_not_reached += o.points_not_reached;
     rays_cast += o.rays_cast;
     rays_stopped_early += o.rays_stopped_early;
+    rays_cut_by_budget += o.rays_cut_by_budget;
     voxel_updates += o.voxel_updates;
     blocks_allocated += o.blocks_allocated;
     budget_exhausted = budget_exhausted || o.budget_exhausted;

@@ -17,6 +17,15 @@ enum class ColorBlending {
   kNone,             ///< colours are not integrated
 };
 
+/// How the fast integrator remembers which voxels a frame's rays already updated.
+enum class VisitedVoxelSet {
+  /// One bit per voxel kept in each block, valid for one frame and guarded by the block
+  /// lock the ray already holds: exact, and stays in cache. The default (BENCHMARKS.md).
+  kBlockBitmap,
+  /// The paper's fixed-size lock-free approximate hash set (approx_set_log2_buckets).
+  kApproxHashSet,
+};
+
 /// Settings shared by the simple, fast and projective TSDF integrators.
 /// All lengths in metres; defaults follow the paper's 7-Scenes set-up
 /// (2 cm voxels, 4-voxel truncation).
@@ -52,7 +61,9 @@ struct IntegratorConfig {
   /// Points are visited in an order that covers the image evenly, so a cut frame leaves
   /// a sparser, not a partial, update.
   double max_integration_time_s = 0.0;
-  /// log2 of the bucket count of each approximate set (start set, visited-voxel set).
+  VisitedVoxelSet visited_voxel_set = VisitedVoxelSet::kBlockBitmap;
+  /// log2 of the bucket count of each approximate set (start set, and the visited-voxel
+  /// set when it is kApproxHashSet).
   int approx_set_log2_buckets = 20;
 
   /// Empty when valid, otherwise a message naming the offending field. `voxel_size` is

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <limits>
 #include <cmath>
 #include <stdexcept>
 
@@ -14,11 +15,17 @@ namespace {
 
 constexpr int kBlockSetLog2Buckets = 16;
 constexpr size_t kBlocksPerClaim = 4;
+constexpr int kSearchCellPixels = 8;  // block search cell, split while its depth range is large
 
 struct ThreadState {
   IntegrationStats stats;
   std::vector<uint64_t> block_keys;
 };
+
+bool sameIntrinsics(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
+  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.width == b.width &&
+         a.height == b.height;
+}
 
 }  // namespace
 
@@ -28,6 +35,66 @@ ProjectiveTsdfIntegrator::ProjectiveTsdfIntegrator(const IntegratorConfig& confi
   if (layer == nullptr) throw std::invalid_argument("ProjectiveTsdfIntegrator: layer is null");
   const std::string error = config.validate(layer->voxelSize());
   if (!error.empty()) throw std::invalid_argument("IntegratorConfig: " + error);
+}
+
+void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0, int v0,
+                                             int size, std::vector<uint64_t>* keys) {
+  const int width = valid_depth_.width, height = valid_depth_.height;
+  const int u1 = std::min(u0 + size, width), v1 = std::min(v0 + size, height);
+  float d_min = std::numeric_limits<float>::infinity(), d_max = 0.0f;
+  for (int v = v0; v < v1; ++v) {
+    const float* row = &valid_depth_.data[static_cast<size_t>(v) * static_cast<size_t>(width)];
+    for (int u = u0; u < u1; ++u) {
+      if (row[u] > 0.0f) {
+        d_min = std::min(d_min, row[u]);
+        d_max = std::max(d_max, row[u]);
+      }
+    }
+  }
+  if (d_max <= 0.0f) return;  // no valid pixel
+  const float truncation = config_.truncation_distance_m;
+  if (size > 1 && d_max - d_min > truncation) {
+    const int half = size / 2;
+    for (int dv = 0; dv < size; dv += half) {
+      for (int du = 0; du < size; du += half) {
+        if (u0 + du < width && v0 + dv < height) collectBlocks(T_G_C, u0 + du, v0 + dv, half, keys);
+      }
+    }
+    return;
+  }
+  // The cell's rays leave its centre ray by at most half its diagonal (plus the half pixel
+  // by which a voxel centre can miss its pixel's ray).
+  const PinholeIntrinsics& K = factor_camera_;
+  const float f_min = static_cast<float>(std::min(K.fx, K.fy));
+  const float uc = 0.5f * static_cast<float>(u0 + u1 - 1), vc = 0.5f * static_cast<float>(v0 + v1 - 1);
+  const Eigen::Vector3f ray((uc - static_cast<float>(K.cx)) / static_cast<float>(K.fx),
+                            (vc - static_cast<float>(K.cy)) / static_cast<float>(K.fy), 1.0f);
+  const float lateral = (0.7072f * static_cast<float>(std::max(u1 - u0, v1 - v0)) + 0.5f) / f_min;
+  const float radius = truncation * ray.norm() + lateral * d_max;
+  const Eigen::Vector3f a = T_G_C * Eigen::Vector3f(ray * d_min);
+  const Eigen::Vector3f b = T_G_C * Eigen::Vector3f(ray * d_max);
+  const float block_size_inv = layer_->blockSizeInv();
+  const BlockIndex lo = gridIndexFromPoint(Eigen::Vector3f(a.cwiseMin(b).array() - radius), block_size_inv);
+  const BlockIndex hi = gridIndexFromPoint(Eigen::Vector3f(a.cwiseMax(b).array() + radius), block_size_inv);
+  // Keep the blocks of that box that can hold a voxel within `radius` of the segment a-b:
+  // block centre within radius + half the block diagonal of it.
+  const float block_size = layer_->blockSize();
+  const float reach = radius + 0.8661f * block_size;
+  const Eigen::Vector3f ab = b - a;
+  const float ab_squared = std::max(ab.squaredNorm(), 1e-12f);
+  for (int z = lo.z(); z <= hi.z(); ++z) {
+    for (int y = lo.y(); y <= hi.y(); ++y) {
+      for (int x = lo.x(); x <= hi.x(); ++x) {
+        const Eigen::Vector3f centre =
+            (Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)) +
+             Eigen::Vector3f::Constant(0.5f)) * block_size;
+        const float t = std::clamp((centre - a).dot(ab) / ab_squared, 0.0f, 1.0f);
+        if ((a + t * ab - centre).squaredNorm() > reach * reach) continue;
+        const uint64_t key = packGridIndex(BlockIndex(x, y, z));
+        if (block_set_.insert(key)) keys->push_back(key);
+      }
+    }
+  }
 }
 
 IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformation& T_G_C,
@@ -48,13 +115,19 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   const int width = depth.width;
   const int height = depth.height;
   const int num_threads = config_.num_threads;
-  const float truncation = config_.truncation_distance_m;
-  const float fx = static_cast<float>(K.fx), fy = static_cast<float>(K.fy);
-  const float cx = static_cast<float>(K.cx), cy = static_cast<float>(K.cy);
-  const float block_size_inv = layer_->blockSizeInv();
-  // A voxel updated from pixel q lies within truncation of q's surface point, up to the
-  // half-pixel by which its centre can miss q's ray.
-  const float lateral_margin = 0.5f / std::min(fx, fy);
+  if (ray_factor_.empty() || !sameIntrinsics(factor_camera_, K)) {
+    factor_camera_ = K;
+    ray_factor_.resize(static_cast<size_t>(width) * static_cast<size_t>(height));
+    for (int v = 0; v < height; ++v) {
+      for (int u = 0; u < width; ++u) {
+        const double xn = (u - K.cx) / K.fx, yn = (v - K.cy) / K.fy;
+        ray_factor_[static_cast<size_t>(v) * width + u] = static_cast<float>(std::sqrt(1.0 + xn * xn + yn * yn));
+      }
+    }
+  }
+  // Every point must stay inside the packable grid (absurd poses are rejected whole).
+  const float coordinate_limit = (kGridIndexMax - 2) * layer_->voxelSize() - 2.0f * config_.max_ray_length_m;
+  const bool pose_in_range = T_G_C.translation().cwiseAbs().maxCoeff() < coordinate_limit;
 
   valid_depth_.width = width;
   valid_depth_.height = height;
@@ -62,49 +135,35 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   block_set_.clear();
   std::vector<ThreadState> states(static_cast<size_t>(num_threads));
 
-  // Phase A: validate pixels and collect the blocks within truncation of their points.
+  // Phase A: validate pixels (rows), then collect the blocks of each search cell.
   std::atomic<int> next_row{0};
   runThreadTeam(num_threads, [&](int id) {
-    ThreadState& state = states[static_cast<size_t>(id)];
+    IntegrationStats& stats = states[static_cast<size_t>(id)].stats;
     for (int v = next_row.fetch_add(1); v < height; v = next_row.fetch_add(1)) {
-      BlockIndex previous_lo(1, 1, 1), previous_hi(0, 0, 0);  // an empty range
-      const float yn = (static_cast<float>(v) - cy) / fy;
+      const size_t row = static_cast<size_t>(v) * static_cast<size_t>(width);
       for (int u = 0; u < width; ++u) {
-        const size_t pixel = static_cast<size_t>(v) * static_cast<size_t>(width) + static_cast<size_t>(u);
-        const float d = depth.data[pixel];
-        valid_depth_.data[pixel] = 0.0f;
-        if (!std::isfinite(d) || d <= 0.0f) {
-          ++state.stats.points_invalid;
-          continue;
+        const float d = depth.data[row + u];
+        float valid = 0.0f;
+        if (!std::isfinite(d) || d <= 0.0f || !pose_in_range) {
+          ++stats.points_invalid;
+        } else if (const float length = d * ray_factor_[row + u];
+                   length < config_.min_ray_length_m || length > config_.max_ray_length_m) {
+          ++stats.points_out_of_range;
+        } else {
+          valid = d;
         }
-        const float xn = (static_cast<float>(u) - cx) / fx;
-        const Eigen::Vector3f point_C(xn * d, yn * d, d);
-        const float length = point_C.norm();
-        if (length < config_.min_ray_length_m || length > config_.max_ray_length_m) {
-          ++state.stats.points_out_of_range;
-          continue;
-        }
-        const Eigen::Vector3f point_G = T_G_C * point_C;
-        const float radius = truncation + lateral_margin * d;
-        const BlockIndex lo = gridIndexFromPoint(Eigen::Vector3f(point_G.array() - radius), block_size_inv);
-        const BlockIndex hi = gridIndexFromPoint(Eigen::Vector3f(point_G.array() + radius), block_size_inv);
-        if (!gridIndexInRange(lo) || !gridIndexInRange(hi)) {
-          ++state.stats.points_invalid;
-          continue;
-        }
-        valid_depth_.data[pixel] = d;
-        if (lo == previous_lo && hi == previous_hi) continue;
-        previous_lo = lo;
-        previous_hi = hi;
-        for (int z = lo.z(); z <= hi.z(); ++z) {
-          for (int y = lo.y(); y <= hi.y(); ++y) {
-            for (int x = lo.x(); x <= hi.x(); ++x) {
-              const uint64_t key = packGridIndex(BlockIndex(x, y, z));
-              if (block_set_.insert(key)) state.block_keys.push_back(key);
-            }
-          }
-        }
+        valid_depth_.data[row + u] = valid;
       }
+    }
+  });
+  const int cells_x = (width + kSearchCellPixels - 1) / kSearchCellPixels;
+  const int cells_y = (height + kSearchCellPixels - 1) / kSearchCellPixels;
+  std::atomic<int> next_cell{0};
+  runThreadTeam(num_threads, [&](int id) {
+    ThreadState& state = states[static_cast<size_t>(id)];
+    for (int c = next_cell.fetch_add(1); c < cells_x * cells_y; c = next_cell.fetch_add(1)) {
+      collectBlocks(T_G_C, (c % cells_x) * kSearchCellPixels, (c / cells_x) * kSearchCellPixels,
+                    kSearchCellPixels, &state.block_keys);
     }
   });
 
@@ -132,12 +191,20 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   const Eigen::Matrix3f R_C_G = T_C_G.rotationMatrix();
   const Eigen::Vector3f t_C_G = T_C_G.translation();
   const float voxel_size = layer_->voxelSize();
+  const float truncation = config_.truncation_distance_m;
+  const float fx = static_cast<float>(K.fx), fy = static_cast<float>(K.fy);
+  const float cx = static_cast<float>(K.cx) + 0.5f, cy = static_cast<float>(K.cy) + 0.5f;
   const int vps = layer_->voxelsPerSide();
   const Eigen::Vector3f step_x = R_C_G.col(0) * voxel_size;
   const Eigen::Vector3f step_y = R_C_G.col(1) * voxel_size;
   const Eigen::Vector3f step_z = R_C_G.col(2) * voxel_size;
   std::vector<uint8_t> touched(blocks.size(), 0);
   std::atomic<size_t> next_block{0};
+  // Raw pointers in locals: the compiler cannot prove voxel writes do not alias members.
+  const float* const valid_depth = valid_depth_.data.data();
+  const float* const ray_factor = ray_factor_.data();
+  const Color* const colors =
+      color != nullptr && config_.color_blending != ColorBlending::kNone ? color->data.data() : nullptr;
   runThreadTeam(num_threads, [&](int id) {
     IntegrationStats& stats = states[static_cast<size_t>(id)].stats;
     for (size_t begin = next_block.fetch_add(kBlocksPerClaim); begin < blocks.size();
@@ -156,14 +223,19 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
             for (int i = 0; i < vps; ++i, ++voxel, p_C += step_x) {
               if (p_C.z() <= 1e-6f) continue;
               const float inv_z = 1.0f / p_C.z();
-              const int u = static_cast<int>(std::floor(fx * p_C.x() * inv_z + cx + 0.5f));
-              const int v = static_cast<int>(std::floor(fy * p_C.y() * inv_z + cy + 0.5f));
-              if (u < 0 || u >= width || v < 0 || v >= height) continue;
+              // Nearest pixel; +0.5 is folded into cx, cy. Values < 0 fail the bounds check
+              // after truncation only when >= -1, so test the float first.
+              const float uf = fx * p_C.x() * inv_z + cx;
+              const float vf = fy * p_C.y() * inv_z + cy;
+              if (!(uf >= 0.0f && vf >= 0.0f)) continue;
+              const int u = static_cast<int>(uf), v = static_cast<int>(vf);
+              if (u >= width || v >= height) continue;
               const size_t pixel = static_cast<size_t>(v) * static_cast<size_t>(width) + static_cast<size_t>(u);
-              const float d = valid_depth_.data[pixel];
+              const float d = valid_depth[pixel];
               if (d <= 0.0f) continue;
-              const float sdf = (d - p_C.z()) * p_C.norm() * inv_z;
-              const Color c = color != nullptr ? color->data[pixel] : Color{};
+              const float sdf = (d - p_C.z()) * ray_factor[pixel];
+              if (sdf < -truncation) continue;
+              const Color c = colors != nullptr ? colors[pixel] : Color{};
               if (updater.update(sdf, updater.measurementWeight(d), c, voxel)) ++updates;
             }
           }
@@ -188,7 +260,6 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
     }
   }
   stats.points_in = depth.data.size();
-  stats.rays_cast = 0;
   stats.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
   return stats;

@@ -16,7 +16,15 @@ namespace cblox {
 /// Integrates depth images by voxel projection (KinectFusion / Open3D style): each voxel
 /// of the blocks within truncation of the measured surface is visited once per frame,
 /// projected into the image (nearest pixel), and updated with the distance to the
-/// measured surface along the pixel's ray, (d - z) * |p_C| / z.
+/// measured surface along that pixel's ray, (d - z) * ||(x_n, y_n, 1)|| where d is the
+/// pixel's depth, z the voxel centre's depth and (x_n, y_n) the pixel's normalised
+/// coordinates (a per-pixel factor computed once per camera, as Open3D does).
+///
+/// Block search: the image is cut into 8x8-pixel cells; a cell whose valid depths span
+/// at most the truncation distance contributes the blocks around the segment of its
+/// centre ray between its nearest and farthest depth, widened by the truncation and the
+/// cell's lateral extent; a cell with a larger depth range is split in four, down to
+/// single pixels. No voxel within truncation of a measured point is missed.
 ///
 /// Compared with the ray-casting integrators it maps no free space outside the blocks
 /// of the truncation band, and it is much faster. Every voxel is owned by exactly one
@@ -43,8 +51,13 @@ class ProjectiveTsdfIntegrator {
  private:
   IntegratorConfig config_;
   TsdfLayer* layer_;
+  void collectBlocks(const Transformation& T_G_C, int u0, int v0, int size,
+                     std::vector<uint64_t>* keys);
+
   ApproxHashSet block_set_;
-  DepthImage valid_depth_;  // the frame's depth with rejected pixels set to 0
+  DepthImage valid_depth_;           // the frame's depth with rejected pixels set to 0
+  PinholeIntrinsics factor_camera_;  // the camera ray_factor_ was computed for
+  std::vector<float> ray_factor_;    // per pixel ||(x_n, y_n, 1)||
 };
 
 }  // namespace cblox

@@ -15,17 +15,24 @@
 namespace cblox {
 namespace {
 
-// Points handed to a thread at a time; the budget is checked once per chunk.
-constexpr size_t kChunkSize = 64;
-// Block-level dedup set: blocks crossed by one frame are in the thousands.
-constexpr int kBlockSetLog2Buckets = 16;
 constexpr uint64_t kNoBlock = std::numeric_limits<uint64_t>::max();
+// Parked rays handed to a thread at a time when they resume.
+constexpr size_t kParkedPerClaim = 64;
+// The start-voxel set clusters 4x4x4 start cells (6 member bits).
+constexpr int kStartClusterLog2 = 2;
 
 }  // namespace
 
+struct RayCastingIntegrator::ParkedRay {
+  uint32_t index = 0;   // point index in the cloud
+  int collisions = 0;   // consecutive re-visited voxels so far (fast mode)
+  GridRayTraversal walk;  // positioned at the next voxel to update
+};
+
 struct RayCastingIntegrator::ThreadState {
   IntegrationStats stats;
-  std::vector<uint64_t> new_block_keys;
+  std::vector<ParkedRay> parked;
+  std::vector<uint64_t> missing_blocks;
 };
 
 struct RayCastingIntegrator::Frame {
@@ -34,16 +41,11 @@ struct RayCastingIntegrator::Frame {
   Eigen::Vector3f origin_G;
   Deadline deadline;
   TsdfVoxelUpdater updater;
+  uint64_t epoch;           // this call's Block::markVisited epoch
+  float coordinate_limit;   // |coordinate| bound keeping every ray inside the packable grid
   std::atomic<size_t> cursor{0};
   std::atomic<bool> out_of_time{false};
 
-  // Claims the next chunk of the point order; false when none is left.
-  bool claim(size_t* begin, size_t* end) {
-    *begin = cursor.fetch_add(kChunkSize, std::memory_order_relaxed);
-    if (*begin >= cloud_C.size()) return false;
-    *end = std::min(*begin + kChunkSize, cloud_C.size());
-    return true;
-  }
   // True when the budget is spent (sticky across threads).
   bool outOfTime() {
     if (out_of_time.load(std::memory_order_relaxed)) return true;
@@ -55,13 +57,15 @@ struct RayCastingIntegrator::Frame {
 
 RayCastingIntegrator::RayCastingIntegrator(Mode mode, const IntegratorConfig& config,
                                            TsdfLayer* layer)
-    : mode_(mode), config_(config), layer_(layer), block_set_(kBlockSetLog2Buckets) {
+    : mode_(mode), config_(config), layer_(layer) {
   if (layer == nullptr) throw std::invalid_argument("RayCastingIntegrator: layer is null");
   const std::string error = config.validate(layer->voxelSize());
   if (!error.empty()) throw std::invalid_argument("IntegratorConfig: " + error);
   if (mode_ == Mode::kFast) {
     start_voxel_set_ = std::make_unique<ApproxHashSet>(config.approx_set_log2_buckets);
-    visited_voxel_set_ = std::make_unique<ApproxHashSet>(config.approx_set_log2_buckets);
+    if (config.visited_voxel_set == VisitedVoxelSet::kApproxHashSet) {
+      visited_voxel_set_ = std::make_unique<ApproxHashSet>(config.approx_set_log2_buckets);
+    }
   }
 }
 
@@ -81,40 +85,56 @@ IntegrationStats RayCastingIntegrator::integratePointCloud(const Transformation&
               cloud_C,
               T_G_C.translation(),
               Deadline(fast ? config_.max_integration_time_s : 0.0),
-              TsdfVoxelUpdater(config_, layer_->voxelSize())};
-
-  const size_t n = cloud_C.size();
-  if (order_.size() != n) order_ = evenCoverageOrder(static_cast<uint32_t>(n));
-  accepted_.assign(n, 0);
-  block_set_.clear();
+              TsdfVoxelUpdater(config_, layer_->voxelSize()),
+              layer_->nextIntegrationEpoch(),
+              (kGridIndexMax - 2) * layer_->voxelSize() - config_.truncation_distance_m};
+  const size_t num_chunks = (cloud_C.size() + kPointsPerChunk - 1) / kPointsPerChunk;
+  if (chunk_order_.size() != num_chunks) {
+    chunk_order_ = evenCoverageOrder(static_cast<uint32_t>(num_chunks));
+  }
   if (fast) {
     start_voxel_set_->clear();
-    visited_voxel_set_->clear();
+    if (visited_voxel_set_) visited_voxel_set_->clear();
   }
-
   const int num_threads = config_.num_threads;
   std::vector<ThreadState> states(static_cast<size_t>(num_threads));
 
-  // Phase 1: accept points and collect the blocks their rays cross.
-  runThreadTeam(num_threads, [&](int id) {
-    acceptPointsAndCollectBlocks(frame, &states[static_cast<size_t>(id)]);
-  });
+  // Main pass: every point in chunk order; rays that reach a missing block are parked.
+  runThreadTeam(num_threads,
+                [&](int id) { castChunks(frame, &states[static_cast<size_t>(id)]); });
 
-  // Allocation, single-threaded: the hash map is never written concurrently.
+  // Allocate what parked rays need, single-threaded, and resume them; repeat.
   std::vector<BlockIndex> new_blocks;
-  for (const ThreadState& state : states) {
-    for (const uint64_t key : state.new_block_keys) {
+  std::vector<ParkedRay> parked;
+  std::vector<uint64_t> missing;
+  size_t rays_cut_by_budget = 0;
+  for (;;) {
+    parked.clear();
+    missing.clear();
+    for (ThreadState& state : states) {
+      parked.insert(parked.end(), state.parked.begin(), state.parked.end());
+      missing.insert(missing.end(), state.missing_blocks.begin(), state.missing_blocks.end());
+      state.parked.clear();
+      state.missing_blocks.clear();
+    }
+    if (parked.empty()) break;
+    if (fast && frame.outOfTime()) {
+      rays_cut_by_budget += parked.size();
+      break;
+    }
+    std::sort(missing.begin(), missing.end());
+    missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
+    for (const uint64_t key : missing) {
       bool newly_allocated = false;
       const BlockIndex index = unpackGridIndex(key);
       layer_->allocateBlock(index, &newly_allocated);
       if (newly_allocated) new_blocks.push_back(index);
     }
+    frame.cursor.store(0);
+    runThreadTeam(num_threads, [&](int id) {
+      resumeParked(frame, parked, &states[static_cast<size_t>(id)]);
+    });
   }
-
-  // Phase 2: walk the accepted rays voxel by voxel.
-  frame.cursor.store(0);
-  runThreadTeam(num_threads,
-                [&](int id) { castRays(frame, &states[static_cast<size_t>(id)]); });
 
   IntegrationStats stats;
   for (const ThreadState& state : states) stats += state.stats;
@@ -125,140 +145,194 @@ IntegrationStats RayCastingIntegrator::integratePointCloud(const Transformation&
       layer_->removeBlock(index);
     }
   }
-  stats.points_in = n;
+  stats.points_in = cloud_C.size();
+  stats.rays_cut_by_budget += rays_cut_by_budget;
   stats.budget_exhausted = frame.out_of_time.load();
   stats.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
   return stats;
 }
 
-void RayCastingIntegrator::acceptPointsAndCollectBlocks(Frame& frame, ThreadState* state) {
-  const bool fast = mode_ == Mode::kFast;
-  const float truncation = config_.truncation_distance_m;
-  const float block_size_inv = layer_->blockSizeInv();
-  const float start_cell_inv = layer_->voxelSizeInv() * config_.start_voxel_subsampling_factor;
-  const float min_length = std::max(config_.min_ray_length_m, 1e-6f);
-  IntegrationStats& stats = state->stats;
+// A point that passed the range checks, with its start-voxel set key (fast mode).
+struct RayCastingIntegrator::StartCell {
+  uint32_t index = 0;
+  uint64_t cell = 0;     // packed start-cell index
+  uint64_t cluster = 0;  // packed index of the 4x4x4 cluster of start cells
+  uint32_t member = 0;   // the cell inside its cluster
+};
 
-  size_t begin = 0, end = 0;
-  while (frame.claim(&begin, &end)) {
+void RayCastingIntegrator::castChunks(Frame& frame, ThreadState* state) {
+  const bool fast = mode_ == Mode::kFast;
+  const size_t n = frame.cloud_C.size();
+  IntegrationStats& stats = state->stats;
+  StartCell candidates[kPointsPerChunk];
+  for (size_t c = frame.cursor.fetch_add(1, std::memory_order_relaxed); c < chunk_order_.size();
+       c = frame.cursor.fetch_add(1, std::memory_order_relaxed)) {
+    const size_t begin = static_cast<size_t>(chunk_order_[c]) * kPointsPerChunk;
+    const size_t end = std::min(n, begin + kPointsPerChunk);
     if (fast && frame.outOfTime()) {
       stats.points_not_reached += end - begin;
       continue;
     }
+    // First screen the whole chunk and prefetch the start-set buckets, so that the
+    // set's cache misses overlap; then insert and cast.
+    size_t count = 0;
+    uint64_t last_cell = kNoBlock;  // consecutive points often share a start cell
     for (size_t i = begin; i < end; ++i) {
-      const uint32_t index = order_[i];
-      const Eigen::Vector3f& point_C = frame.cloud_C.points[index];
-      if (!point_C.allFinite()) {
-        ++stats.points_invalid;
-        continue;
+      StartCell& candidate = candidates[count];
+      if (!screenPoint(frame, static_cast<uint32_t>(i), &stats, &candidate)) continue;
+      if (fast) {
+        if (candidate.cell == last_cell) {  // what the set would answer, without a lookup
+          ++stats.points_subsampled;
+          continue;
+        }
+        last_cell = candidate.cell;
+        start_voxel_set_->prefetchInCluster(candidate.cluster, candidate.member,
+                                            3 * kStartClusterLog2);
       }
-      const float length = point_C.norm();
-      if (length < min_length || length > config_.max_ray_length_m) {
-        ++stats.points_out_of_range;
-        continue;
-      }
-      const Eigen::Vector3f point_G = frame.T_G_C * point_C;
-      const Eigen::Vector3f unit_G = (point_G - frame.origin_G) / length;
-      const Eigen::Vector3f far_G = point_G + unit_G * truncation;
-      const Eigen::Vector3f near_G =
-          config_.voxel_carving_enabled ? frame.origin_G : Eigen::Vector3f(point_G - unit_G * truncation);
-      // Rays whose ends fall outside the packable grid (absurd poses) are rejected whole.
-      if (!gridIndexInRange(gridIndexFromPoint(far_G, layer_->voxelSizeInv())) ||
-          !gridIndexInRange(gridIndexFromPoint(near_G, layer_->voxelSizeInv()))) {
-        ++stats.points_invalid;
-        continue;
-      }
-      if (fast &&
-          !start_voxel_set_->insert(packGridIndex(gridIndexFromPoint(point_G, start_cell_inv)))) {
+      ++count;
+    }
+    for (size_t k = 0; k < count; ++k) {
+      const StartCell& candidate = candidates[k];
+      if (fast && !start_voxel_set_->insertInCluster(candidate.cluster, candidate.member,
+                                                     3 * kStartClusterLog2)) {
         ++stats.points_subsampled;
         continue;
       }
-      accepted_[index] = 1;
-      for (GridRayTraversal walk(far_G * block_size_inv, near_G * block_size_inv);;) {
-        const uint64_t key = packGridIndex(walk.cell());
-        if (block_set_.insert(key)) state->new_block_keys.push_back(key);
-        if (!walk.advance()) break;
-      }
+      ++stats.rays_cast;
+      walkRay(frame, startRay(frame, candidate.index), state);
     }
   }
 }
 
-void RayCastingIntegrator::castRays(Frame& frame, ThreadState* state) {
+void RayCastingIntegrator::resumeParked(Frame& frame, const std::vector<ParkedRay>& parked,
+                                        ThreadState* state) {
   const bool fast = mode_ == Mode::kFast;
-  const float truncation = config_.truncation_distance_m;
-  const float voxel_size = layer_->voxelSize();
-  const float voxel_size_inv = layer_->voxelSizeInv();
-  const int vps_log2 = layer_->voxelsPerSideLog2();
-  const int max_collisions = config_.max_consecutive_ray_collisions;
-  const bool has_colors = frame.cloud_C.hasColors();
-  IntegrationStats& stats = state->stats;
-
-  size_t begin = 0, end = 0;
-  while (frame.claim(&begin, &end)) {
+  for (size_t begin = frame.cursor.fetch_add(kParkedPerClaim); begin < parked.size();
+       begin = frame.cursor.fetch_add(kParkedPerClaim)) {
+    const size_t end = std::min(parked.size(), begin + kParkedPerClaim);
     if (fast && frame.outOfTime()) {
-      for (size_t i = begin; i < end; ++i) stats.points_not_reached += accepted_[order_[i]];
+      state->stats.rays_cut_by_budget += end - begin;
       continue;
     }
-    for (size_t i = begin; i < end; ++i) {
-      const uint32_t index = order_[i];
-      if (!accepted_[index]) continue;
-      ++stats.rays_cast;
-      const Eigen::Vector3f& point_C = frame.cloud_C.points[index];
-      const float length = point_C.norm();
-      const Eigen::Vector3f point_G = frame.T_G_C * point_C;
-      const Eigen::Vector3f unit_G = (point_G - frame.origin_G) / length;
-      const Eigen::Vector3f far_G = point_G + unit_G * truncation;
-      const Eigen::Vector3f near_G =
-          config_.voxel_carving_enabled ? frame.origin_G : Eigen::Vector3f(point_G - unit_G * truncation);
-      const float weight =
-          frame.updater.measurementWeight(point_C.z() > 0.0f ? point_C.z() : length);
-      const Color color = has_colors ? frame.cloud_C.colors[index] : Color{};
+    for (size_t i = begin; i < end; ++i) walkRay(frame, parked[i], state);
+  }
+}
 
-      Block* block = nullptr;
-      uint64_t block_key = kNoBlock;
-      bool block_touched = false;
-      int collisions = 0;
-      for (GridRayTraversal walk(far_G * voxel_size_inv, near_G * voxel_size_inv);;) {
-        const GlobalVoxelIndex& global = walk.cell();
-        BlockIndex block_index;
-        GridIndex local;
-        splitGlobalVoxelIndex(global, vps_log2, &block_index, &local);
-        const uint64_t key = packGridIndex(block_index);
-        if (key != block_key) {
-          if (block != nullptr) {
-            if (block_touched) block->setUpdated(true);
-            block->lock().unlock();
-          }
-          block = layer_->getBlockByKey(key);
-          block_key = key;
-          block_touched = false;
-          if (block != nullptr) block->lock().lock();
-        }
-        if (fast) {
-          if (visited_voxel_set_->insert(packGridIndex(global))) {
-            collisions = 0;
-          } else if (++collisions > max_collisions) {
-            ++stats.rays_stopped_early;
-            break;
-          }
-        }
-        if (block != nullptr) {
-          const Eigen::Vector3f center =
-              (global.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * voxel_size;
-          const float sdf = length - (center - frame.origin_G).dot(unit_G);
-          if (frame.updater.update(sdf, weight, color, &block->voxel(local))) {
-            ++stats.voxel_updates;
-            block_touched = true;
-          }
-        }
-        if (!walk.advance()) break;
-      }
+bool RayCastingIntegrator::screenPoint(const Frame& frame, uint32_t index,
+                                       IntegrationStats* stats, StartCell* start_cell) const {
+  const Eigen::Vector3f& point_C = frame.cloud_C.points[index];
+  if (!point_C.allFinite()) {
+    ++stats->points_invalid;
+    return false;
+  }
+  const float length = point_C.norm();
+  if (length < std::max(config_.min_ray_length_m, 1e-6f) || length > config_.max_ray_length_m) {
+    ++stats->points_out_of_range;
+    return false;
+  }
+  const Eigen::Vector3f point_G = frame.T_G_C * point_C;
+  // Rays whose ends fall outside the packable grid (absurd poses) are rejected whole.
+  if (!(point_G.cwiseAbs().maxCoeff() < frame.coordinate_limit) ||
+      !(frame.origin_G.cwiseAbs().maxCoeff() < frame.coordinate_limit)) {
+    ++stats->points_invalid;
+    return false;
+  }
+  start_cell->index = index;
+  if (mode_ == Mode::kFast) {
+    const GridIndex cell = gridIndexFromPoint(
+        point_G, layer_->voxelSizeInv() * config_.start_voxel_subsampling_factor);
+    constexpr int kMask = (1 << kStartClusterLog2) - 1;
+    start_cell->cell = packGridIndex(cell);
+    start_cell->cluster = packGridIndex(GridIndex(
+        cell.x() >> kStartClusterLog2, cell.y() >> kStartClusterLog2, cell.z() >> kStartClusterLog2));
+    start_cell->member = static_cast<uint32_t>(
+        (cell.x() & kMask) | ((cell.y() & kMask) << kStartClusterLog2) |
+        ((cell.z() & kMask) << (2 * kStartClusterLog2)));
+  }
+  return true;
+}
+
+RayCastingIntegrator::ParkedRay RayCastingIntegrator::startRay(const Frame& frame,
+                                                               uint32_t index) const {
+  const Eigen::Vector3f& point_C = frame.cloud_C.points[index];
+  const float length = point_C.norm();
+  const Eigen::Vector3f point_G = frame.T_G_C * point_C;
+  const Eigen::Vector3f unit_G = (point_G - frame.origin_G) / length;
+  const float truncation = config_.truncation_distance_m;
+  const Eigen::Vector3f far_G = point_G + unit_G * truncation;
+  const Eigen::Vector3f near_G = config_.voxel_carving_enabled
+                                     ? frame.origin_G
+                                     : Eigen::Vector3f(point_G - unit_G * truncation);
+  const float voxel_size_inv = layer_->voxelSizeInv();
+  return ParkedRay{index, 0, GridRayTraversal(far_G * voxel_size_inv, near_G * voxel_size_inv)};
+}
+
+void RayCastingIntegrator::walkRay(Frame& frame, ParkedRay ray, ThreadState* state) {
+  const bool fast = mode_ == Mode::kFast;
+  const float voxel_size = layer_->voxelSize();
+  const int vps_log2 = layer_->voxelsPerSideLog2();
+  const int member_bits = 3 * vps_log2;
+  const Eigen::Vector3f& point_C = frame.cloud_C.points[ray.index];
+  const float length = point_C.norm();
+  const Eigen::Vector3f point_G = frame.T_G_C * point_C;
+  const Eigen::Vector3f unit_G = (point_G - frame.origin_G) / length;
+  // The distance along the ray of voxel centre c is length - (c - origin).unit.
+  const float sdf_offset = length + frame.origin_G.dot(unit_G);
+  const float weight = frame.updater.measurementWeight(point_C.z() > 0.0f ? point_C.z() : length);
+  const Color color = frame.cloud_C.hasColors() ? frame.cloud_C.colors[ray.index] : Color{};
+  IntegrationStats& stats = state->stats;
+
+  Block* block = nullptr;
+  uint64_t block_key = kNoBlock;
+  bool block_touched = false;
+  GridRayTraversal& walk = ray.walk;
+  for (;;) {
+    const GlobalVoxelIndex& global = walk.cell();
+    BlockIndex block_index;
+    GridIndex local;
+    splitGlobalVoxelIndex(global, vps_log2, &block_index, &local);
+    const uint64_t key = packGridIndex(block_index);
+    if (key != block_key) {
       if (block != nullptr) {
         if (block_touched) block->setUpdated(true);
         block->lock().unlock();
       }
+      block = layer_->getBlockByKey(key);
+      block_key = key;
+      block_touched = false;
+      if (block == nullptr) {  // park: the block is allocated before the ray resumes
+        state->parked.push_back(ray);
+        state->missing_blocks.push_back(key);
+        return;
+      }
+      block->lock().lock();
     }
+    const int linear = block->linearIndex(local);
+    if (fast) {
+      const bool fresh = visited_voxel_set_
+                             ? visited_voxel_set_->insertInCluster(
+                                   key, static_cast<uint32_t>(linear), member_bits)
+                             : block->markVisited(linear, frame.epoch);
+      if (fresh) {
+        ray.collisions = 0;
+      } else if (++ray.collisions > config_.max_consecutive_ray_collisions) {
+        ++stats.rays_stopped_early;
+        break;
+      }
+    }
+    const Eigen::Vector3f center =
+        (global.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * voxel_size;
+    if (frame.updater.update(sdf_offset - center.dot(unit_G), weight, color,
+                             &block->voxel(linear))) {
+      ++stats.voxel_updates;
+      block_touched = true;
+    }
+    if (!walk.advance()) break;
+  }
+  if (block != nullptr) {
+    if (block_touched) block->setUpdated(true);
+    block->lock().unlock();
   }
 }
 

@@ -22,25 +22,31 @@ namespace cblox {
 /// - kSimple: every ray, every voxel: the accuracy reference.
 /// - kFast: the paper's integrator. A point is skipped when its cell of the start-voxel
 ///   set (cell = voxel_size / start_voxel_subsampling_factor) was used earlier in the
-///   frame; a ray stops after more than max_consecutive_ray_collisions consecutive voxels
-///   already updated this frame (visited-voxel set); both sets are lock-free
-///   ApproxHashSets cleared per frame in O(1); points are visited in evenCoverageOrder
-///   and the max_integration_time_s budget is checked inside both loops.
+///   frame (a lock-free ApproxHashSet cleared per frame in O(1), keyed so that
+///   neighbouring cells share cache lines); a ray stops after more than
+///   max_consecutive_ray_collisions consecutive voxels already updated this frame
+///   (the visited-voxel set: per-block bitmaps by default, or the paper's ApproxHashSet,
+///   see VisitedVoxelSet); the max_integration_time_s budget is checked inside the loops.
 ///
-/// One frame runs in two parallel phases over the same point order:
-///  1. accept points (range checks, start set) and collect the blocks their rays cross
-///     (a block-level DDA deduplicated through a small ApproxHashSet);
-///  2. allocate those blocks single-threaded, then walk the rays voxel by voxel in
-///     parallel. A ray looks the hash map up only when it crosses into another block,
-///     and holds that block's spin lock while it updates the block's voxels.
-/// Blocks allocated in phase 1 that no ray updated (rays stopped early or cut by the
-/// budget) are removed again, so the layer never keeps empty blocks from a frame.
+/// Point order: the cloud is cut into runs of kPointsPerChunk consecutive points (a row
+/// segment of a depth image) and the runs are visited in evenCoverageOrder, so a frame
+/// cut short by the budget still covers the whole image, while the points of one run are
+/// neighbours and keep the hash sets and blocks in cache. Threads claim runs.
+///
+/// Allocation never happens while threads walk rays: a ray that enters a missing block
+/// is parked (its traversal state kept); after the parallel pass the missing blocks are
+/// allocated single-threaded and the parked rays resume in parallel, repeated until no
+/// ray is parked. In a mapped area almost no ray is parked. A ray looks the hash map up
+/// only when it crosses into another block, and holds that block's spin lock while it
+/// updates the block's voxels. Blocks allocated for rays that then updated nothing are
+/// removed again, so the layer never keeps empty blocks from a frame.
 ///
 /// Thread safety: one integratePointCloud call at a time per integrator, and nothing
 /// else may touch the layer during that call. Internally uses config.num_threads threads.
 class RayCastingIntegrator {
  public:
   enum class Mode { kSimple, kFast };
+  static constexpr size_t kPointsPerChunk = 64;
 
   /// Throws std::invalid_argument naming the invalid field, or if layer is null.
   RayCastingIntegrator(Mode mode, const IntegratorConfig& config, TsdfLayer* layer);
@@ -55,19 +61,23 @@ class RayCastingIntegrator {
   Mode mode() const { return mode_; }
 
  private:
-  struct ThreadState;
   struct Frame;
-  void acceptPointsAndCollectBlocks(Frame& frame, ThreadState* state);
-  void castRays(Frame& frame, ThreadState* state);
+  struct ParkedRay;
+  struct ThreadState;
+  struct StartCell;
+  void castChunks(Frame& frame, ThreadState* state);
+  void resumeParked(Frame& frame, const std::vector<ParkedRay>& parked, ThreadState* state);
+  bool screenPoint(const Frame& frame, uint32_t index, IntegrationStats* stats,
+                   StartCell* start_cell) const;
+  void walkRay(Frame& frame, ParkedRay ray, ThreadState* state);
+  ParkedRay startRay(const Frame& frame, uint32_t index) const;
 
   Mode mode_;
   IntegratorConfig config_;
   TsdfLayer* layer_;
   std::unique_ptr<ApproxHashSet> start_voxel_set_;
   std::unique_ptr<ApproxHashSet> visited_voxel_set_;
-  ApproxHashSet block_set_;
-  std::vector<uint32_t> order_;
-  std::vector<uint8_t> accepted_;
+  std::vector<uint32_t> chunk_order_;
 };
 
 /// Every ray, every voxel (the accuracy reference). See RayCastingIntegrator.

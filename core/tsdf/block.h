@@ -1,6 +1,8 @@
 #pragma once
 
+#include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <cstddef>
 #include <memory>
 
@@ -64,12 +66,29 @@ class Block {
   bool updated() const { return updated_.load(std::memory_order_acquire); }
   void setUpdated(bool value) { updated_.store(value, std::memory_order_release); }
 
+  /// Per-call scratch for integrators: one "visited" bit per voxel, valid for one
+  /// integration epoch (TsdfLayer::nextIntegrationEpoch). Returns true when the voxel had
+  /// not been visited in `epoch` yet (and marks it). Not thread-safe: hold lock().
+  bool markVisited(int linear, uint64_t epoch) {
+    if (visited_epoch_ != epoch) {
+      if (!visited_bits_) visited_bits_.reset(new uint64_t[visitedWords()]);
+      std::fill_n(visited_bits_.get(), visitedWords(), uint64_t{0});
+      visited_epoch_ = epoch;
+    }
+    uint64_t& word = visited_bits_[static_cast<size_t>(linear) >> 6];
+    const uint64_t bit = uint64_t{1} << (linear & 63);
+    const bool fresh = (word & bit) == 0;
+    word |= bit;
+    return fresh;
+  }
+
   /// Number of voxels with weight > 0 (O(voxels)).
   int countObservedVoxels() const;
 
   /// Bytes owned by this block (object + voxel array).
   size_t memoryBytes() const {
-    return sizeof(Block) + static_cast<size_t>(num_voxels_) * sizeof(TsdfVoxel);
+    return sizeof(Block) + static_cast<size_t>(num_voxels_) * sizeof(TsdfVoxel) +
+           (visited_bits_ ? visitedWords() * sizeof(uint64_t) : 0);
   }
 
  private:
@@ -80,7 +99,11 @@ class Block {
   float voxel_size_;
   Eigen::Vector3f origin_;
   std::unique_ptr<TsdfVoxel[]> voxels_;
+  size_t visitedWords() const { return (static_cast<size_t>(num_voxels_) + 63) / 64; }
+
   mutable SpinLock lock_;
+  uint64_t visited_epoch_ = 0;  // 0: never used (epochs start at 1)
+  std::unique_ptr<uint64_t[]> visited_bits_;
   std::atomic<bool> updated_{false};
 };
 

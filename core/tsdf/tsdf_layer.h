@@ -78,6 +78,10 @@ class TsdfLayer {
   const TsdfVoxel* getVoxel(const GlobalVoxelIndex& index) const;
   TsdfVoxel* getVoxel(const GlobalVoxelIndex& index);
 
+  /// A fresh epoch for Block::markVisited, one per integration call (1, 2, ...).
+  /// Not thread-safe: called by the integrator before its threads start.
+  uint64_t nextIntegrationEpoch() { return ++integration_epoch_; }
+
   /// Bytes held: blocks plus the hash map's slot array.
   size_t memoryBytes() const;
 
@@ -88,6 +92,7 @@ class TsdfLayer {
   float block_size_ = 0.0f;
   float block_size_inv_ = 0.0f;
   BlockMap blocks_;
+  uint64_t integration_epoch_ = 0;
 };
 
 }  // namespace cblox

@@ -13,9 +13,10 @@ namespace {
 using test::kVoxelSize;
 
 // One frame of a tilted plane from a rotated, translated camera, constant weights, no
-// drop-off: every observed voxel stores exactly (d - z) |p_C| / z clamped to the
-// truncation, with d the depth of the nearest pixel; every voxel of the allocated
-// blocks that projects onto a valid pixel within the band is observed.
+// drop-off: every observed voxel stores exactly (d - z) ||(x_n, y_n, 1)|| clamped to the
+// truncation, with d and (x_n, y_n) the depth and normalised coordinates of the nearest
+// pixel; every voxel of the allocated blocks that projects onto a valid pixel within the
+// band is observed.
 TEST(ProjectiveTsdfIntegrator, OneFrameStoresTheExactProjectiveDistance) {
   TsdfLayer layer(LayerConfig{kVoxelSize, 8});
   IntegratorConfig config;
@@ -57,7 +58,9 @@ TEST(ProjectiveTsdfIntegrator, OneFrameStoresTheExactProjectiveDistance) {
         EXPECT_FALSE(voxel.observed());
         continue;
       }
-      const float sdf = (depth(u, v) - p_C.z()) * p_C.norm() / p_C.z();
+      const float xn = (static_cast<float>(u) - 79.5f) / 150.0f;
+      const float yn = (static_cast<float>(v) - 59.5f) / 150.0f;
+      const float sdf = (depth(u, v) - p_C.z()) * std::sqrt(1.0f + xn * xn + yn * yn);
       if (sdf < -trunc) {
         EXPECT_FALSE(voxel.observed());
         continue;
@@ -72,6 +75,41 @@ TEST(ProjectiveTsdfIntegrator, OneFrameStoresTheExactProjectiveDistance) {
   EXPECT_EQ(observed, expected_observed);
   EXPECT_EQ(observed + skipped_observed, stats.voxel_updates);
   EXPECT_LT(skipped_observed, observed / 100);
+}
+
+// The block search misses nothing: on a plane at 45 degrees, the voxel containing any
+// point near a measured point along its pixel's ray is observed after one frame.
+TEST(ProjectiveTsdfIntegrator, BlockSearchCoversTheTruncationBandOfEveryPixel) {
+  TsdfLayer layer(LayerConfig{kVoxelSize, 8});
+  IntegratorConfig config;
+  ProjectiveTsdfIntegrator integrator(config, &layer);
+  const PinholeCamera camera = test::smallCamera();
+  const AnalyticScene scene = makePlaneScene(Eigen::Vector3d(0, 0, 1.5),
+                                             Eigen::Vector3d(0, 0.7, -0.7).normalized(), 0.2);
+  DepthImage depth(160, 120);
+  scene.renderDepth(Transformationd(), camera, &depth, nullptr, 10.0);
+  integrator.integrateDepthImage(Transformation(), depth, camera, nullptr);
+  size_t checked = 0;
+  // Pixels at least 2 px inside the border: a voxel whose centre projects outside the
+  // image is never updated, and a block holding only such voxels is not kept.
+  for (int v = 2; v < 118; v += 3) {
+    for (int u = 2; u < 158; u += 3) {
+      if (depth(u, v) <= 0.0f) continue;
+      const Eigen::Vector3f ray((u - 79.5f) / 150.0f, (v - 59.5f) / 150.0f, 1.0f);
+      // Behind the surface only to -0.3 truncation: a voxel centre can lie 0.87 voxel off
+      // the point and project onto a neighbouring pixel ~1 cm deeper.
+      for (float s = -0.3f; s <= 0.9f; s += 0.1f) {
+        // s > 0: in front of the surface (towards the camera).
+        const Eigen::Vector3f p =
+            ray * depth(u, v) - ray.normalized() * (s * config.truncation_distance_m);
+        const TsdfVoxel* voxel = layer.getVoxelAtPoint(p);
+        ASSERT_NE(voxel, nullptr) << "pixel " << u << "," << v << " s " << s;
+        ASSERT_TRUE(voxel->observed()) << "pixel " << u << "," << v << " s " << s;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 10000u);
 }
 
 TEST(ProjectiveTsdfIntegrator, SphereNearSurfaceVoxelsMatchTheTrueSignedDistance) {

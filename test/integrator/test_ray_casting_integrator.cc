@@ -137,6 +137,29 @@ TEST(FastTsdfIntegrator, AgreesWithSimpleNearTheSurface) {
   EXPECT_LT(fast_errors.max_abs, 2.0 * kVoxelSize) << "simple " << simple_errors.max_abs;
 }
 
+TEST(FastTsdfIntegrator, PaperHashSetVariantReconstructsTheSameSurface) {
+  TsdfLayer bitmap_layer(LayerConfig{kVoxelSize, 8});
+  TsdfLayer hashed_layer(LayerConfig{kVoxelSize, 8});
+  IntegratorConfig config;
+  FastTsdfIntegrator bitmap(config, &bitmap_layer);
+  config.visited_voxel_set = VisitedVoxelSet::kApproxHashSet;
+  FastTsdfIntegrator hashed(config, &hashed_layer);
+  size_t bitmap_updates = 0, hashed_updates = 0;
+  for (const test::View& view : test::renderSphereViews(8)) {
+    const PointCloud cloud = test::toCloud(view);
+    bitmap_updates += bitmap.integratePointCloud(view.T_G_C.cast<float>(), cloud).voxel_updates;
+    hashed_updates += hashed.integratePointCloud(view.T_G_C.cast<float>(), cloud).voxel_updates;
+  }
+  // Both sets answer "visited this frame" for the same voxels up to rare hash evictions
+  // (which only let a ray go on a little longer).
+  EXPECT_NEAR(static_cast<double>(hashed_updates), static_cast<double>(bitmap_updates),
+              0.02 * static_cast<double>(bitmap_updates));
+  const test::DistanceErrors a = test::surfaceErrors(bitmap_layer);
+  const test::DistanceErrors b = test::surfaceErrors(hashed_layer);
+  EXPECT_NEAR(static_cast<double>(a.count), static_cast<double>(b.count), 0.02 * a.count);
+  EXPECT_NEAR(a.rms, b.rms, 0.05 * kVoxelSize);
+}
+
 TEST(FastTsdfIntegrator, ThreadsOneAndTwoGiveTheSameSurface) {
   TsdfLayer one(LayerConfig{kVoxelSize, 8});
   TsdfLayer two(LayerConfig{kVoxelSize, 8});

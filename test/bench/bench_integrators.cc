@@ -1,0 +1,265 @@
+// cblox-bench-integrators: ms per frame of the simple, fast and projective integrators on
+// the 50 frames of ../shared/data/7scenes-rgbd-50 (voxel 2 cm, truncation 4 voxels, max
+// depth 4 m), 1 and 2 threads, 8^3 vs 16^3 blocks, Open3D's ScalableTSDFVolume on the
+// same frames in the same run (when built with Open3D), mesh extraction time, and the
+// accuracy of each mesh against the simple integrator's TSDF (the fused reference).
+//
+//   build/test/bench/cblox-bench-integrators [--data DIR] [--simple-frames N] [--json FILE]
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/geometry/depth_to_point_cloud.h"
+#include "core/integrator/projective_tsdf_integrator.h"
+#include "core/integrator/ray_casting_integrator.h"
+#include "core/mesh/mesh_integrator.h"
+#include "core/tsdf/tsdf_interpolator.h"
+#include "drivers/dataset/seven_scenes_reader.h"
+#include "test/bench/bench_frames.h"
+#ifdef CBLOX_HAVE_OPEN3D
+#include "test/bench/open3d_peer.h"
+#endif
+
+namespace cblox::bench {
+namespace {
+
+constexpr float kVoxelSize = 0.02f;
+constexpr float kTruncation = 4 * kVoxelSize;
+constexpr float kMaxDepth = 4.0f;
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
+}
+double peakRssMiB() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;
+}
+
+struct Run {
+  std::string name;
+  int threads = 1;
+  int voxels_per_side = 8;
+  std::vector<double> frame_ms;
+  size_t blocks = 0;
+  double layer_mib = 0.0;
+  double mesh_ms = 0.0;
+  size_t mesh_vertices = 0;
+  double rmse_to_reference_mm = -1.0;  // mesh vertices -> reference surface
+  double reference_coverage = -1.0;    // share of reference vertices near this surface
+  std::shared_ptr<TsdfLayer> layer;
+  Mesh mesh;
+};
+
+enum class Kind { kSimple, kFast, kProjective };
+
+Run integrate(const BenchSequence& seq, Kind kind, int threads, int voxels_per_side,
+              size_t max_frames) {
+  Run run;
+  run.name = kind == Kind::kSimple ? "simple" : kind == Kind::kFast ? "fast" : "projective";
+  run.threads = threads;
+  run.voxels_per_side = voxels_per_side;
+  run.layer = std::make_shared<TsdfLayer>(LayerConfig{kVoxelSize, voxels_per_side});
+  IntegratorConfig config;
+  config.truncation_distance_m = kTruncation;
+  config.max_ray_length_m = kMaxDepth * 1.3f;  // depth is cut at 4 m below; keep the rays
+  config.num_threads = threads;
+  const PinholeCamera camera(seq.intrinsics);
+  DepthConversionConfig conversion;
+  conversion.min_depth_m = 0.1f;
+  conversion.max_depth_m = kMaxDepth;
+  std::unique_ptr<RayCastingIntegrator> rays;
+  std::unique_ptr<ProjectiveTsdfIntegrator> projective;
+  if (kind == Kind::kProjective) {
+    projective = std::make_unique<ProjectiveTsdfIntegrator>(config, run.layer.get());
+  } else {
+    rays = std::make_unique<RayCastingIntegrator>(
+        kind == Kind::kFast ? RayCastingIntegrator::Mode::kFast : RayCastingIntegrator::Mode::kSimple,
+        config, run.layer.get());
+  }
+  size_t count = 0;
+  for (const BenchFrame& frame : seq.frames) {
+    if (count++ >= max_frames) break;
+    const Transformation T_G_C = frame.T_G_C.cast<float>();
+    if (projective) {
+      // The depth image is cut at kMaxDepth like the point cloud (and Open3D's depth_trunc).
+      DepthImage depth = frame.depth;
+      for (float& d : depth.data) d = d > kMaxDepth ? 0.0f : d;
+      const auto start = std::chrono::steady_clock::now();
+      projective->integrateDepthImage(T_G_C, depth, camera, &frame.color);
+      run.frame_ms.push_back(std::chrono::duration<double, std::milli>(
+                                 std::chrono::steady_clock::now() - start).count());
+    } else {
+      // Timed: depth -> point cloud conversion plus integration (what a mapper does).
+      const auto start = std::chrono::steady_clock::now();
+      const PointCloud cloud = depthToPointCloud(frame.depth, camera, &frame.color, conversion);
+      rays->integratePointCloud(T_G_C, cloud);
+      run.frame_ms.push_back(std::chrono::duration<double, std::milli>(
+                                 std::chrono::steady_clock::now() - start).count());
+    }
+  }
+  run.blocks = run.layer->numBlocks();
+  run.layer_mib = run.layer->memoryBytes() / 1048576.0;
+  MeshConfig mesh_config;
+  mesh_config.num_threads = threads;
+  MeshIntegrator mesher(*run.layer, mesh_config);
+  const auto start = std::chrono::steady_clock::now();
+  mesher.update(false, true);
+  run.mesh = mesher.extractMesh(true);
+  run.mesh_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  run.mesh_vertices = run.mesh.numVertices();
+  return run;
+}
+
+// RMSE of |reference TSDF| at this mesh's vertices (distance to the reference surface,
+// valid within the truncation band; vertices where the reference is unobserved count as
+// one truncation), and the share of reference vertices within one voxel of this TSDF's
+// surface.
+void compareToReference(const Run& reference, Run* run) {
+  const TsdfInterpolator ref(*reference.layer);
+  double sum_sq = 0.0;
+  for (const Eigen::Vector3f& v : run->mesh.vertices) {
+    float d = kTruncation;
+    if (!ref.getInterpolatedDistance(v, &d)) d = kTruncation;
+    sum_sq += static_cast<double>(d) * d;
+  }
+  run->rmse_to_reference_mm =
+      run->mesh.vertices.empty() ? 0.0 : 1e3 * std::sqrt(sum_sq / run->mesh.vertices.size());
+  const TsdfInterpolator own(*run->layer);
+  size_t covered = 0;
+  for (const Eigen::Vector3f& v : reference.mesh.vertices) {
+    float d = 0.0f;
+    covered += own.getInterpolatedDistance(v, &d) && std::abs(d) < kVoxelSize ? 1 : 0;
+  }
+  run->reference_coverage =
+      reference.mesh.vertices.empty() ? 0.0 : static_cast<double>(covered) / reference.mesh.vertices.size();
+}
+
+BenchSequence load(const std::string& folder) {
+  std::string error;
+  auto reader = SevenScenesReader::open(folder, &error);
+  if (!reader) throw std::runtime_error(error);
+  BenchSequence seq;
+  seq.intrinsics = reader->depthIntrinsics();
+  for (size_t i = 0; i < reader->size(); ++i) {
+    SevenScenesFrame f;
+    if (!reader->read(i, &f, &error)) throw std::runtime_error(error);
+    seq.frames.push_back({f.T_G_C, std::move(f.depth), std::move(f.color)});
+  }
+  return seq;
+}
+
+}  // namespace
+}  // namespace cblox::bench
+
+int main(int argc, char** argv) {
+  using namespace cblox::bench;
+  std::string data = std::string(CBLOX_SHARED_DATA_DIR) + "/7scenes-rgbd-50";
+  std::string json_path;
+  size_t simple_frames = 50;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--data" && i + 1 < argc) {
+      data = argv[++i];
+    } else if (arg == "--simple-frames" && i + 1 < argc) {
+      simple_frames = std::stoul(argv[++i]);
+    } else if (arg == "--json" && i + 1 < argc) {
+      json_path = argv[++i];
+    } else {
+      std::fprintf(stderr, "usage: %s [--data DIR] [--simple-frames N] [--json FILE]\n", argv[0]);
+      return 2;
+    }
+  }
+  BenchSequence seq;
+  try {
+    seq = load(data);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "cannot load %s: %s\n", data.c_str(), e.what());
+    return 1;
+  }
+  std::printf("%zu frames %dx%d from %s; voxel %.3f m, truncation %.3f m, max depth %.1f m\n",
+              seq.frames.size(), seq.intrinsics.width, seq.intrinsics.height, data.c_str(),
+              kVoxelSize, kTruncation, kMaxDepth);
+
+  std::vector<Run> runs;
+  auto add = [&](Kind kind, int threads, int vps, size_t frames) {
+    std::printf("running %s, %d thread(s), %d^3 blocks ...\n",
+                kind == Kind::kSimple ? "simple" : kind == Kind::kFast ? "fast" : "projective",
+                threads, vps);
+    std::fflush(stdout);
+    runs.push_back(integrate(seq, kind, threads, vps, frames));
+  };
+  add(Kind::kSimple, 2, 8, simple_frames);
+  for (int threads : {1, 2}) add(Kind::kFast, threads, 8, seq.frames.size());
+  add(Kind::kFast, 2, 16, seq.frames.size());
+  for (int threads : {1, 2}) add(Kind::kProjective, threads, 8, seq.frames.size());
+  add(Kind::kProjective, 2, 16, seq.frames.size());
+  const bool reference_complete = simple_frames >= seq.frames.size();
+  for (size_t i = 1; i < runs.size() && reference_complete; ++i) compareToReference(runs[0], &runs[i]);
+
+  std::printf("\n| integrator | threads | block | median ms/frame | p95 ms | blocks | layer MiB | mesh ms | mesh vertices | RMSE to simple (mm) | covers simple |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const Run& run : runs) {
+    std::printf("| %s | %d | %d^3 | %.2f | %.2f | %zu | %.1f | %.1f | %zu | %s | %s |\n",
+                run.name.c_str(), run.threads, run.voxels_per_side, median(run.frame_ms),
+                percentile(run.frame_ms, 0.95), run.blocks, run.layer_mib, run.mesh_ms,
+                run.mesh_vertices,
+                run.rmse_to_reference_mm < 0 ? "-" : std::to_string(run.rmse_to_reference_mm).substr(0, 5).c_str(),
+                run.reference_coverage < 0 ? "-" : (std::to_string(100.0 * run.reference_coverage).substr(0, 5) + "%").c_str());
+  }
+#ifdef CBLOX_HAVE_OPEN3D
+  std::vector<std::pair<int, double>> open3d_medians;
+  for (int threads : {1, 2}) {
+    std::printf("running Open3D ScalableTSDFVolume, %d thread(s) ...\n", threads);
+    std::fflush(stdout);
+    const Open3dResult peer = runOpen3dScalableTsdf(seq, kVoxelSize, kTruncation, kMaxDepth, threads);
+    open3d_medians.emplace_back(threads, median(peer.frame_ms));
+    std::printf("| Open3D ScalableTSDFVolume | %d | 16^3 | %.2f | %.2f | - | - | - | %zu | - | - |\n",
+                threads, median(peer.frame_ms), percentile(peer.frame_ms, 0.95), peer.mesh_vertices);
+  }
+  std::printf("\nratios ours / Open3D (median ms per frame, same threads, same run):\n");
+  for (const Run& run : runs) {
+    if (run.voxels_per_side != 8 || run.name == "simple") continue;
+    for (const auto& [threads, o3d] : open3d_medians) {
+      if (threads == run.threads) {
+        std::printf("  %s, %d thread(s): %.2f\n", run.name.c_str(), threads, median(run.frame_ms) / o3d);
+      }
+    }
+  }
+#else
+  std::printf("\nOpen3D peer not built (install libopen3d-dev: scripts/setup.sh --bench)\n");
+#endif
+  std::printf("\npeak RSS of the whole benchmark process: %.0f MiB\n", peakRssMiB());
+  if (!json_path.empty()) {
+    std::ofstream json(json_path);
+    json << "{\"runs\": [";
+    for (size_t i = 0; i < runs.size(); ++i) {
+      const Run& r = runs[i];
+      json << (i ? "," : "") << "{\"integrator\":\"" << r.name << "\",\"threads\":" << r.threads
+           << ",\"voxels_per_side\":" << r.voxels_per_side << ",\"median_ms\":" << median(r.frame_ms)
+           << ",\"p95_ms\":" << percentile(r.frame_ms, 0.95) << ",\"blocks\":" << r.blocks
+           << ",\"layer_mib\":" << r.layer_mib << ",\"mesh_ms\":" << r.mesh_ms
+           << ",\"mesh_vertices\":" << r.mesh_vertices << ",\"rmse_to_simple_mm\":" << r.rmse_to_reference_mm
+           << ",\"covers_simple\":" << r.reference_coverage << "}";
+    }
+    json << "]}\n";
+  }
+  return 0;
+}

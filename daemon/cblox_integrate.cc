@@ -74,7 +74,7 @@ SyntheticSettings loadSyntheticSettings(const YAML::Node& node) {
                    {"width", "height", "fx", "fy", "frames", "rate_hz", "orbit_radius_m",
                     "orbit_height_m", "look_at_height_m", "max_range_m"});
   SyntheticSettings s;
-  if (!node) return s;
+  if (isAbsent(node)) return s;
   readOptional(node, "synthetic", "width", &s.width);
   readOptional(node, "synthetic", "height", &s.height);
   readOptional(node, "synthetic", "fx", &s.fx);
@@ -166,7 +166,7 @@ int run(const Options& options) {
   bool connected = true;
   std::string format = options.ascii ? "ascii" : "binary";
   requireKnownKeys(root["output"], "output", {"connected", "format"});
-  if (root["output"]) {
+  if (!isAbsent(root["output"])) {
     readOptional(root["output"], "output", "connected", &connected);
     if (!options.ascii) readOptional(root["output"], "output", "format", &format);
   }

@@ -34,9 +34,11 @@ YAML::Node loadYamlFile(const std::string& file) {
   }
 }
 
+bool isAbsent(const YAML::Node& node) { return !node || node.IsNull(); }
+
 void requireKnownKeys(const YAML::Node& node, const std::string& path,
                       std::initializer_list<const char*> allowed) {
-  if (!node) return;
+  if (isAbsent(node)) return;
   if (!node.IsMap()) throw ConfigError(path + ": expected a map of settings");
   for (const auto& entry : node) {
     const std::string key = entry.first.as<std::string>();
@@ -57,7 +59,7 @@ void throwIfInvalid(const std::string& path, const std::string& error) {
 LayerConfig loadLayerConfig(const YAML::Node& node, const std::string& path) {
   requireKnownKeys(node, path, {"voxel_size", "voxels_per_side"});
   LayerConfig config;
-  if (node) {
+  if (!isAbsent(node)) {
     readOptional(node, path, "voxel_size", &config.voxel_size);
     readOptional(node, path, "voxels_per_side", &config.voxels_per_side);
   }
@@ -72,9 +74,9 @@ IntegratorConfig loadIntegratorConfig(const YAML::Node& node, float voxel_size,
                     "max_ray_length_m", "weight_model", "use_weight_dropoff",
                     "voxel_carving_enabled", "color_blending", "num_threads",
                     "start_voxel_subsampling_factor", "max_consecutive_ray_collisions",
-                    "max_integration_time_s", "approx_set_log2_buckets"});
+                    "max_integration_time_s", "visited_voxel_set", "approx_set_log2_buckets"});
   IntegratorConfig config;
-  if (node) {
+  if (!isAbsent(node)) {
     std::string type_name = integratorTypeName(*type);
     readOptional(node, path, "type", &type_name);
     try {
@@ -116,6 +118,16 @@ IntegratorConfig loadIntegratorConfig(const YAML::Node& node, float voxel_size,
     readOptional(node, path, "max_consecutive_ray_collisions",
                  &config.max_consecutive_ray_collisions);
     readOptional(node, path, "max_integration_time_s", &config.max_integration_time_s);
+    std::string visited = "block_bitmap";
+    readOptional(node, path, "visited_voxel_set", &visited);
+    if (visited == "block_bitmap") {
+      config.visited_voxel_set = VisitedVoxelSet::kBlockBitmap;
+    } else if (visited == "hash_set") {
+      config.visited_voxel_set = VisitedVoxelSet::kApproxHashSet;
+    } else {
+      throw ConfigError(path + ".visited_voxel_set: must be block_bitmap or hash_set, got '" +
+                        visited + "'");
+    }
     readOptional(node, path, "approx_set_log2_buckets", &config.approx_set_log2_buckets);
   }
   throwIfInvalid(path, config.validate(voxel_size));
@@ -125,7 +137,7 @@ IntegratorConfig loadIntegratorConfig(const YAML::Node& node, float voxel_size,
 MeshConfig loadMeshConfig(const YAML::Node& node, const std::string& path) {
   requireKnownKeys(node, path, {"min_weight", "use_color", "compute_normals", "num_threads"});
   MeshConfig config;
-  if (node) {
+  if (!isAbsent(node)) {
     readOptional(node, path, "min_weight", &config.min_weight);
     readOptional(node, path, "use_color", &config.use_color);
     readOptional(node, path, "compute_normals", &config.compute_normals);

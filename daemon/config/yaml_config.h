@@ -39,6 +39,9 @@ MeshConfig loadMeshConfig(const YAML::Node& node, const std::string& path = "mes
 /// Loads a YAML file; throws ConfigError with the file name on read or parse errors.
 YAML::Node loadYamlFile(const std::string& file);
 
+/// True for a missing node and for an empty (null) one, e.g. `mesh:` with no settings.
+bool isAbsent(const YAML::Node& node);
+
 /// Throws ConfigError when `node` (a map) has a key not in `allowed`.
 void requireKnownKeys(const YAML::Node& node, const std::string& path,
                       std::initializer_list<const char*> allowed);

@@ -63,6 +63,7 @@ struct Run {
   size_t mesh_vertices = 0;
   double rmse_to_reference_mm = -1.0;  // mesh vertices -> reference surface
   double reference_coverage = -1.0;    // share of reference vertices near this surface
+  double unobserved_in_reference = -1.0;  // share of vertices where the reference is empty
   std::shared_ptr<TsdfLayer> layer;
   Mesh mesh;
 };
@@ -128,20 +129,24 @@ Run integrate(const BenchSequence& seq, Kind kind, int threads, int voxels_per_s
   return run;
 }
 
-// RMSE of |reference TSDF| at this mesh's vertices (distance to the reference surface,
-// valid within the truncation band; vertices where the reference is unobserved count as
-// one truncation), and the share of reference vertices within one voxel of this TSDF's
-// surface.
+// Accuracy against the reference (the simple integrator's TSDF, the fused reference):
+// RMSE of |reference TSDF| interpolated at this mesh's vertices, over the vertices where
+// the reference is observed (the distance to the reference surface, valid within the
+// truncation band), the share of vertices where it is not, and the share of reference
+// vertices within one voxel of this TSDF's surface.
 void compareToReference(const Run& reference, Run* run) {
   const TsdfInterpolator ref(*reference.layer);
   double sum_sq = 0.0;
+  size_t observed = 0;
   for (const Eigen::Vector3f& v : run->mesh.vertices) {
-    float d = kTruncation;
-    if (!ref.getInterpolatedDistance(v, &d)) d = kTruncation;
+    float d = 0.0f;
+    if (!ref.getInterpolatedDistance(v, &d)) continue;
     sum_sq += static_cast<double>(d) * d;
+    ++observed;
   }
-  run->rmse_to_reference_mm =
-      run->mesh.vertices.empty() ? 0.0 : 1e3 * std::sqrt(sum_sq / run->mesh.vertices.size());
+  run->rmse_to_reference_mm = observed == 0 ? 0.0 : 1e3 * std::sqrt(sum_sq / observed);
+  run->unobserved_in_reference =
+      run->mesh.vertices.empty() ? 0.0 : 1.0 - static_cast<double>(observed) / run->mesh.vertices.size();
   const TsdfInterpolator own(*run->layer);
   size_t covered = 0;
   for (const Eigen::Vector3f& v : reference.mesh.vertices) {
@@ -214,15 +219,22 @@ int main(int argc, char** argv) {
   const bool reference_complete = simple_frames >= seq.frames.size();
   for (size_t i = 1; i < runs.size() && reference_complete; ++i) compareToReference(runs[0], &runs[i]);
 
-  std::printf("\n| integrator | threads | block | median ms/frame | p95 ms | blocks | layer MiB | mesh ms | mesh vertices | RMSE to simple (mm) | covers simple |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+  auto optional = [](double value, double scale, const char* unit) {
+    if (value < 0) return std::string("-");
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.1f%s", value * scale, unit);
+    return std::string(text);
+  };
+  std::printf("\n| integrator | threads | block | median ms/frame | p95 ms | blocks | layer MiB | "
+              "mesh ms | mesh vertices | RMSE to simple | vertices outside simple | covers simple |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Run& run : runs) {
-    std::printf("| %s | %d | %d^3 | %.2f | %.2f | %zu | %.1f | %.1f | %zu | %s | %s |\n",
+    std::printf("| %s | %d | %d^3 | %.2f | %.2f | %zu | %.1f | %.1f | %zu | %s | %s | %s |\n",
                 run.name.c_str(), run.threads, run.voxels_per_side, median(run.frame_ms),
                 percentile(run.frame_ms, 0.95), run.blocks, run.layer_mib, run.mesh_ms,
-                run.mesh_vertices,
-                run.rmse_to_reference_mm < 0 ? "-" : std::to_string(run.rmse_to_reference_mm).substr(0, 5).c_str(),
-                run.reference_coverage < 0 ? "-" : (std::to_string(100.0 * run.reference_coverage).substr(0, 5) + "%").c_str());
+                run.mesh_vertices, optional(run.rmse_to_reference_mm, 1.0, " mm").c_str(),
+                optional(run.unobserved_in_reference, 100.0, "%").c_str(),
+                optional(run.reference_coverage, 100.0, "%").c_str());
   }
 #ifdef CBLOX_HAVE_OPEN3D
   std::vector<std::pair<int, double>> open3d_medians;
@@ -231,7 +243,7 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
     const Open3dResult peer = runOpen3dScalableTsdf(seq, kVoxelSize, kTruncation, kMaxDepth, threads);
     open3d_medians.emplace_back(threads, median(peer.frame_ms));
-    std::printf("| Open3D ScalableTSDFVolume | %d | 16^3 | %.2f | %.2f | - | - | - | %zu | - | - |\n",
+    std::printf("| Open3D ScalableTSDFVolume | %d | 16^3 | %.2f | %.2f | - | - | - | %zu | - | - | - |\n",
                 threads, median(peer.frame_ms), percentile(peer.frame_ms, 0.95), peer.mesh_vertices);
   }
   std::printf("\nratios ours / Open3D (median ms per frame, same threads, same run):\n");
@@ -257,6 +269,7 @@ int main(int argc, char** argv) {
            << ",\"p95_ms\":" << percentile(r.frame_ms, 0.95) << ",\"blocks\":" << r.blocks
            << ",\"layer_mib\":" << r.layer_mib << ",\"mesh_ms\":" << r.mesh_ms
            << ",\"mesh_vertices\":" << r.mesh_vertices << ",\"rmse_to_simple_mm\":" << r.rmse_to_reference_mm
+           << ",\"outside_simple\":" << r.unobserved_in_reference
            << ",\"covers_simple\":" << r.reference_coverage << "}";
     }
     json << "]}\n";

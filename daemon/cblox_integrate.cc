@@ -241,15 +241,23 @@ int run(const Options& options) {
   std::printf("mesh: %zu vertices, %zu triangles in %.1f ms -> %s\n", mesh.numVertices(),
               mesh.numTriangles(), mesh_ms, options.output.c_str());
   if (source.ground_truth) {
-    double sum_sq = 0.0, max_abs = 0.0;
+    std::vector<double> errors;
+    errors.reserve(mesh.numVertices());
+    double sum_sq = 0.0;
     for (const Eigen::Vector3f& v : mesh.vertices) {
-      const double d = std::abs(source.ground_truth->signedDistance(v.cast<double>()));
-      sum_sq += d * d;
-      max_abs = std::max(max_abs, d);
+      errors.push_back(std::abs(source.ground_truth->signedDistance(v.cast<double>())));
+      sum_sq += errors.back() * errors.back();
     }
-    const double rmse = mesh.numVertices() ? std::sqrt(sum_sq / mesh.numVertices()) : 0.0;
-    std::printf("accuracy vs ground truth: vertex RMSE %.2f mm, max %.2f mm\n", rmse * 1e3,
-                max_abs * 1e3);
+    const double rmse = errors.empty() ? 0.0 : std::sqrt(sum_sq / errors.size());
+    const double within_voxel =
+        errors.empty() ? 0.0
+                       : std::count_if(errors.begin(), errors.end(),
+                                       [&](double e) { return e <= layer_config.voxel_size; }) /
+                             static_cast<double>(errors.size());
+    std::printf("accuracy vs ground truth: vertex RMSE %.2f mm, median %.2f mm, p90 %.2f mm, "
+                "max %.2f mm, %.2f%% within one voxel\n",
+                rmse * 1e3, percentile(errors, 0.5) * 1e3, percentile(errors, 0.9) * 1e3,
+                percentile(errors, 1.0) * 1e3, 100.0 * within_voxel);
   }
   if (skipped_points > 0) std::printf("skipped %zu invalid or out-of-range depth pixels\n", skipped_points);
   return mesh.numVertices() > 0 ? 0 : 1;

@@ -39,15 +39,16 @@ ProjectiveTsdfIntegrator::ProjectiveTsdfIntegrator(const IntegratorConfig& confi
 
 void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0, int v0,
                                              int size, std::vector<uint64_t>* keys) {
-  const int width = valid_depth_.width, height = valid_depth_.height;
+  const int width = width_, height = height_;
   const int u1 = std::min(u0 + size, width), v1 = std::min(v0 + size, height);
   float d_min = std::numeric_limits<float>::infinity(), d_max = 0.0f;
   for (int v = v0; v < v1; ++v) {
-    const float* row = &valid_depth_.data[static_cast<size_t>(v) * static_cast<size_t>(width)];
+    const PixelSample* row = &samples_[static_cast<size_t>(v) * static_cast<size_t>(width)];
     for (int u = u0; u < u1; ++u) {
-      if (row[u] > 0.0f) {
-        d_min = std::min(d_min, row[u]);
-        d_max = std::max(d_max, row[u]);
+      const float d = row[u].depth;
+      if (d > 0.0f) {
+        d_min = std::min(d_min, d);
+        d_max = std::max(d_max, d);
       }
     }
   }
@@ -129,9 +130,9 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   const float coordinate_limit = (kGridIndexMax - 2) * layer_->voxelSize() - 2.0f * config_.max_ray_length_m;
   const bool pose_in_range = T_G_C.translation().cwiseAbs().maxCoeff() < coordinate_limit;
 
-  valid_depth_.width = width;
-  valid_depth_.height = height;
-  valid_depth_.data.resize(depth.data.size());
+  width_ = width;
+  height_ = height;
+  samples_.resize(depth.data.size());
   block_set_.clear();
   std::vector<ThreadState> states(static_cast<size_t>(num_threads));
 
@@ -152,7 +153,7 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
         } else {
           valid = d;
         }
-        valid_depth_.data[row + u] = valid;
+        samples_[row + u] = {valid, ray_factor_[row + u]};
       }
     }
   });
@@ -198,15 +199,37 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   const Eigen::Vector3f step_x = R_C_G.col(0) * voxel_size;
   const Eigen::Vector3f step_y = R_C_G.col(1) * voxel_size;
   const Eigen::Vector3f step_z = R_C_G.col(2) * voxel_size;
+  // Visit blocks in image order (16-pixel tiles of their centre's projection), so that
+  // consecutive blocks read neighbouring depth and colour pixels.
+  {
+    std::vector<std::pair<uint32_t, size_t>> order(blocks.size());
+    const Eigen::Vector3f half_block = Eigen::Vector3f::Constant(0.5f * layer_->blockSize());
+    for (size_t b = 0; b < blocks.size(); ++b) {
+      const Eigen::Vector3f c = R_C_G * (blocks[b]->origin() + half_block) + t_C_G;
+      const float z = std::max(c.z(), 1e-3f);
+      const int u = std::clamp(static_cast<int>(fx * c.x() / z + cx), 0, width - 1) >> 4;
+      const int v = std::clamp(static_cast<int>(fy * c.y() / z + cy), 0, height - 1) >> 4;
+      order[b] = {static_cast<uint32_t>(v * ((width >> 4) + 1) + u), b};
+    }
+    std::sort(order.begin(), order.end());
+    std::vector<Block*> sorted_blocks(blocks.size());
+    std::vector<uint8_t> sorted_new(blocks.size());
+    for (size_t b = 0; b < blocks.size(); ++b) {
+      sorted_blocks[b] = blocks[order[b].second];
+      sorted_new[b] = newly_allocated[order[b].second];
+    }
+    blocks.swap(sorted_blocks);
+    newly_allocated.swap(sorted_new);
+  }
   std::vector<uint8_t> touched(blocks.size(), 0);
   std::atomic<size_t> next_block{0};
   // Raw pointers in locals: the compiler cannot prove voxel writes do not alias members.
-  const float* const valid_depth = valid_depth_.data.data();
-  const float* const ray_factor = ray_factor_.data();
+  const PixelSample* const samples = samples_.data();
   const Color* const colors =
       color != nullptr && config_.color_blending != ColorBlending::kNone ? color->data.data() : nullptr;
   runThreadTeam(num_threads, [&](int id) {
     IntegrationStats& stats = states[static_cast<size_t>(id)].stats;
+    float row_z[64], row_u[64], row_v[64];  // voxels_per_side <= 64
     for (size_t begin = next_block.fetch_add(kBlocksPerClaim); begin < blocks.size();
          begin = next_block.fetch_add(kBlocksPerClaim)) {
       const size_t end = std::min(begin + kBlocksPerClaim, blocks.size());
@@ -216,27 +239,36 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
         const Eigen::Vector3f first_center_C =
             R_C_G * (block.origin() + Eigen::Vector3f::Constant(0.5f * voxel_size)) + t_C_G;
         size_t updates = 0;
+        // Per row of voxels along x: first the projections (a plain arithmetic loop the
+        // compiler vectorises), then the lookups and updates.
         for (int k = 0; k < vps; ++k) {
-          for (int j = 0; j < vps; ++j) {
-            Eigen::Vector3f p_C = first_center_C + static_cast<float>(k) * step_z +
-                                  static_cast<float>(j) * step_y;
-            for (int i = 0; i < vps; ++i, ++voxel, p_C += step_x) {
-              if (p_C.z() <= 1e-6f) continue;
-              const float inv_z = 1.0f / p_C.z();
-              // Nearest pixel; +0.5 is folded into cx, cy. Values < 0 fail the bounds check
-              // after truncation only when >= -1, so test the float first.
-              const float uf = fx * p_C.x() * inv_z + cx;
-              const float vf = fy * p_C.y() * inv_z + cy;
-              if (!(uf >= 0.0f && vf >= 0.0f)) continue;
+          for (int j = 0; j < vps; ++j, voxel += vps) {
+            const Eigen::Vector3f row_C = first_center_C + static_cast<float>(k) * step_z +
+                                          static_cast<float>(j) * step_y;
+            for (int i = 0; i < vps; ++i) {
+              const float x = row_C.x() + static_cast<float>(i) * step_x.x();
+              const float y = row_C.y() + static_cast<float>(i) * step_x.y();
+              const float z = row_C.z() + static_cast<float>(i) * step_x.z();
+              const float inv_z = 1.0f / std::max(z, 1e-6f);
+              row_z[i] = z;
+              // Nearest pixel (+0.5 is folded into cx, cy); negative values are rejected
+              // as floats, since truncation towards zero would map (-1, 0) to 0.
+              row_u[i] = fx * x * inv_z + cx;
+              row_v[i] = fy * y * inv_z + cy;
+            }
+            for (int i = 0; i < vps; ++i) {
+              const float z = row_z[i], uf = row_u[i], vf = row_v[i];
+              if (!(z > 1e-6f && uf >= 0.0f && vf >= 0.0f)) continue;
               const int u = static_cast<int>(uf), v = static_cast<int>(vf);
               if (u >= width || v >= height) continue;
               const size_t pixel = static_cast<size_t>(v) * static_cast<size_t>(width) + static_cast<size_t>(u);
-              const float d = valid_depth[pixel];
+              const PixelSample sample = samples[pixel];
+              const float d = sample.depth;
               if (d <= 0.0f) continue;
-              const float sdf = (d - p_C.z()) * ray_factor[pixel];
+              const float sdf = (d - z) * sample.ray_factor;
               if (sdf < -truncation) continue;
               const Color c = colors != nullptr ? colors[pixel] : Color{};
-              if (updater.update(sdf, updater.measurementWeight(d), c, voxel)) ++updates;
+              if (updater.update(sdf, updater.measurementWeight(d), c, voxel + i)) ++updates;
             }
           }
         }

@@ -54,8 +54,15 @@ class ProjectiveTsdfIntegrator {
   void collectBlocks(const Transformation& T_G_C, int u0, int v0, int size,
                      std::vector<uint64_t>* keys);
 
+  // What the voxel loop reads per pixel, interleaved so one cache line serves both.
+  struct PixelSample {
+    float depth;       // the frame's depth, 0 where the pixel was rejected
+    float ray_factor;  // ||(x_n, y_n, 1)||
+  };
+
   ApproxHashSet block_set_;
-  DepthImage valid_depth_;           // the frame's depth with rejected pixels set to 0
+  int width_ = 0, height_ = 0;
+  std::vector<PixelSample> samples_;
   PinholeIntrinsics factor_camera_;  // the camera ray_factor_ was computed for
   std::vector<float> ray_factor_;    // per pixel ||(x_n, y_n, 1)||
 };

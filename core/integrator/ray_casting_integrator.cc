@@ -309,6 +309,9 @@ void RayCastingIntegrator::walkRay(Frame& frame, ParkedRay ray, ThreadState* sta
       block->lock().lock();
     }
     const int linear = block->linearIndex(local);
+    // Collisions count everywhere along the ray, as in the paper. Counting them only
+    // outside the truncation band was tried: 2.5x the voxel updates for the same median
+    // surface error (BENCHMARKS.md, "fast integrator accuracy").
     if (fast) {
       const bool fresh = visited_voxel_set_
                              ? visited_voxel_set_->insertInCluster(

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "core/geometry/color.h"
 #include "core/integrator/integrator_config.h"
@@ -32,7 +33,10 @@ class TsdfVoxelUpdater {
 
   /// Fuses one measurement: `sdf` is the signed distance of the voxel centre to the
   /// measured surface along the ray (metres, positive on the sensor side). Voxels more
-  /// than one truncation behind the surface are not touched. Returns true if updated.
+  /// than one truncation behind the surface are not touched. Colour is blended only
+  /// within the truncation band (|sdf| < truncation): free-space measurements carry no
+  /// surface colour, and meshes read colours at the zero crossing. Returns true if the
+  /// voxel was updated.
   bool update(float sdf, float weight, const Color& color, TsdfVoxel* voxel) const {
     if (sdf < -truncation_) return false;
     if (use_dropoff_ && sdf < -dropoff_start_) {
@@ -41,24 +45,23 @@ class TsdfVoxelUpdater {
     }
     const float old_weight = voxel->weight;
     const float new_weight = old_weight + weight;
-    const float fused = (voxel->distance * old_weight + std::min(sdf, truncation_) * weight) /
-                        new_weight;
-    voxel->distance = std::clamp(fused, -truncation_, truncation_);
+    const float inv_new_weight = 1.0f / new_weight;
+    const bool in_band = sdf < truncation_;
+    const float measured = in_band ? sdf : truncation_;
+    voxel->distance = std::clamp((voxel->distance * old_weight + measured * weight) * inv_new_weight,
+                                 -truncation_, truncation_);
     voxel->weight = std::min(new_weight, max_weight_);
-    switch (blending_) {
-      case ColorBlending::kWeightedAverage: {
-        const float a = old_weight / new_weight;
-        const float b = weight / new_weight;
-        voxel->color.r = static_cast<uint8_t>(a * voxel->color.r + b * color.r + 0.5f);
-        voxel->color.g = static_cast<uint8_t>(a * voxel->color.g + b * color.g + 0.5f);
-        voxel->color.b = static_cast<uint8_t>(a * voxel->color.b + b * color.b + 0.5f);
-        break;
-      }
-      case ColorBlending::kOverwrite:
-        voxel->color = color;
-        break;
-      case ColorBlending::kNone:
-        break;
+    if (!in_band) return true;
+    if (blending_ == ColorBlending::kWeightedAverage) {
+      // Fixed point: the new colour's share in 1/256, rounded; (a + b) == 256 keeps the
+      // result a convex combination (no overflow, exact for equal colours).
+      const uint32_t b = static_cast<uint32_t>(weight * inv_new_weight * 256.0f + 0.5f);
+      const uint32_t a = 256u - b;
+      voxel->color.r = static_cast<uint8_t>((voxel->color.r * a + color.r * b + 128u) >> 8);
+      voxel->color.g = static_cast<uint8_t>((voxel->color.g * a + color.g * b + 128u) >> 8);
+      voxel->color.b = static_cast<uint8_t>((voxel->color.b * a + color.b * b + 128u) >> 8);
+    } else if (blending_ == ColorBlending::kOverwrite) {
+      voxel->color = color;
     }
     return true;
   }

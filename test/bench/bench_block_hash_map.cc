@@ -1,6 +1,7 @@
 // Google Benchmark: the layer's block map (absl::flat_hash_map keyed by the packed block
-// index) against std::unordered_map, on the access pattern of ray casting: sequences of
-// blocks crossed by rays through a 6 x 4 x 3 m room whose walls hold the allocated blocks.
+// index) against std::unordered_map, on the access pattern of ray casting with voxel
+// carving: every block of a 6 x 4 x 3 m room is allocated (free space and walls), and the
+// queries are the blocks crossed by rays from random points in the room to its walls.
 //
 //   build/test/bench/cblox-bench-block-hash-map --benchmark_repetitions=3
 
@@ -33,18 +34,17 @@ const Workload& workload() {
     const GridIndex bhi = gridIndexFromPoint(hi, 1 / kBlockSize) + GridIndex::Ones();
     for (int x = blo.x(); x <= bhi.x(); ++x) {
       for (int y = blo.y(); y <= bhi.y(); ++y) {
-        for (int z = blo.z(); z <= bhi.z(); ++z) {
-          const Eigen::Vector3f c = (Eigen::Vector3f(x, y, z) + Eigen::Vector3f::Constant(0.5f)) * kBlockSize;
-          const float wall = std::min({c.x() - lo.x(), hi.x() - c.x(), c.y() - lo.y(), hi.y() - c.y(),
-                                       c.z() - lo.z(), hi.z() - c.z()});
-          if (std::abs(wall) < kBlockSize) result.allocated.push_back(packGridIndex({x, y, z}));
-        }
+        for (int z = blo.z(); z <= bhi.z(); ++z) result.allocated.push_back(packGridIndex({x, y, z}));
       }
     }
     std::mt19937 rng(7);
-    std::uniform_real_distribution<float> ux(-2.5f, 2.5f), uy(-1.5f, 1.5f), uz(0.5f, 2.5f);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
     for (int r = 0; r < 20000; ++r) {
-      const Eigen::Vector3f a(ux(rng), uy(rng), uz(rng)), b(ux(rng) * 1.2f, uy(rng) * 1.3f, uz(rng) * 1.2f);
+      const Eigen::Vector3f a = lo + Eigen::Vector3f(unit(rng), unit(rng), unit(rng)).cwiseProduct(hi - lo);
+      // A wall point: one coordinate pinned to a face of the room.
+      Eigen::Vector3f b = lo + Eigen::Vector3f(unit(rng), unit(rng), unit(rng)).cwiseProduct(hi - lo);
+      const int axis = r % 3;
+      b[axis] = (r / 3) % 2 ? hi[axis] : lo[axis];
       for (GridRayTraversal t(a / kBlockSize, b / kBlockSize);;) {
         result.queries.push_back(packGridIndex(t.cell()));
         if (!t.advance()) break;

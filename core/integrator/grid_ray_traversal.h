@@ -19,14 +19,16 @@ namespace cblox {
 /// Not thread-safe (cheap to construct per ray).
 class GridRayTraversal {
  public:
+  /// `start` and `end` must be finite with |coordinates| < 2^31 (callers range-check).
   GridRayTraversal(const Eigen::Vector3f& start, const Eigen::Vector3f& end) {
     const Eigen::Vector3f delta = end - start;
     constexpr float kInf = std::numeric_limits<float>::infinity();
     for (int axis = 0; axis < 3; ++axis) {
-      cell_[axis] = static_cast<int>(std::floor(start[axis]));
-      end_cell_[axis] = static_cast<int>(std::floor(end[axis]));
+      cell_[axis] = fastFloor(start[axis]);
+      end_cell_[axis] = fastFloor(end[axis]);
       step_[axis] = end_cell_[axis] > cell_[axis] ? 1 : (end_cell_[axis] < cell_[axis] ? -1 : 0);
       if (step_[axis] == 0 || delta[axis] == 0.0f) {
+        // Nothing to do along this axis: its boundary never comes first.
         t_delta_[axis] = kInf;
         t_max_[axis] = kInf;
       } else {
@@ -41,23 +43,23 @@ class GridRayTraversal {
   }
 
   const GridIndex& cell() const { return cell_; }
+  /// Axis (0, 1, 2) of the last advance() and its direction (+1 or -1) along it.
+  int lastAxis() const { return last_axis_; }
+  int lastStep() const { return step_[last_axis_]; }
   /// Number of cells still to visit after the current one.
   int remaining() const { return remaining_; }
 
   /// Steps to the next cell; false when the current cell was the last one.
   bool advance() {
     if (remaining_ == 0) return false;
-    // Among the axes that still need steps, take the one whose boundary comes first.
-    int axis = -1;
-    float best = std::numeric_limits<float>::infinity();
-    for (int a = 0; a < 3; ++a) {
-      if (cell_[a] != end_cell_[a] && (axis < 0 || t_max_[a] < best)) {
-        axis = a;
-        best = t_max_[a];
-      }
-    }
+    // The axis whose boundary comes first; an axis that reached its end cell has its
+    // boundary at infinity, so the walk only ever steps towards the end cell.
+    const int axis = t_max_[0] < t_max_[1] ? (t_max_[0] < t_max_[2] ? 0 : 2)
+                                           : (t_max_[1] < t_max_[2] ? 1 : 2);
     cell_[axis] += step_[axis];
-    t_max_[axis] += t_delta_[axis];
+    t_max_[axis] = cell_[axis] == end_cell_[axis] ? std::numeric_limits<float>::infinity()
+                                                  : t_max_[axis] + t_delta_[axis];
+    last_axis_ = axis;
     --remaining_;
     return true;
   }
@@ -69,6 +71,7 @@ class GridRayTraversal {
   Eigen::Vector3f t_delta_;
   Eigen::Vector3f t_max_;
   int remaining_ = 0;
+  int last_axis_ = 0;
 };
 
 }  // namespace cblox

@@ -22,8 +22,9 @@ std::string IntegratorConfig::validate(float voxel_size) const {
           << "), got " << max_ray_length_m;
   } else if (num_threads < 1 || num_threads > 64) {
     error << "num_threads must be in [1, 64], got " << num_threads;
-  } else if (!finite_positive(start_voxel_subsampling_factor)) {
-    error << "start_voxel_subsampling_factor must be finite and > 0, got "
+  } else if (!finite_positive(start_voxel_subsampling_factor) ||
+             start_voxel_subsampling_factor > 64.0f) {
+    error << "start_voxel_subsampling_factor must be in (0, 64], got "
           << start_voxel_subsampling_factor;
   } else if (max_consecutive_ray_collisions < 0) {
     error << "max_consecutive_ray_collisions must be >= 0, got "

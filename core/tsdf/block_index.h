@@ -50,6 +50,20 @@ inline GridIndex gridIndexFromPoint(const Eigen::Vector3f& point, float cell_siz
                    static_cast<int>(std::floor(point.z() * cell_size_inv)));
 }
 
+/// floor(x) for finite |x| < 2^31, without a libm call (baseline x86-64 has no SSE4.1
+/// roundss). Callers guarantee the range; NaN or larger values are undefined behaviour.
+inline int fastFloor(float x) {
+  const int truncated = static_cast<int>(x);
+  return truncated - (x < static_cast<float>(truncated) ? 1 : 0);
+}
+
+/// gridIndexFromPoint for hot loops whose points are known finite and inside the packable
+/// grid (|point * cell_size_inv| < 2^31). Thread-safe.
+inline GridIndex gridIndexFromPointUnchecked(const Eigen::Vector3f& point, float cell_size_inv) {
+  return GridIndex(fastFloor(point.x() * cell_size_inv), fastFloor(point.y() * cell_size_inv),
+                   fastFloor(point.z() * cell_size_inv));
+}
+
 /// Splits a global voxel index into its block index and the voxel's index inside the block.
 /// `voxels_per_side` = 1 << `voxels_per_side_log2`. Arithmetic shift gives floor division
 /// for negative indices. Thread-safe.

@@ -88,46 +88,27 @@ IntegratorConfig loadIntegratorConfig(const YAML::Node& node, float voxel_size,
     readOptional(node, path, "max_weight", &config.max_weight);
     readOptional(node, path, "min_ray_length_m", &config.min_ray_length_m);
     readOptional(node, path, "max_ray_length_m", &config.max_ray_length_m);
-    std::string weight_model = "inverse_square";
-    readOptional(node, path, "weight_model", &weight_model);
-    if (weight_model == "constant") {
-      config.weight_model = WeightModel::kConstant;
-    } else if (weight_model == "inverse_square") {
-      config.weight_model = WeightModel::kInverseSquare;
-    } else {
-      throw ConfigError(path + ".weight_model: must be constant or inverse_square, got '" +
-                        weight_model + "'");
-    }
+    readOptionalEnum(node, path, "weight_model",
+                     {{"constant", WeightModel::kConstant},
+                      {"inverse_square", WeightModel::kInverseSquare}},
+                     &config.weight_model);
     readOptional(node, path, "use_weight_dropoff", &config.use_weight_dropoff);
     readOptional(node, path, "voxel_carving_enabled", &config.voxel_carving_enabled);
-    std::string blending = "weighted_average";
-    readOptional(node, path, "color_blending", &blending);
-    if (blending == "weighted_average") {
-      config.color_blending = ColorBlending::kWeightedAverage;
-    } else if (blending == "overwrite") {
-      config.color_blending = ColorBlending::kOverwrite;
-    } else if (blending == "none") {
-      config.color_blending = ColorBlending::kNone;
-    } else {
-      throw ConfigError(path + ".color_blending: must be weighted_average, overwrite or none, got '" +
-                        blending + "'");
-    }
+    readOptionalEnum(node, path, "color_blending",
+                     {{"weighted_average", ColorBlending::kWeightedAverage},
+                      {"overwrite", ColorBlending::kOverwrite},
+                      {"none", ColorBlending::kNone}},
+                     &config.color_blending);
     readOptional(node, path, "num_threads", &config.num_threads);
     readOptional(node, path, "start_voxel_subsampling_factor",
                  &config.start_voxel_subsampling_factor);
     readOptional(node, path, "max_consecutive_ray_collisions",
                  &config.max_consecutive_ray_collisions);
     readOptional(node, path, "max_integration_time_s", &config.max_integration_time_s);
-    std::string visited = "block_bitmap";
-    readOptional(node, path, "visited_voxel_set", &visited);
-    if (visited == "block_bitmap") {
-      config.visited_voxel_set = VisitedVoxelSet::kBlockBitmap;
-    } else if (visited == "hash_set") {
-      config.visited_voxel_set = VisitedVoxelSet::kApproxHashSet;
-    } else {
-      throw ConfigError(path + ".visited_voxel_set: must be block_bitmap or hash_set, got '" +
-                        visited + "'");
-    }
+    readOptionalEnum(node, path, "visited_voxel_set",
+                     {{"block_bitmap", VisitedVoxelSet::kBlockBitmap},
+                      {"hash_set", VisitedVoxelSet::kApproxHashSet}},
+                     &config.visited_voxel_set);
     readOptional(node, path, "approx_set_log2_buckets", &config.approx_set_log2_buckets);
   }
   throwIfInvalid(path, config.validate(voxel_size));

@@ -8,6 +8,7 @@
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <yaml-cpp/yaml.h>
 
@@ -57,6 +58,25 @@ void readOptional(const YAML::Node& node, const std::string& path, const char* k
   } catch (const YAML::Exception&) {
     throw ConfigError(path + "." + key + ": cannot read '" + YAML::Dump(child) + "' as the expected type");
   }
+}
+
+/// Reads node[key], a name from `names`, into *value when present; throws ConfigError
+/// naming path.key and the accepted names otherwise.
+template <typename Enum>
+void readOptionalEnum(const YAML::Node& node, const std::string& path, const char* key,
+                      std::initializer_list<std::pair<const char*, Enum>> names, Enum* value) {
+  if (!node[key]) return;
+  std::string name;
+  readOptional(node, path, key, &name);
+  std::string accepted;
+  for (const auto& [candidate, candidate_value] : names) {
+    if (name == candidate) {
+      *value = candidate_value;
+      return;
+    }
+    accepted += (accepted.empty() ? "" : ", ") + std::string(candidate);
+  }
+  throw ConfigError(path + "." + key + ": must be one of " + accepted + ", got '" + name + "'");
 }
 
 }  // namespace cblox

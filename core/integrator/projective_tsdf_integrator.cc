@@ -8,6 +8,10 @@
 #include <stdexcept>
 
 #include "core/integrator/thread_team.h"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include "core/integrator/tsdf_voxel_update.h"
 
 namespace cblox {
@@ -20,6 +24,67 @@ constexpr int kSearchCellPixels = 8;  // block search cell, split while its dept
 struct ThreadState {
   IntegrationStats stats;
   std::vector<uint64_t> block_keys;
+};
+
+// One row of `count` voxel centres p_i = p0 + i * step (camera frame) projected into the
+// image: z_i, and the index of the nearest pixel, or -1 when the centre is behind the
+// camera or its nearest pixel is outside the image. `cx`, `cy` include the +0.5 of
+// rounding, so the nearest pixel is the truncation of (u, v) once they are >= 0.
+struct RowProjector {
+  float fx, fy, cx, cy;
+  int width, height;
+  static constexpr float kMinZ = 1e-6f;
+
+  void project(const Eigen::Vector3f& p0, const Eigen::Vector3f& step, int count, float* z_out,
+               int32_t* pixel_out) const {
+    int i = 0;
+#if defined(__SSE2__)
+    // Four voxels at a time. The pixel index is formed in float, exact while the image
+    // has fewer than 2^24 pixels.
+    if (static_cast<int64_t>(width) * height < (int64_t{1} << 24)) {
+      const __m128 eps = _mm_set1_ps(kMinZ), zero = _mm_setzero_ps();
+      const __m128 w = _mm_set1_ps(static_cast<float>(width));
+      const __m128 h = _mm_set1_ps(static_cast<float>(height));
+      const __m128 last_u = _mm_set1_ps(static_cast<float>(width - 1));
+      const __m128 last_v = _mm_set1_ps(static_cast<float>(height - 1));
+      const __m128i minus_one = _mm_set1_epi32(-1);
+      for (; i + 4 <= count; i += 4) {
+        const __m128 fi = _mm_setr_ps(static_cast<float>(i), static_cast<float>(i + 1),
+                                      static_cast<float>(i + 2), static_cast<float>(i + 3));
+        const __m128 x = _mm_add_ps(_mm_set1_ps(p0.x()), _mm_mul_ps(fi, _mm_set1_ps(step.x())));
+        const __m128 y = _mm_add_ps(_mm_set1_ps(p0.y()), _mm_mul_ps(fi, _mm_set1_ps(step.y())));
+        const __m128 z = _mm_add_ps(_mm_set1_ps(p0.z()), _mm_mul_ps(fi, _mm_set1_ps(step.z())));
+        const __m128 inv_z = _mm_div_ps(_mm_set1_ps(1.0f), _mm_max_ps(z, eps));
+        const __m128 u = _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(fx), x), inv_z), _mm_set1_ps(cx));
+        const __m128 v = _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(fy), y), inv_z), _mm_set1_ps(cy));
+        const __m128 inside = _mm_and_ps(
+            _mm_and_ps(_mm_cmpgt_ps(z, eps), _mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmpge_ps(v, zero))),
+            _mm_and_ps(_mm_cmplt_ps(u, w), _mm_cmplt_ps(v, h)));
+        const __m128i ui = _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(u, zero), last_u));
+        const __m128i vi = _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(v, zero), last_v));
+        const __m128i pixel = _mm_cvttps_epi32(
+            _mm_add_ps(_mm_mul_ps(_mm_cvtepi32_ps(vi), w), _mm_cvtepi32_ps(ui)));
+        const __m128i mask = _mm_castps_si128(inside);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(pixel_out + i),
+                         _mm_or_si128(_mm_and_si128(mask, pixel), _mm_andnot_si128(mask, minus_one)));
+        _mm_storeu_ps(z_out + i, z);
+      }
+    }
+#endif
+    for (; i < count; ++i) {
+      const float fi = static_cast<float>(i);
+      const float z = p0.z() + fi * step.z();
+      z_out[i] = z;
+      pixel_out[i] = -1;
+      if (!(z > kMinZ)) continue;
+      const float u = fx * (p0.x() + fi * step.x()) / z + cx;
+      const float v = fy * (p0.y() + fi * step.y()) / z + cy;
+      if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(width) && v < static_cast<float>(height))) {
+        continue;
+      }
+      pixel_out[i] = static_cast<int32_t>(v) * width + static_cast<int32_t>(u);
+    }
+  }
 };
 
 bool sameIntrinsics(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
@@ -223,13 +288,15 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   }
   std::vector<uint8_t> touched(blocks.size(), 0);
   std::atomic<size_t> next_block{0};
+  const RowProjector projector{fx, fy, cx, cy, width, height};
   // Raw pointers in locals: the compiler cannot prove voxel writes do not alias members.
   const PixelSample* const samples = samples_.data();
   const Color* const colors =
       color != nullptr && config_.color_blending != ColorBlending::kNone ? color->data.data() : nullptr;
   runThreadTeam(num_threads, [&](int id) {
     IntegrationStats& stats = states[static_cast<size_t>(id)].stats;
-    float row_z[64], row_u[64], row_v[64];  // voxels_per_side <= 64
+    float row_z[64];  // voxels_per_side <= 64
+    int32_t row_pixel[64];
     for (size_t begin = next_block.fetch_add(kBlocksPerClaim); begin < blocks.size();
          begin = next_block.fetch_add(kBlocksPerClaim)) {
       const size_t end = std::min(begin + kBlocksPerClaim, blocks.size());
@@ -239,33 +306,19 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
         const Eigen::Vector3f first_center_C =
             R_C_G * (block.origin() + Eigen::Vector3f::Constant(0.5f * voxel_size)) + t_C_G;
         size_t updates = 0;
-        // Per row of voxels along x: first the projections (a plain arithmetic loop the
-        // compiler vectorises), then the lookups and updates.
+        // Per row of voxels along x: first all projections (SIMD), then lookups and updates.
         for (int k = 0; k < vps; ++k) {
           for (int j = 0; j < vps; ++j, voxel += vps) {
             const Eigen::Vector3f row_C = first_center_C + static_cast<float>(k) * step_z +
                                           static_cast<float>(j) * step_y;
+            projector.project(row_C, step_x, vps, row_z, row_pixel);
             for (int i = 0; i < vps; ++i) {
-              const float x = row_C.x() + static_cast<float>(i) * step_x.x();
-              const float y = row_C.y() + static_cast<float>(i) * step_x.y();
-              const float z = row_C.z() + static_cast<float>(i) * step_x.z();
-              const float inv_z = 1.0f / std::max(z, 1e-6f);
-              row_z[i] = z;
-              // Nearest pixel (+0.5 is folded into cx, cy); negative values are rejected
-              // as floats, since truncation towards zero would map (-1, 0) to 0.
-              row_u[i] = fx * x * inv_z + cx;
-              row_v[i] = fy * y * inv_z + cy;
-            }
-            for (int i = 0; i < vps; ++i) {
-              const float z = row_z[i], uf = row_u[i], vf = row_v[i];
-              if (!(z > 1e-6f && uf >= 0.0f && vf >= 0.0f)) continue;
-              const int u = static_cast<int>(uf), v = static_cast<int>(vf);
-              if (u >= width || v >= height) continue;
-              const size_t pixel = static_cast<size_t>(v) * static_cast<size_t>(width) + static_cast<size_t>(u);
+              const int32_t pixel = row_pixel[i];
+              if (pixel < 0) continue;
               const PixelSample sample = samples[pixel];
               const float d = sample.depth;
               if (d <= 0.0f) continue;
-              const float sdf = (d - z) * sample.ray_factor;
+              const float sdf = (d - row_z[i]) * sample.ray_factor;
               if (sdf < -truncation) continue;
               const Color c = colors != nullptr ? colors[pixel] : Color{};
               if (updater.update(sdf, updater.measurementWeight(d), c, voxel + i)) ++updates;

@@ -43,6 +43,9 @@ struct RayCastingIntegrator::Frame {
   TsdfVoxelUpdater updater;
   uint64_t epoch;           // this call's Block::markVisited epoch
   float coordinate_limit;   // |coordinate| bound keeping every ray inside the packable grid
+  bool origin_in_range;     // the sensor itself is inside that bound
+  float min_length_squared;  // accepted ray lengths, squared
+  float max_length_squared;
   std::atomic<size_t> cursor{0};
   std::atomic<bool> out_of_time{false};
 
@@ -87,7 +90,11 @@ IntegrationStats RayCastingIntegrator::integratePointCloud(const Transformation&
               Deadline(fast ? config_.max_integration_time_s : 0.0),
               TsdfVoxelUpdater(config_, layer_->voxelSize()),
               layer_->nextIntegrationEpoch(),
-              (kGridIndexMax - 2) * layer_->voxelSize() - config_.truncation_distance_m};
+              (kGridIndexMax - 2) * layer_->voxelSize() - config_.truncation_distance_m,
+              false,
+              std::max(config_.min_ray_length_m, 1e-6f) * std::max(config_.min_ray_length_m, 1e-6f),
+              config_.max_ray_length_m * config_.max_ray_length_m};
+  frame.origin_in_range = frame.origin_G.cwiseAbs().maxCoeff() < frame.coordinate_limit;
   const size_t num_chunks = (cloud_C.size() + kPointsPerChunk - 1) / kPointsPerChunk;
   if (chunk_order_.size() != num_chunks) {
     chunk_order_ = evenCoverageOrder(static_cast<uint32_t>(num_chunks));
@@ -226,15 +233,14 @@ bool RayCastingIntegrator::screenPoint(const Frame& frame, uint32_t index,
     ++stats->points_invalid;
     return false;
   }
-  const float length = point_C.norm();
-  if (length < std::max(config_.min_ray_length_m, 1e-6f) || length > config_.max_ray_length_m) {
+  const float length_squared = point_C.squaredNorm();
+  if (length_squared < frame.min_length_squared || length_squared > frame.max_length_squared) {
     ++stats->points_out_of_range;
     return false;
   }
   const Eigen::Vector3f point_G = frame.R_G_C * point_C + frame.origin_G;
   // Rays whose ends fall outside the packable grid (absurd poses) are rejected whole.
-  if (!(point_G.cwiseAbs().maxCoeff() < frame.coordinate_limit) ||
-      !(frame.origin_G.cwiseAbs().maxCoeff() < frame.coordinate_limit)) {
+  if (!frame.origin_in_range || !(point_G.cwiseAbs().maxCoeff() < frame.coordinate_limit)) {
     ++stats->points_invalid;
     return false;
   }

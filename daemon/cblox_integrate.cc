@@ -103,12 +103,12 @@ Source openSource(const Options& options, const YAML::Node& root) {
     const SyntheticSettings s = loadSyntheticSettings(root["synthetic"]);
     source.intrinsics = {s.fx, s.fy, (s.width - 1) / 2.0, (s.height - 1) / 2.0, s.width, s.height};
     const int frames = options.frames.value_or(s.frames);
-    const auto trajectory = makeOrbitTrajectory(Eigen::Vector3d(0, 0, 0), s.orbit_radius_m,
-                                                s.orbit_height_m, frames,
-                                                Eigen::Vector3d(0, 0, s.look_at_height_m));
+    const auto trajectory =
+        makeOrbitTrajectory(Eigen::Vector3d(0, 0, 0), s.orbit_radius_m, s.orbit_height_m, frames,
+                            Eigen::Vector3d(0, 0, s.look_at_height_m));
     source.ground_truth = makeDemoRoom();
-    auto synthetic = std::make_shared<SyntheticDepthSource>(
-        *source.ground_truth, source.intrinsics, trajectory, s.rate_hz, s.max_range_m);
+    auto synthetic = std::make_shared<SyntheticDepthSource>(*source.ground_truth, source.intrinsics,
+                                                            trajectory, s.rate_hz, s.max_range_m);
     source.size = synthetic->size();
     source.next = [synthetic](Frame* frame) {
       SyntheticFrame f;
@@ -142,8 +142,8 @@ Source openSource(const Options& options, const YAML::Node& root) {
     };
     return source;
   }
-  throw ConfigError("--source must be synthetic-room or 7scenes:<folder>, got '" +
-                    options.source + "'");
+  throw ConfigError("--source must be synthetic-room or 7scenes:<folder>, got '" + options.source +
+                    "'");
 }
 
 double percentile(std::vector<double> values, double q) {
@@ -154,7 +154,8 @@ double percentile(std::vector<double> values, double q) {
 }
 
 int run(const Options& options) {
-  const YAML::Node root = options.config_file.empty() ? YAML::Node() : loadYamlFile(options.config_file);
+  const YAML::Node root =
+      options.config_file.empty() ? YAML::Node() : loadYamlFile(options.config_file);
   requireKnownKeys(root, options.config_file.empty() ? "config" : options.config_file,
                    {"layer", "integrator", "mesh", "output", "synthetic"});
   const LayerConfig layer_config = loadLayerConfig(root["layer"]);
@@ -187,11 +188,12 @@ int run(const Options& options) {
                                       : RayCastingIntegrator::Mode::kSimple,
         integrator_config, &layer);
   }
-  std::printf("cblox-integrate: source %s (%zu frames, %dx%d), %s integrator, voxel %.3f m, "
-              "truncation %.3f m, %d threads\n",
-              options.source.c_str(), source.size, source.intrinsics.width,
-              source.intrinsics.height, integratorTypeName(type), layer_config.voxel_size,
-              integrator_config.truncation_distance_m, integrator_config.num_threads);
+  std::printf(
+      "cblox-integrate: source %s (%zu frames, %dx%d), %s integrator, voxel %.3f m, "
+      "truncation %.3f m, %d threads\n",
+      options.source.c_str(), source.size, source.intrinsics.width, source.intrinsics.height,
+      integratorTypeName(type), layer_config.voxel_size, integrator_config.truncation_distance_m,
+      integrator_config.num_threads);
 
   DepthConversionConfig conversion;
   conversion.min_depth_m = std::max(1e-3f, integrator_config.min_ray_length_m);
@@ -222,19 +224,21 @@ int run(const Options& options) {
       std::fflush(stdout);
     }
   }
-  std::printf("integrated %zu frames: median %.2f ms, p95 %.2f ms per frame; %zu blocks, "
-              "%.1f MiB\n",
-              frames, percentile(frame_ms, 0.5), percentile(frame_ms, 0.95), layer.numBlocks(),
-              layer.memoryBytes() / 1048576.0);
+  std::printf(
+      "integrated %zu frames: median %.2f ms, p95 %.2f ms per frame; %zu blocks, "
+      "%.1f MiB\n",
+      frames, percentile(frame_ms, 0.5), percentile(frame_ms, 0.95), layer.numBlocks(),
+      layer.memoryBytes() / 1048576.0);
 
   const auto mesh_start = Clock::now();
   MeshIntegrator mesher(layer, mesh_config);
   mesher.update(false, true);
   const Mesh mesh = mesher.extractMesh(connected);
-  const double mesh_ms = std::chrono::duration<double, std::milli>(Clock::now() - mesh_start).count();
+  const double mesh_ms =
+      std::chrono::duration<double, std::milli>(Clock::now() - mesh_start).count();
   std::string error;
-  if (!writePly(options.output, mesh, format == "ascii" ? PlyFormat::kAscii : PlyFormat::kBinaryLittleEndian,
-                &error)) {
+  if (!writePly(options.output, mesh,
+                format == "ascii" ? PlyFormat::kAscii : PlyFormat::kBinaryLittleEndian, &error)) {
     std::fprintf(stderr, "cblox-integrate: %s\n", error.c_str());
     return 1;
   }
@@ -250,16 +254,17 @@ int run(const Options& options) {
     }
     const double rmse = errors.empty() ? 0.0 : std::sqrt(sum_sq / errors.size());
     const double within_voxel =
-        errors.empty() ? 0.0
-                       : std::count_if(errors.begin(), errors.end(),
-                                       [&](double e) { return e <= layer_config.voxel_size; }) /
-                             static_cast<double>(errors.size());
-    std::printf("accuracy vs ground truth: vertex RMSE %.2f mm, median %.2f mm, p90 %.2f mm, "
-                "max %.2f mm, %.2f%% within one voxel\n",
-                rmse * 1e3, percentile(errors, 0.5) * 1e3, percentile(errors, 0.9) * 1e3,
-                percentile(errors, 1.0) * 1e3, 100.0 * within_voxel);
+        errors.empty() ? 0.0 : std::count_if(errors.begin(), errors.end(), [&](double e) {
+                                 return e <= layer_config.voxel_size;
+                               }) / static_cast<double>(errors.size());
+    std::printf(
+        "accuracy vs ground truth: vertex RMSE %.2f mm, median %.2f mm, p90 %.2f mm, "
+        "max %.2f mm, %.2f%% within one voxel\n",
+        rmse * 1e3, percentile(errors, 0.5) * 1e3, percentile(errors, 0.9) * 1e3,
+        percentile(errors, 1.0) * 1e3, 100.0 * within_voxel);
   }
-  if (skipped_points > 0) std::printf("skipped %zu invalid or out-of-range depth pixels\n", skipped_points);
+  if (skipped_points > 0)
+    std::printf("skipped %zu invalid or out-of-range depth pixels\n", skipped_points);
   return mesh.numVertices() > 0 ? 0 : 1;
 }
 

@@ -26,8 +26,7 @@ class ApproxHashSet {
  public:
   /// `log2_buckets` in [16, 30].
   explicit ApproxHashSet(int log2_buckets)
-      : mask_((uint64_t{1} << log2_buckets) - 1),
-        buckets_(new std::atomic<uint64_t>[mask_ + 1]) {
+      : mask_((uint64_t{1} << log2_buckets) - 1), buckets_(new std::atomic<uint64_t>[mask_ + 1]) {
     for (uint64_t i = 0; i <= mask_; ++i) buckets_[i].store(0, std::memory_order_relaxed);
   }
 

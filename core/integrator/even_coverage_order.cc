@@ -12,7 +12,8 @@ std::vector<uint32_t> evenCoverageOrder(uint32_t n) {
   const uint64_t count = uint64_t{1} << bits;
   for (uint64_t i = 0; i < count; ++i) {
     uint32_t reversed = 0;
-    for (int b = 0; b < bits; ++b) reversed |= static_cast<uint32_t>((i >> b) & 1u) << (bits - 1 - b);
+    for (int b = 0; b < bits; ++b)
+      reversed |= static_cast<uint32_t>((i >> b) & 1u) << (bits - 1 - b);
     if (reversed < n) order.push_back(reversed);
   }
   return order;

@@ -54,8 +54,8 @@ class GridRayTraversal {
     if (remaining_ == 0) return false;
     // The axis whose boundary comes first; an axis that reached its end cell has its
     // boundary at infinity, so the walk only ever steps towards the end cell.
-    const int axis = t_max_[0] < t_max_[1] ? (t_max_[0] < t_max_[2] ? 0 : 2)
-                                           : (t_max_[1] < t_max_[2] ? 1 : 2);
+    const int axis =
+        t_max_[0] < t_max_[1] ? (t_max_[0] < t_max_[2] ? 0 : 2) : (t_max_[1] < t_max_[2] ? 1 : 2);
     cell_[axis] += step_[axis];
     t_max_[axis] = cell_[axis] == end_cell_[axis] ? std::numeric_limits<float>::infinity()
                                                   : t_max_[axis] + t_delta_[axis];

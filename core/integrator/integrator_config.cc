@@ -11,8 +11,8 @@ std::string IntegratorConfig::validate(float voxel_size) const {
   if (!finite_positive(voxel_size)) {
     error << "voxel_size must be finite and > 0, got " << voxel_size;
   } else if (!finite_positive(truncation_distance_m) || truncation_distance_m < voxel_size) {
-    error << "truncation_distance_m must be finite and >= voxel_size (" << voxel_size
-          << "), got " << truncation_distance_m;
+    error << "truncation_distance_m must be finite and >= voxel_size (" << voxel_size << "), got "
+          << truncation_distance_m;
   } else if (!finite_positive(max_weight)) {
     error << "max_weight must be finite and > 0, got " << max_weight;
   } else if (!std::isfinite(min_ray_length_m) || min_ray_length_m < 0.0f) {
@@ -27,8 +27,7 @@ std::string IntegratorConfig::validate(float voxel_size) const {
     error << "start_voxel_subsampling_factor must be in (0, 64], got "
           << start_voxel_subsampling_factor;
   } else if (max_consecutive_ray_collisions < 0) {
-    error << "max_consecutive_ray_collisions must be >= 0, got "
-          << max_consecutive_ray_collisions;
+    error << "max_consecutive_ray_collisions must be >= 0, got " << max_consecutive_ray_collisions;
   } else if (!std::isfinite(max_integration_time_s) || max_integration_time_s < 0.0) {
     error << "max_integration_time_s must be finite and >= 0 (0 = unlimited), got "
           << max_integration_time_s;

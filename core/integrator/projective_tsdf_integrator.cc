@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "core/integrator/thread_team.h"
@@ -55,18 +55,22 @@ struct RowProjector {
         const __m128 y = _mm_add_ps(_mm_set1_ps(p0.y()), _mm_mul_ps(fi, _mm_set1_ps(step.y())));
         const __m128 z = _mm_add_ps(_mm_set1_ps(p0.z()), _mm_mul_ps(fi, _mm_set1_ps(step.z())));
         const __m128 inv_z = _mm_div_ps(_mm_set1_ps(1.0f), _mm_max_ps(z, eps));
-        const __m128 u = _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(fx), x), inv_z), _mm_set1_ps(cx));
-        const __m128 v = _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(fy), y), inv_z), _mm_set1_ps(cy));
-        const __m128 inside = _mm_and_ps(
-            _mm_and_ps(_mm_cmpgt_ps(z, eps), _mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmpge_ps(v, zero))),
-            _mm_and_ps(_mm_cmplt_ps(u, w), _mm_cmplt_ps(v, h)));
+        const __m128 u =
+            _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(fx), x), inv_z), _mm_set1_ps(cx));
+        const __m128 v =
+            _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(fy), y), inv_z), _mm_set1_ps(cy));
+        const __m128 inside =
+            _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(z, eps),
+                                  _mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmpge_ps(v, zero))),
+                       _mm_and_ps(_mm_cmplt_ps(u, w), _mm_cmplt_ps(v, h)));
         const __m128i ui = _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(u, zero), last_u));
         const __m128i vi = _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(v, zero), last_v));
-        const __m128i pixel = _mm_cvttps_epi32(
-            _mm_add_ps(_mm_mul_ps(_mm_cvtepi32_ps(vi), w), _mm_cvtepi32_ps(ui)));
+        const __m128i pixel =
+            _mm_cvttps_epi32(_mm_add_ps(_mm_mul_ps(_mm_cvtepi32_ps(vi), w), _mm_cvtepi32_ps(ui)));
         const __m128i mask = _mm_castps_si128(inside);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(pixel_out + i),
-                         _mm_or_si128(_mm_and_si128(mask, pixel), _mm_andnot_si128(mask, minus_one)));
+        _mm_storeu_si128(
+            reinterpret_cast<__m128i*>(pixel_out + i),
+            _mm_or_si128(_mm_and_si128(mask, pixel), _mm_andnot_si128(mask, minus_one)));
         _mm_storeu_ps(z_out + i, z);
       }
     }
@@ -79,7 +83,8 @@ struct RowProjector {
       if (!(z > kMinZ)) continue;
       const float u = fx * (p0.x() + fi * step.x()) / z + cx;
       const float v = fy * (p0.y() + fi * step.y()) / z + cy;
-      if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(width) && v < static_cast<float>(height))) {
+      if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(width) &&
+            v < static_cast<float>(height))) {
         continue;
       }
       pixel_out[i] = static_cast<int32_t>(v) * width + static_cast<int32_t>(u);
@@ -94,16 +99,15 @@ bool sameIntrinsics(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
 
 }  // namespace
 
-ProjectiveTsdfIntegrator::ProjectiveTsdfIntegrator(const IntegratorConfig& config,
-                                                   TsdfLayer* layer)
+ProjectiveTsdfIntegrator::ProjectiveTsdfIntegrator(const IntegratorConfig& config, TsdfLayer* layer)
     : config_(config), layer_(layer), block_set_(kBlockSetLog2Buckets) {
   if (layer == nullptr) throw std::invalid_argument("ProjectiveTsdfIntegrator: layer is null");
   const std::string error = config.validate(layer->voxelSize());
   if (!error.empty()) throw std::invalid_argument("IntegratorConfig: " + error);
 }
 
-void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0, int v0,
-                                             int size, std::vector<uint64_t>* keys) {
+void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0, int v0, int size,
+                                             std::vector<uint64_t>* keys) {
   const int width = width_, height = height_;
   const int u1 = std::min(u0 + size, width), v1 = std::min(v0 + size, height);
   float d_min = std::numeric_limits<float>::infinity(), d_max = 0.0f;
@@ -132,7 +136,8 @@ void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0
   // by which a voxel centre can miss its pixel's ray).
   const PinholeIntrinsics& K = factor_camera_;
   const float f_min = static_cast<float>(std::min(K.fx, K.fy));
-  const float uc = 0.5f * static_cast<float>(u0 + u1 - 1), vc = 0.5f * static_cast<float>(v0 + v1 - 1);
+  const float uc = 0.5f * static_cast<float>(u0 + u1 - 1),
+              vc = 0.5f * static_cast<float>(v0 + v1 - 1);
   const Eigen::Vector3f ray((uc - static_cast<float>(K.cx)) / static_cast<float>(K.fx),
                             (vc - static_cast<float>(K.cy)) / static_cast<float>(K.fy), 1.0f);
   const float lateral = (0.7072f * static_cast<float>(std::max(u1 - u0, v1 - v0)) + 0.5f) / f_min;
@@ -140,8 +145,10 @@ void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0
   const Eigen::Vector3f a = T_G_C * Eigen::Vector3f(ray * d_min);
   const Eigen::Vector3f b = T_G_C * Eigen::Vector3f(ray * d_max);
   const float block_size_inv = layer_->blockSizeInv();
-  const BlockIndex lo = gridIndexFromPoint(Eigen::Vector3f(a.cwiseMin(b).array() - radius), block_size_inv);
-  const BlockIndex hi = gridIndexFromPoint(Eigen::Vector3f(a.cwiseMax(b).array() + radius), block_size_inv);
+  const BlockIndex lo =
+      gridIndexFromPoint(Eigen::Vector3f(a.cwiseMin(b).array() - radius), block_size_inv);
+  const BlockIndex hi =
+      gridIndexFromPoint(Eigen::Vector3f(a.cwiseMax(b).array() + radius), block_size_inv);
   // Keep the blocks of that box that can hold a voxel within `radius` of the segment a-b:
   // block centre within radius + half the block diagonal of it.
   const float block_size = layer_->blockSize();
@@ -153,7 +160,8 @@ void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0
       for (int x = lo.x(); x <= hi.x(); ++x) {
         const Eigen::Vector3f centre =
             (Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)) +
-             Eigen::Vector3f::Constant(0.5f)) * block_size;
+             Eigen::Vector3f::Constant(0.5f)) *
+            block_size;
         const float t = std::clamp((centre - a).dot(ab) / ab_squared, 0.0f, 1.0f);
         if ((a + t * ab - centre).squaredNorm() > reach * reach) continue;
         const uint64_t key = packGridIndex(BlockIndex(x, y, z));
@@ -164,9 +172,9 @@ void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0
 }
 
 IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformation& T_G_C,
-                                                              const DepthImage& depth,
-                                                              const PinholeCamera& camera,
-                                                              const ColorImage* color) {
+                                                               const DepthImage& depth,
+                                                               const PinholeCamera& camera,
+                                                               const ColorImage* color) {
   const auto start_time = std::chrono::steady_clock::now();
   const PinholeIntrinsics& K = camera.intrinsics();
   if (depth.width != K.width || depth.height != K.height) {
@@ -187,12 +195,14 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
     for (int v = 0; v < height; ++v) {
       for (int u = 0; u < width; ++u) {
         const double xn = (u - K.cx) / K.fx, yn = (v - K.cy) / K.fy;
-        ray_factor_[static_cast<size_t>(v) * width + u] = static_cast<float>(std::sqrt(1.0 + xn * xn + yn * yn));
+        ray_factor_[static_cast<size_t>(v) * width + u] =
+            static_cast<float>(std::sqrt(1.0 + xn * xn + yn * yn));
       }
     }
   }
   // Every point must stay inside the packable grid (absurd poses are rejected whole).
-  const float coordinate_limit = (kGridIndexMax - 2) * layer_->voxelSize() - 2.0f * config_.max_ray_length_m;
+  const float coordinate_limit =
+      (kGridIndexMax - 2) * layer_->voxelSize() - 2.0f * config_.max_ray_length_m;
   const bool pose_in_range = T_G_C.translation().cwiseAbs().maxCoeff() < coordinate_limit;
 
   width_ = width;
@@ -291,8 +301,9 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   const RowProjector projector{fx, fy, cx, cy, width, height};
   // Raw pointers in locals: the compiler cannot prove voxel writes do not alias members.
   const PixelSample* const samples = samples_.data();
-  const Color* const colors =
-      color != nullptr && config_.color_blending != ColorBlending::kNone ? color->data.data() : nullptr;
+  const Color* const colors = color != nullptr && config_.color_blending != ColorBlending::kNone
+                                  ? color->data.data()
+                                  : nullptr;
   runThreadTeam(num_threads, [&](int id) {
     IntegrationStats& stats = states[static_cast<size_t>(id)].stats;
     float row_z[64];  // voxels_per_side <= 64
@@ -309,8 +320,8 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
         // Per row of voxels along x: first all projections (SIMD), then lookups and updates.
         for (int k = 0; k < vps; ++k) {
           for (int j = 0; j < vps; ++j, voxel += vps) {
-            const Eigen::Vector3f row_C = first_center_C + static_cast<float>(k) * step_z +
-                                          static_cast<float>(j) * step_y;
+            const Eigen::Vector3f row_C =
+                first_center_C + static_cast<float>(k) * step_z + static_cast<float>(j) * step_y;
             projector.project(row_C, step_x, vps, row_z, row_pixel);
             for (int i = 0; i < vps; ++i) {
               const int32_t pixel = row_pixel[i];

@@ -24,8 +24,8 @@ constexpr int kStartClusterLog2 = 2;
 }  // namespace
 
 struct RayCastingIntegrator::ParkedRay {
-  uint32_t index = 0;   // point index in the cloud
-  int collisions = 0;   // consecutive re-visited voxels so far (fast mode)
+  uint32_t index = 0;     // point index in the cloud
+  int collisions = 0;     // consecutive re-visited voxels so far (fast mode)
   GridRayTraversal walk;  // positioned at the next voxel to update
 };
 
@@ -41,9 +41,9 @@ struct RayCastingIntegrator::Frame {
   Eigen::Vector3f origin_G;
   Deadline deadline;
   TsdfVoxelUpdater updater;
-  uint64_t epoch;           // this call's Block::markVisited epoch
-  float coordinate_limit;   // |coordinate| bound keeping every ray inside the packable grid
-  bool origin_in_range;     // the sensor itself is inside that bound
+  uint64_t epoch;            // this call's Block::markVisited epoch
+  float coordinate_limit;    // |coordinate| bound keeping every ray inside the packable grid
+  bool origin_in_range;      // the sensor itself is inside that bound
   float min_length_squared;  // accepted ray lengths, squared
   float max_length_squared;
   std::atomic<size_t> cursor{0};
@@ -107,8 +107,7 @@ IntegrationStats RayCastingIntegrator::integratePointCloud(const Transformation&
   std::vector<ThreadState> states(static_cast<size_t>(num_threads));
 
   // Main pass: every point in chunk order; rays that reach a missing block are parked.
-  runThreadTeam(num_threads,
-                [&](int id) { castChunks(frame, &states[static_cast<size_t>(id)]); });
+  runThreadTeam(num_threads, [&](int id) { castChunks(frame, &states[static_cast<size_t>(id)]); });
 
   // Allocate what parked rays need, single-threaded, and resume them; repeat.
   std::vector<BlockIndex> new_blocks;
@@ -138,9 +137,8 @@ IntegrationStats RayCastingIntegrator::integratePointCloud(const Transformation&
       if (newly_allocated) new_blocks.push_back(index);
     }
     frame.cursor.store(0);
-    runThreadTeam(num_threads, [&](int id) {
-      resumeParked(frame, parked, &states[static_cast<size_t>(id)]);
-    });
+    runThreadTeam(num_threads,
+                  [&](int id) { resumeParked(frame, parked, &states[static_cast<size_t>(id)]); });
   }
 
   IntegrationStats stats;
@@ -226,8 +224,8 @@ void RayCastingIntegrator::resumeParked(Frame& frame, const std::vector<ParkedRa
   }
 }
 
-bool RayCastingIntegrator::screenPoint(const Frame& frame, uint32_t index,
-                                       IntegrationStats* stats, StartCell* start_cell) const {
+bool RayCastingIntegrator::screenPoint(const Frame& frame, uint32_t index, IntegrationStats* stats,
+                                       StartCell* start_cell) const {
   const Eigen::Vector3f& point_C = frame.cloud_C.points[index];
   if (!point_C.allFinite()) {
     ++stats->points_invalid;
@@ -250,11 +248,12 @@ bool RayCastingIntegrator::screenPoint(const Frame& frame, uint32_t index,
         point_G, layer_->voxelSizeInv() * config_.start_voxel_subsampling_factor);
     constexpr int kMask = (1 << kStartClusterLog2) - 1;
     start_cell->cell = packGridIndex(cell);
-    start_cell->cluster = packGridIndex(GridIndex(
-        cell.x() >> kStartClusterLog2, cell.y() >> kStartClusterLog2, cell.z() >> kStartClusterLog2));
-    start_cell->member = static_cast<uint32_t>(
-        (cell.x() & kMask) | ((cell.y() & kMask) << kStartClusterLog2) |
-        ((cell.z() & kMask) << (2 * kStartClusterLog2)));
+    start_cell->cluster =
+        packGridIndex(GridIndex(cell.x() >> kStartClusterLog2, cell.y() >> kStartClusterLog2,
+                                cell.z() >> kStartClusterLog2));
+    start_cell->member =
+        static_cast<uint32_t>((cell.x() & kMask) | ((cell.y() & kMask) << kStartClusterLog2) |
+                              ((cell.z() & kMask) << (2 * kStartClusterLog2)));
   }
   return true;
 }

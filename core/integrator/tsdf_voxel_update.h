@@ -48,8 +48,9 @@ class TsdfVoxelUpdater {
     const float inv_new_weight = 1.0f / new_weight;
     const bool in_band = sdf < truncation_;
     const float measured = in_band ? sdf : truncation_;
-    voxel->distance = std::clamp((voxel->distance * old_weight + measured * weight) * inv_new_weight,
-                                 -truncation_, truncation_);
+    voxel->distance =
+        std::clamp((voxel->distance * old_weight + measured * weight) * inv_new_weight,
+                   -truncation_, truncation_);
     voxel->weight = std::min(new_weight, max_weight_);
     if (!in_band) return true;
     if (blending_ == ColorBlending::kWeightedAverage) {

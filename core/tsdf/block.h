@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cstdint>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 
 #include <Eigen/Core>
@@ -37,8 +37,8 @@ class Block {
 
   /// Linear index of a local voxel index (each component in [0, voxels_per_side)).
   int linearIndex(const GridIndex& local) const {
-    return local.x() + ((local.y() + (local.z() << voxels_per_side_log2_))
-                        << voxels_per_side_log2_);
+    return local.x() +
+           ((local.y() + (local.z() << voxels_per_side_log2_)) << voxels_per_side_log2_);
   }
   /// Inverse of linearIndex.
   GridIndex localIndex(int linear) const {

@@ -35,11 +35,11 @@ inline uint64_t packGridIndex(const GridIndex& index) {
 /// Inverse of packGridIndex. Thread-safe.
 inline GridIndex unpackGridIndex(uint64_t key) {
   constexpr uint64_t kMask = (uint64_t{1} << kGridIndexBits) - 1;
-  return GridIndex(static_cast<int32_t>(static_cast<int64_t>(key & kMask) + kGridIndexMin),
-                   static_cast<int32_t>(static_cast<int64_t>((key >> kGridIndexBits) & kMask) +
-                                        kGridIndexMin),
-                   static_cast<int32_t>(
-                       static_cast<int64_t>((key >> (2 * kGridIndexBits)) & kMask) + kGridIndexMin));
+  return GridIndex(
+      static_cast<int32_t>(static_cast<int64_t>(key & kMask) + kGridIndexMin),
+      static_cast<int32_t>(static_cast<int64_t>((key >> kGridIndexBits) & kMask) + kGridIndexMin),
+      static_cast<int32_t>(static_cast<int64_t>((key >> (2 * kGridIndexBits)) & kMask) +
+                           kGridIndexMin));
 }
 
 /// Grid index of the cell of side `cell_size_inv`^-1 that contains `point`

@@ -42,8 +42,8 @@ void requireKnownKeys(const YAML::Node& node, const std::string& path,
   if (!node.IsMap()) throw ConfigError(path + ": expected a map of settings");
   for (const auto& entry : node) {
     const std::string key = entry.first.as<std::string>();
-    const bool known = std::any_of(allowed.begin(), allowed.end(),
-                                   [&](const char* a) { return key == a; });
+    const bool known =
+        std::any_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; });
     if (!known) throw ConfigError(path + "." + key + ": unknown setting");
   }
 }
@@ -69,12 +69,12 @@ LayerConfig loadLayerConfig(const YAML::Node& node, const std::string& path) {
 
 IntegratorConfig loadIntegratorConfig(const YAML::Node& node, float voxel_size,
                                       IntegratorType* type, const std::string& path) {
-  requireKnownKeys(node, path,
-                   {"type", "truncation_distance_m", "max_weight", "min_ray_length_m",
-                    "max_ray_length_m", "weight_model", "use_weight_dropoff",
-                    "voxel_carving_enabled", "color_blending", "num_threads",
-                    "start_voxel_subsampling_factor", "max_consecutive_ray_collisions",
-                    "max_integration_time_s", "visited_voxel_set", "approx_set_log2_buckets"});
+  requireKnownKeys(
+      node, path,
+      {"type", "truncation_distance_m", "max_weight", "min_ray_length_m", "max_ray_length_m",
+       "weight_model", "use_weight_dropoff", "voxel_carving_enabled", "color_blending",
+       "num_threads", "start_voxel_subsampling_factor", "max_consecutive_ray_collisions",
+       "max_integration_time_s", "visited_voxel_set", "approx_set_log2_buckets"});
   IntegratorConfig config;
   if (!isAbsent(node)) {
     std::string type_name = integratorTypeName(*type);
@@ -88,10 +88,10 @@ IntegratorConfig loadIntegratorConfig(const YAML::Node& node, float voxel_size,
     readOptional(node, path, "max_weight", &config.max_weight);
     readOptional(node, path, "min_ray_length_m", &config.min_ray_length_m);
     readOptional(node, path, "max_ray_length_m", &config.max_ray_length_m);
-    readOptionalEnum(node, path, "weight_model",
-                     {{"constant", WeightModel::kConstant},
-                      {"inverse_square", WeightModel::kInverseSquare}},
-                     &config.weight_model);
+    readOptionalEnum(
+        node, path, "weight_model",
+        {{"constant", WeightModel::kConstant}, {"inverse_square", WeightModel::kInverseSquare}},
+        &config.weight_model);
     readOptional(node, path, "use_weight_dropoff", &config.use_weight_dropoff);
     readOptional(node, path, "voxel_carving_enabled", &config.voxel_carving_enabled);
     readOptionalEnum(node, path, "color_blending",

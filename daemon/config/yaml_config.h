@@ -33,8 +33,7 @@ const char* integratorTypeName(IntegratorType type);
 /// `node` (a map; a missing node keeps all defaults). `path` prefixes error messages.
 LayerConfig loadLayerConfig(const YAML::Node& node, const std::string& path = "layer");
 IntegratorConfig loadIntegratorConfig(const YAML::Node& node, float voxel_size,
-                                      IntegratorType* type,
-                                      const std::string& path = "integrator");
+                                      IntegratorType* type, const std::string& path = "integrator");
 MeshConfig loadMeshConfig(const YAML::Node& node, const std::string& path = "mesh");
 
 /// Loads a YAML file; throws ConfigError with the file name on read or parse errors.
@@ -56,7 +55,8 @@ void readOptional(const YAML::Node& node, const std::string& path, const char* k
   try {
     *value = child.as<T>();
   } catch (const YAML::Exception&) {
-    throw ConfigError(path + "." + key + ": cannot read '" + YAML::Dump(child) + "' as the expected type");
+    throw ConfigError(path + "." + key + ": cannot read '" + YAML::Dump(child) +
+                      "' as the expected type");
   }
 }
 

@@ -34,15 +34,18 @@ const Workload& workload() {
     const GridIndex bhi = gridIndexFromPoint(hi, 1 / kBlockSize) + GridIndex::Ones();
     for (int x = blo.x(); x <= bhi.x(); ++x) {
       for (int y = blo.y(); y <= bhi.y(); ++y) {
-        for (int z = blo.z(); z <= bhi.z(); ++z) result.allocated.push_back(packGridIndex({x, y, z}));
+        for (int z = blo.z(); z <= bhi.z(); ++z)
+          result.allocated.push_back(packGridIndex({x, y, z}));
       }
     }
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
     for (int r = 0; r < 20000; ++r) {
-      const Eigen::Vector3f a = lo + Eigen::Vector3f(unit(rng), unit(rng), unit(rng)).cwiseProduct(hi - lo);
+      const Eigen::Vector3f a =
+          lo + Eigen::Vector3f(unit(rng), unit(rng), unit(rng)).cwiseProduct(hi - lo);
       // A wall point: one coordinate pinned to a face of the room.
-      Eigen::Vector3f b = lo + Eigen::Vector3f(unit(rng), unit(rng), unit(rng)).cwiseProduct(hi - lo);
+      Eigen::Vector3f b =
+          lo + Eigen::Vector3f(unit(rng), unit(rng), unit(rng)).cwiseProduct(hi - lo);
       const int axis = r % 3;
       b[axis] = (r / 3) % 2 ? hi[axis] : lo[axis];
       for (GridRayTraversal t(a / kBlockSize, b / kBlockSize);;) {

@@ -66,8 +66,8 @@ struct Run {
   double layer_mib = 0.0;
   double mesh_ms = 0.0;
   size_t mesh_vertices = 0;
-  double rmse_to_reference_mm = -1.0;  // mesh vertices -> reference surface
-  double reference_coverage = -1.0;    // share of reference vertices near this surface
+  double rmse_to_reference_mm = -1.0;     // mesh vertices -> reference surface
+  double reference_coverage = -1.0;       // share of reference vertices near this surface
   double unobserved_in_reference = -1.0;  // share of vertices where the reference is empty
   std::shared_ptr<TsdfLayer> layer;
   Mesh mesh;
@@ -97,9 +97,10 @@ Run integrateOnce(const BenchSequence& seq, Kind kind, int threads, int voxels_p
   if (kind == Kind::kProjective) {
     projective = std::make_unique<ProjectiveTsdfIntegrator>(config, run.layer.get());
   } else {
-    rays = std::make_unique<RayCastingIntegrator>(
-        kind == Kind::kFast ? RayCastingIntegrator::Mode::kFast : RayCastingIntegrator::Mode::kSimple,
-        config, run.layer.get());
+    rays = std::make_unique<RayCastingIntegrator>(kind == Kind::kFast
+                                                      ? RayCastingIntegrator::Mode::kFast
+                                                      : RayCastingIntegrator::Mode::kSimple,
+                                                  config, run.layer.get());
   }
   size_t count = 0;
   for (const BenchFrame& frame : seq.frames) {
@@ -111,15 +112,17 @@ Run integrateOnce(const BenchSequence& seq, Kind kind, int threads, int voxels_p
       for (float& d : depth.data) d = d > kMaxDepth ? 0.0f : d;
       const auto start = std::chrono::steady_clock::now();
       projective->integrateDepthImage(T_G_C, depth, camera, &frame.color);
-      run.frame_ms.push_back(std::chrono::duration<double, std::milli>(
-                                 std::chrono::steady_clock::now() - start).count());
+      run.frame_ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+              .count());
     } else {
       // Timed: depth -> point cloud conversion plus integration (what a mapper does).
       const auto start = std::chrono::steady_clock::now();
       const PointCloud cloud = depthToPointCloud(frame.depth, camera, &frame.color, conversion);
       rays->integratePointCloud(T_G_C, cloud);
-      run.frame_ms.push_back(std::chrono::duration<double, std::milli>(
-                                 std::chrono::steady_clock::now() - start).count());
+      run.frame_ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+              .count());
     }
   }
   run.blocks = run.layer->numBlocks();
@@ -168,15 +171,17 @@ void compareToReference(const Run& reference, Run* run) {
   }
   run->rmse_to_reference_mm = observed == 0 ? 0.0 : 1e3 * std::sqrt(sum_sq / observed);
   run->unobserved_in_reference =
-      run->mesh.vertices.empty() ? 0.0 : 1.0 - static_cast<double>(observed) / run->mesh.vertices.size();
+      run->mesh.vertices.empty() ? 0.0
+                                 : 1.0 - static_cast<double>(observed) / run->mesh.vertices.size();
   const TsdfInterpolator own(*run->layer);
   size_t covered = 0;
   for (const Eigen::Vector3f& v : reference.mesh.vertices) {
     float d = 0.0f;
     covered += own.getInterpolatedDistance(v, &d) && std::abs(d) < kVoxelSize ? 1 : 0;
   }
-  run->reference_coverage =
-      reference.mesh.vertices.empty() ? 0.0 : static_cast<double>(covered) / reference.mesh.vertices.size();
+  run->reference_coverage = reference.mesh.vertices.empty()
+                                ? 0.0
+                                : static_cast<double>(covered) / reference.mesh.vertices.size();
 }
 
 BenchSequence load(const std::string& folder) {
@@ -234,7 +239,9 @@ int main(int argc, char** argv) {
   auto add = [&](Kind kind, int threads, int vps, size_t frames, int reps,
                  cblox::VisitedVoxelSet visited = cblox::VisitedVoxelSet::kBlockBitmap) {
     std::printf("running %s, %d thread(s), %d^3 blocks, %d repetition(s) ...\n",
-                kind == Kind::kSimple ? "simple" : kind == Kind::kFast ? "fast" : "projective",
+                kind == Kind::kSimple ? "simple"
+                : kind == Kind::kFast ? "fast"
+                                      : "projective",
                 threads, vps, reps);
     std::fflush(stdout);
     runs.push_back(integrate(seq, kind, threads, vps, frames, visited, reps));
@@ -247,7 +254,8 @@ int main(int argc, char** argv) {
   for (int threads : {1, 2}) add(Kind::kProjective, threads, 8, seq.frames.size(), repeats);
   add(Kind::kProjective, 2, 16, seq.frames.size(), repeats);
   const bool reference_complete = simple_frames >= seq.frames.size();
-  for (size_t i = 2; i < runs.size() && reference_complete; ++i) compareToReference(runs[0], &runs[i]);
+  for (size_t i = 2; i < runs.size() && reference_complete; ++i)
+    compareToReference(runs[0], &runs[i]);
 
   auto optional = [](double value, double scale, const char* unit) {
     if (value < 0) return std::string("-");
@@ -255,8 +263,9 @@ int main(int argc, char** argv) {
     std::snprintf(text, sizeof(text), "%.1f%s", value * scale, unit);
     return std::string(text);
   };
-  std::printf("\n| integrator | threads | block | median ms/frame | p95 ms | blocks | layer MiB | "
-              "mesh ms | mesh vertices | RMSE to simple | vertices outside simple | covers simple |\n");
+  std::printf(
+      "\n| integrator | threads | block | median ms/frame | p95 ms | blocks | layer MiB | "
+      "mesh ms | mesh vertices | RMSE to simple | vertices outside simple | covers simple |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Run& run : runs) {
     std::printf("| %s | %d | %d^3 | %.2f | %.2f | %zu | %.1f | %.1f | %zu | %s | %s | %s |\n",
@@ -280,8 +289,9 @@ int main(int argc, char** argv) {
       }
     }
     open3d_medians.emplace_back(threads, median(peer.frame_ms));
-    std::printf("| Open3D ScalableTSDFVolume | %d | 16^3 | %.2f | %.2f | - | - | - | %zu | - | - | - |\n",
-                threads, median(peer.frame_ms), percentile(peer.frame_ms, 0.95), peer.mesh_vertices);
+    std::printf(
+        "| Open3D ScalableTSDFVolume | %d | 16^3 | %.2f | %.2f | - | - | - | %zu | - | - | - |\n",
+        threads, median(peer.frame_ms), percentile(peer.frame_ms, 0.95), peer.mesh_vertices);
   }
   std::printf("\nratios ours / Open3D (median ms per frame, same threads, same run):\n");
   for (const Run& run : runs) {
@@ -291,7 +301,8 @@ int main(int argc, char** argv) {
     }
     for (const auto& [threads, o3d] : open3d_medians) {
       if (threads == run.threads) {
-        std::printf("  %s, %d thread(s): %.2f\n", run.name.c_str(), threads, median(run.frame_ms) / o3d);
+        std::printf("  %s, %d thread(s): %.2f\n", run.name.c_str(), threads,
+                    median(run.frame_ms) / o3d);
       }
     }
   }
@@ -305,10 +316,12 @@ int main(int argc, char** argv) {
     for (size_t i = 0; i < runs.size(); ++i) {
       const Run& r = runs[i];
       json << (i ? "," : "") << "{\"integrator\":\"" << r.name << "\",\"threads\":" << r.threads
-           << ",\"voxels_per_side\":" << r.voxels_per_side << ",\"median_ms\":" << median(r.frame_ms)
+           << ",\"voxels_per_side\":" << r.voxels_per_side
+           << ",\"median_ms\":" << median(r.frame_ms)
            << ",\"p95_ms\":" << percentile(r.frame_ms, 0.95) << ",\"blocks\":" << r.blocks
            << ",\"layer_mib\":" << r.layer_mib << ",\"mesh_ms\":" << r.mesh_ms
-           << ",\"mesh_vertices\":" << r.mesh_vertices << ",\"rmse_to_simple_mm\":" << r.rmse_to_reference_mm
+           << ",\"mesh_vertices\":" << r.mesh_vertices
+           << ",\"rmse_to_simple_mm\":" << r.rmse_to_reference_mm
            << ",\"outside_simple\":" << r.unobserved_in_reference
            << ",\"covers_simple\":" << r.reference_coverage << "}";
     }

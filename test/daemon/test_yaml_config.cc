@@ -21,7 +21,8 @@ TEST(YamlConfig, ShippedConfigMatchesTheCodeDefaults) {
   EXPECT_EQ(layer.voxel_size, LayerConfig{}.voxel_size);
   EXPECT_EQ(layer.voxels_per_side, LayerConfig{}.voxels_per_side);
   IntegratorType type = IntegratorType::kSimple;
-  const IntegratorConfig integrator = loadIntegratorConfig(root["integrator"], layer.voxel_size, &type);
+  const IntegratorConfig integrator =
+      loadIntegratorConfig(root["integrator"], layer.voxel_size, &type);
   const IntegratorConfig defaults;
   EXPECT_EQ(type, IntegratorType::kFast);
   EXPECT_EQ(integrator.truncation_distance_m, defaults.truncation_distance_m);
@@ -69,24 +70,31 @@ TEST(YamlConfig, ErrorsNameTheKey) {
   IntegratorType type = IntegratorType::kFast;
   EXPECT_EQ(errorOf([] { loadLayerConfig(YAML::Load("voxel_size: -1")); }),
             "layer.voxel_size must be finite and > 0, got -1");
-  EXPECT_NE(errorOf([] { loadLayerConfig(YAML::Load("voxels_per_sid: 8")); }).find("layer.voxels_per_sid: unknown setting"),
+  EXPECT_NE(errorOf([] {
+              loadLayerConfig(YAML::Load("voxels_per_sid: 8"));
+            }).find("layer.voxels_per_sid: unknown setting"),
             std::string::npos);
-  EXPECT_NE(errorOf([&] { loadIntegratorConfig(YAML::Load("num_threads: two"), 0.02f, &type); })
-                .find("integrator.num_threads"),
+  EXPECT_NE(errorOf([&] {
+              loadIntegratorConfig(YAML::Load("num_threads: two"), 0.02f, &type);
+            }).find("integrator.num_threads"),
             std::string::npos);
-  EXPECT_NE(errorOf([&] { loadIntegratorConfig(YAML::Load("type: magic"), 0.02f, &type); })
-                .find("integrator.type"),
+  EXPECT_NE(errorOf([&] {
+              loadIntegratorConfig(YAML::Load("type: magic"), 0.02f, &type);
+            }).find("integrator.type"),
             std::string::npos);
-  EXPECT_NE(errorOf([&] { loadIntegratorConfig(YAML::Load("weight_model: cubic"), 0.02f, &type); })
-                .find("integrator.weight_model"),
+  EXPECT_NE(errorOf([&] {
+              loadIntegratorConfig(YAML::Load("weight_model: cubic"), 0.02f, &type);
+            }).find("integrator.weight_model"),
             std::string::npos);
-  EXPECT_NE(errorOf([&] { loadIntegratorConfig(YAML::Load("truncation_distance_m: 0.001"), 0.02f, &type); })
-                .find("integrator.truncation_distance_m"),
+  EXPECT_NE(errorOf([&] {
+              loadIntegratorConfig(YAML::Load("truncation_distance_m: 0.001"), 0.02f, &type);
+            }).find("integrator.truncation_distance_m"),
             std::string::npos);
   EXPECT_NE(errorOf([] { loadMeshConfig(YAML::Load("- a list")); }).find("mesh: expected a map"),
             std::string::npos);
-  EXPECT_NE(errorOf([] { loadYamlFile("/nonexistent/cblox.yaml"); }).find("/nonexistent/cblox.yaml"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf([] { loadYamlFile("/nonexistent/cblox.yaml"); }).find("/nonexistent/cblox.yaml"),
+      std::string::npos);
 }
 
 }  // namespace

@@ -95,10 +95,10 @@ inline DistanceErrors surfaceErrors(const TsdfLayer& layer) {
   for (int lat = -30; lat <= 45; lat += 5) {
     for (int lon = 0; lon < 360; lon += 3) {
       const double phi = lat * M_PI / 180.0, theta = lon * M_PI / 180.0;
-      const Eigen::Vector3f p = (kSphereRadius * Eigen::Vector3d(std::cos(phi) * std::cos(theta),
-                                                                   std::cos(phi) * std::sin(theta),
-                                                                   std::sin(phi)))
-                                    .cast<float>();
+      const Eigen::Vector3f p =
+          (kSphereRadius * Eigen::Vector3d(std::cos(phi) * std::cos(theta),
+                                           std::cos(phi) * std::sin(theta), std::sin(phi)))
+              .cast<float>();
       float distance = 0.0f;
       if (!interpolator.getInterpolatedDistance(p, &distance)) continue;
       errors.max_abs = std::max(errors.max_abs, static_cast<double>(std::abs(distance)));

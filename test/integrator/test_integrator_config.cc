@@ -23,7 +23,9 @@ TEST(IntegratorConfig, MessagesNameTheField) {
   };
   const Case cases[] = {
       {[](IntegratorConfig& c) { c.truncation_distance_m = 0.01f; }, "truncation_distance_m"},
-      {[](IntegratorConfig& c) { c.truncation_distance_m = std::numeric_limits<float>::quiet_NaN(); },
+      {[](IntegratorConfig& c) {
+         c.truncation_distance_m = std::numeric_limits<float>::quiet_NaN();
+       },
        "truncation_distance_m"},
       {[](IntegratorConfig& c) { c.max_weight = 0.0f; }, "max_weight"},
       {[](IntegratorConfig& c) { c.min_ray_length_m = -1.0f; }, "min_ray_length_m"},

@@ -84,8 +84,8 @@ TEST(ProjectiveTsdfIntegrator, BlockSearchCoversTheTruncationBandOfEveryPixel) {
   IntegratorConfig config;
   ProjectiveTsdfIntegrator integrator(config, &layer);
   const PinholeCamera camera = test::smallCamera();
-  const AnalyticScene scene = makePlaneScene(Eigen::Vector3d(0, 0, 1.5),
-                                             Eigen::Vector3d(0, 0.7, -0.7).normalized(), 0.2);
+  const AnalyticScene scene =
+      makePlaneScene(Eigen::Vector3d(0, 0, 1.5), Eigen::Vector3d(0, 0.7, -0.7).normalized(), 0.2);
   DepthImage depth(160, 120);
   scene.renderDepth(Transformationd(), camera, &depth, nullptr, 10.0);
   integrator.integrateDepthImage(Transformation(), depth, camera, nullptr);
@@ -170,7 +170,8 @@ TEST(ProjectiveTsdfIntegrator, BadDepthsAreSkippedAndCounted) {
   depth(3, 0) = -1.0f;
   depth(4, 0) = 3.5f;
   depth(5, 0) = 0.05f;
-  const IntegrationStats stats = integrator.integrateDepthImage(Transformation(), depth, camera, nullptr);
+  const IntegrationStats stats =
+      integrator.integrateDepthImage(Transformation(), depth, camera, nullptr);
   EXPECT_EQ(stats.points_invalid, 4u);
   EXPECT_EQ(stats.points_out_of_range, 2u);
   EXPECT_GT(stats.voxel_updates, 0u);

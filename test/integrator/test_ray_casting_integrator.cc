@@ -27,8 +27,9 @@ TEST(SimpleTsdfIntegrator, SingleRayStoresTheExactDistanceAlongTheRay) {
   TsdfLayer layer(LayerConfig{kVoxelSize, 8});
   const IntegratorConfig config = exactConfig();
   SimpleTsdfIntegrator integrator(config, &layer);
-  const Transformation T_G_C(Eigen::Quaternionf(Eigen::AngleAxisf(0.7f, Eigen::Vector3f(1, 2, 3).normalized())),
-                             Eigen::Vector3f(0.31f, -0.12f, 0.77f));
+  const Transformation T_G_C(
+      Eigen::Quaternionf(Eigen::AngleAxisf(0.7f, Eigen::Vector3f(1, 2, 3).normalized())),
+      Eigen::Vector3f(0.31f, -0.12f, 0.77f));
   PointCloud cloud;
   cloud.points.push_back(Eigen::Vector3f(0.1f, -0.05f, 1.7f));
   const IntegrationStats stats = integrator.integratePointCloud(T_G_C, cloud);
@@ -132,7 +133,8 @@ TEST(FastTsdfIntegrator, AgreesWithSimpleNearTheSurface) {
   // The fast integrator reconstructs (almost) every surface point the simple one does.
   // It is noisier: most voxels get one ray per frame instead of all of them (measured on
   // these 8 low-resolution views: RMS 0.29 voxel vs 0.08, max 1.5 voxel vs 0.28).
-  EXPECT_GT(static_cast<double>(fast_errors.count), 0.97 * static_cast<double>(simple_errors.count));
+  EXPECT_GT(static_cast<double>(fast_errors.count),
+            0.97 * static_cast<double>(simple_errors.count));
   EXPECT_LT(fast_errors.rms, 0.4 * kVoxelSize) << "simple " << simple_errors.rms;
   EXPECT_LT(fast_errors.max_abs, 2.0 * kVoxelSize) << "simple " << simple_errors.max_abs;
 }
@@ -242,7 +244,7 @@ TEST(RayCastingIntegrator, BadPointsAreSkippedAndCounted) {
   const float inf = std::numeric_limits<float>::infinity();
   const float nan = std::numeric_limits<float>::quiet_NaN();
   PointCloud cloud;
-  cloud.points = {{0, 0, nan}, {inf, 0, 1}, {0, 0, 0},  {0, 0, -0.05f},
+  cloud.points = {{0, 0, nan},  {inf, 0, 1},   {0, 0, 0},   {0, 0, -0.05f},
                   {0, 0, 3.5f}, {0, 0, 1e30f}, {0, 0, 1.0f}};
   const IntegrationStats stats = integrator.integratePointCloud(Transformation(), cloud);
   EXPECT_EQ(stats.points_in, 7u);

@@ -4,6 +4,7 @@
 // buffers of another type (fingerprint mismatch) must fail to decode.
 // Suite names start with "lcmtypes_" so `ctest -R lcm` selects them.
 
+#include <gtest/gtest.h>
 #include <cblox/camera_calibration_t.hpp>
 #include <cblox/command_reply_t.hpp>
 #include <cblox/command_t.hpp>
@@ -20,7 +21,6 @@
 #include <cblox/pose_stamped_t.hpp>
 #include <cblox/pose_t.hpp>
 #include <cblox/stereo_pair_t.hpp>
-#include <gtest/gtest.h>
 
 #include <cstddef>
 #include <cstdint>
@@ -103,8 +103,8 @@ void ExpectPoseEq(const cblox::pose_t& a, const cblox::pose_t& b) {
   }
 }
 
-cblox::image_t MakeImage(const std::string& camera_id, int8_t format, int32_t width,
-                         int32_t height, int32_t bytes_per_pixel, uint8_t seed) {
+cblox::image_t MakeImage(const std::string& camera_id, int8_t format, int32_t width, int32_t height,
+                         int32_t bytes_per_pixel, uint8_t seed) {
   cblox::image_t img{};
   img.utime = 1'700'000'000'123'456 + seed;
   img.camera_id = camera_id;
@@ -417,10 +417,12 @@ TEST(lcmtypes_roundtrip, FramePoseT) {
   EXPECT_EQ(d.tracking_state, cblox::frame_pose_t::LOOP_CORRECTED);
   EXPECT_EQ(d.tracking_jump, 1);
   EXPECT_EQ(d.map_epoch, 3);
-  const std::set<int8_t> states = {
-      cblox::frame_pose_t::NOT_INITIALIZED, cblox::frame_pose_t::OK,
-      cblox::frame_pose_t::LOST,            cblox::frame_pose_t::RELOCALIZED,
-      cblox::frame_pose_t::LOOP_CORRECTED,  cblox::frame_pose_t::MAP_RESET};
+  const std::set<int8_t> states = {cblox::frame_pose_t::NOT_INITIALIZED,
+                                   cblox::frame_pose_t::OK,
+                                   cblox::frame_pose_t::LOST,
+                                   cblox::frame_pose_t::RELOCALIZED,
+                                   cblox::frame_pose_t::LOOP_CORRECTED,
+                                   cblox::frame_pose_t::MAP_RESET};
   EXPECT_EQ(states.size(), 6U);
 }
 

@@ -28,8 +28,9 @@ TEST(TsdfInterpolator, ReproducesLinearFieldsExactlyAcrossBlockBorders) {
   const Eigen::Vector3f a(0.3f, -0.5f, 0.8f);
   fillLinear(&layer, a, 0.1f);
   const TsdfInterpolator interpolator(layer);
-  for (const Eigen::Vector3f& p : {Eigen::Vector3f(0.0f, 0.0f, 0.0f), Eigen::Vector3f(-0.013f, 0.1f, -0.2f),
-                                  Eigen::Vector3f(0.17f, -0.3f, 0.02f)}) {
+  for (const Eigen::Vector3f& p :
+       {Eigen::Vector3f(0.0f, 0.0f, 0.0f), Eigen::Vector3f(-0.013f, 0.1f, -0.2f),
+        Eigen::Vector3f(0.17f, -0.3f, 0.02f)}) {
     float distance = 0.0f;
     Color color;
     ASSERT_TRUE(interpolator.getInterpolatedDistance(p, &distance, &color)) << p.transpose();
@@ -53,7 +54,8 @@ TEST(TsdfInterpolator, FailsWithoutAllEightObservedNeighbours) {
   EXPECT_FALSE(interpolator.getInterpolatedDistance(Eigen::Vector3f(0.39f, 0.0f, 0.0f), &distance));
   // An unobserved corner voxel also fails.
   layer.getVoxel(GlobalVoxelIndex(0, 0, 0))->weight = 0.0f;
-  EXPECT_FALSE(interpolator.getInterpolatedDistance(Eigen::Vector3f(0.03f, 0.03f, 0.03f), &distance));
+  EXPECT_FALSE(
+      interpolator.getInterpolatedDistance(Eigen::Vector3f(0.03f, 0.03f, 0.03f), &distance));
   EXPECT_FALSE(interpolator.getNearestDistance(Eigen::Vector3f(0.01f, 0.01f, 0.01f), &distance));
 }
 

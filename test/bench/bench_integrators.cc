@@ -6,6 +6,7 @@
 //
 //   build/test/bench/cblox-bench-integrators [--data DIR] [--simple-frames N] [--repeats R]
 //                                            [--json FILE]
+//   build/test/bench/cblox-bench-integrators --only fast      # peak memory of one integrator
 //
 // Timing: each configuration runs R times (default 3) on a fresh volume; per frame the
 // fastest repetition is kept (interference from other jobs only adds time), and the
@@ -207,20 +208,24 @@ int main(int argc, char** argv) {
   std::string json_path;
   size_t simple_frames = 50;
   int repeats = 3;
+  std::string only;  // run one integrator (2 threads, 8^3) for its peak memory
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--data" && i + 1 < argc) {
       data = argv[++i];
     } else if (arg == "--simple-frames" && i + 1 < argc) {
       simple_frames = std::stoul(argv[++i]);
+    } else if (arg == "--only" && i + 1 < argc) {
+      only = argv[++i];
     } else if (arg == "--repeats" && i + 1 < argc) {
       repeats = std::max(1, std::stoi(argv[++i]));
     } else if (arg == "--json" && i + 1 < argc) {
       json_path = argv[++i];
     } else {
       std::fprintf(stderr,
-                   "usage: %s [--data DIR] [--simple-frames N] [--repeats R] [--json FILE]\n",
-                   argv[0]);
+                   "usage: %s [--data DIR] [--simple-frames N] [--repeats R] [--json FILE]\n"
+                   "       %s --only simple|fast|projective|open3d  (peak memory of one)\n",
+                   argv[0], argv[0]);
       return 2;
     }
   }
@@ -234,6 +239,39 @@ int main(int argc, char** argv) {
   std::printf("%zu frames %dx%d from %s; voxel %.3f m, truncation %.3f m, max depth %.1f m\n",
               seq.frames.size(), seq.intrinsics.width, seq.intrinsics.height, data.c_str(),
               kVoxelSize, kTruncation, kMaxDepth);
+
+  if (!only.empty()) {
+    // Peak memory of one integrator: the process's peak RSS minus its RSS once the frames
+    // are loaded (the kernel reports peaks only, so one integrator per process).
+    const double loaded_mib = peakRssMiB();
+    size_t blocks = 0;
+    double layer_mib = 0.0;
+    if (only == "open3d") {
+#ifdef CBLOX_HAVE_OPEN3D
+      runOpen3dScalableTsdf(seq, kVoxelSize, kTruncation, kMaxDepth, 2);
+#else
+      std::fprintf(stderr, "built without Open3D\n");
+      return 1;
+#endif
+    } else if (only == "simple" || only == "fast" || only == "projective") {
+      const Kind kind = only == "simple" ? Kind::kSimple
+                        : only == "fast" ? Kind::kFast
+                                         : Kind::kProjective;
+      const Run run =
+          integrateOnce(seq, kind, 2, 8, seq.frames.size(), cblox::VisitedVoxelSet::kBlockBitmap);
+      blocks = run.blocks;
+      layer_mib = run.layer_mib;
+    } else {
+      std::fprintf(stderr, "--only takes simple, fast, projective or open3d, got '%s'\n",
+                   only.c_str());
+      return 2;
+    }
+    std::printf("%s: peak RSS %.0f MiB, %.0f MiB above the loaded frames", only.c_str(),
+                peakRssMiB(), peakRssMiB() - loaded_mib);
+    if (only != "open3d") std::printf("; %zu blocks, layer %.1f MiB", blocks, layer_mib);
+    std::printf("\n");
+    return 0;
+  }
 
   std::vector<Run> runs;
   auto add = [&](Kind kind, int threads, int vps, size_t frames, int reps,

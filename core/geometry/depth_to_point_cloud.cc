@@ -54,27 +54,37 @@ PointCloud depthToPointCloud(const DepthImage& depth, const PinholeCamera& camer
   PointCloud cloud;
   const size_t sampled =
       x_factor.size() * static_cast<size_t>((depth.height + stride - 1) / stride);
-  cloud.points.reserve(sampled);
-  if (color != nullptr) cloud.colors.reserve(sampled);
-
+  // Sized once and written by index, then cut to the valid count: no per-point growth
+  // checks in the loop.
+  cloud.points.resize(sampled);
+  if (color != nullptr) cloud.colors.resize(sampled);
+  Eigen::Vector3f* const points = cloud.points.data();
+  Color* const colors = cloud.colors.data();
+  size_t count = 0;
+  const float min_depth = config.min_depth_m, max_depth = config.max_depth_m;
   for (int v = 0; v < depth.height; v += stride) {
     const double y_factor = (v - in.cy) / in.fy;
+    const float* row = &depth.data[static_cast<size_t>(v) * static_cast<size_t>(depth.width)];
     for (int u = 0, i = 0; u < depth.width; u += stride, ++i) {
-      const float d = depth(u, v);
-      if (!std::isfinite(d)) {
+      const float d = row[u];
+      // Fast path first: NaN and every non-positive depth fail this test (min_depth > 0).
+      if (d >= min_depth && d <= max_depth) {
+        points[count] = Eigen::Vector3f(static_cast<float>(x_factor[i] * d),
+                                        static_cast<float>(y_factor * d), d);
+        if (color != nullptr) colors[count] = (*color)(u, v);
+        ++count;
+      } else if (!std::isfinite(d)) {
         ++counts.non_finite;
       } else if (d <= 0.0f) {
         ++counts.non_positive;
-      } else if (d < config.min_depth_m || d > config.max_depth_m) {
-        ++counts.out_of_range;
       } else {
-        ++counts.valid;
-        cloud.points.emplace_back(static_cast<float>(x_factor[i] * d),
-                                  static_cast<float>(y_factor * d), d);
-        if (color != nullptr) cloud.colors.push_back((*color)(u, v));
+        ++counts.out_of_range;
       }
     }
   }
+  counts.valid = count;
+  cloud.points.resize(count);
+  if (color != nullptr) cloud.colors.resize(count);
   if (stats != nullptr) *stats = counts;
   return cloud;
 }

@@ -161,9 +161,22 @@ IntegrationStats RayCastingIntegrator::integratePointCloud(const Transformation&
 // A point that passed the range checks, with its start-voxel set key (fast mode).
 struct RayCastingIntegrator::StartCell {
   uint32_t index = 0;
-  uint64_t cell = 0;     // packed start-cell index
-  uint64_t cluster = 0;  // packed index of the 4x4x4 cluster of start cells
+  uint64_t cell = 0;     // packed start-cell index (packGridIndex)
+  uint64_t cluster = 0;  // key of its 4x4x4 cluster of start cells
   uint32_t member = 0;   // the cell inside its cluster
+
+  // Cluster and member straight from the packed fields: each field is the index plus
+  // 2^20, a multiple of 4, so dropping its two low bits is the floor division by 4.
+  void splitCell() {
+    constexpr uint64_t kField = (uint64_t{1} << kGridIndexBits) - 1;
+    constexpr uint64_t kLow = (uint64_t{1} << kStartClusterLog2) - 1;
+    const uint64_t x = cell & kField, y = (cell >> kGridIndexBits) & kField,
+                   z = cell >> (2 * kGridIndexBits);
+    cluster = (x >> kStartClusterLog2) | ((y >> kStartClusterLog2) << kGridIndexBits) |
+              ((z >> kStartClusterLog2) << (2 * kGridIndexBits));
+    member = static_cast<uint32_t>((x & kLow) | ((y & kLow) << kStartClusterLog2) |
+                                   ((z & kLow) << (2 * kStartClusterLog2)));
+  }
 };
 
 void RayCastingIntegrator::castChunks(Frame& frame, ThreadState* state) {
@@ -192,6 +205,7 @@ void RayCastingIntegrator::castChunks(Frame& frame, ThreadState* state) {
           continue;
         }
         last_cell = candidate.cell;
+        candidate.splitCell();
         start_voxel_set_->prefetchInCluster(candidate.cluster, candidate.member,
                                             3 * kStartClusterLog2);
       }
@@ -244,16 +258,8 @@ bool RayCastingIntegrator::screenPoint(const Frame& frame, uint32_t index, Integ
   }
   start_cell->index = index;
   if (mode_ == Mode::kFast) {
-    const GridIndex cell = gridIndexFromPointUnchecked(
-        point_G, layer_->voxelSizeInv() * config_.start_voxel_subsampling_factor);
-    constexpr int kMask = (1 << kStartClusterLog2) - 1;
-    start_cell->cell = packGridIndex(cell);
-    start_cell->cluster =
-        packGridIndex(GridIndex(cell.x() >> kStartClusterLog2, cell.y() >> kStartClusterLog2,
-                                cell.z() >> kStartClusterLog2));
-    start_cell->member =
-        static_cast<uint32_t>((cell.x() & kMask) | ((cell.y() & kMask) << kStartClusterLog2) |
-                              ((cell.z() & kMask) << (2 * kStartClusterLog2)));
+    start_cell->cell = packGridIndex(gridIndexFromPointUnchecked(
+        point_G, layer_->voxelSizeInv() * config_.start_voxel_subsampling_factor));
   }
   return true;
 }

@@ -13,7 +13,6 @@ class Deadline {
       : unlimited_(seconds <= 0.0),
         end_(Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                 std::chrono::duration<double>(unlimited_ ? 0.0 : seconds))) {}
-  bool unlimited() const { return unlimited_; }
   bool expired() const { return !unlimited_ && Clock::now() >= end_; }
 
  private:

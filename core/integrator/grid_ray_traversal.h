@@ -46,8 +46,6 @@ class GridRayTraversal {
   /// Axis (0, 1, 2) of the last advance() and its direction (+1 or -1) along it.
   int lastAxis() const { return last_axis_; }
   int lastStep() const { return step_[last_axis_]; }
-  /// Number of cells still to visit after the current one.
-  int remaining() const { return remaining_; }
 
   /// Steps to the next cell; false when the current cell was the last one.
   bool advance() {

@@ -189,14 +189,16 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   const int width = depth.width;
   const int height = depth.height;
   const int num_threads = config_.num_threads;
-  if (ray_factor_.empty() || !sameIntrinsics(factor_camera_, K)) {
+  // The ray factors depend only on the camera: computed once, then each frame writes
+  // only the depths next to them.
+  if (samples_.empty() || !sameIntrinsics(factor_camera_, K)) {
     factor_camera_ = K;
-    ray_factor_.resize(static_cast<size_t>(width) * static_cast<size_t>(height));
+    samples_.resize(static_cast<size_t>(width) * static_cast<size_t>(height));
     for (int v = 0; v < height; ++v) {
       for (int u = 0; u < width; ++u) {
         const double xn = (u - K.cx) / K.fx, yn = (v - K.cy) / K.fy;
-        ray_factor_[static_cast<size_t>(v) * width + u] =
-            static_cast<float>(std::sqrt(1.0 + xn * xn + yn * yn));
+        samples_[static_cast<size_t>(v) * width + u] = {
+            0.0f, static_cast<float>(std::sqrt(1.0 + xn * xn + yn * yn))};
       }
     }
   }
@@ -207,7 +209,6 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
 
   width_ = width;
   height_ = height;
-  samples_.resize(depth.data.size());
   block_set_.clear();
   std::vector<ThreadState> states(static_cast<size_t>(num_threads));
 
@@ -222,13 +223,13 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
         float valid = 0.0f;
         if (!std::isfinite(d) || d <= 0.0f || !pose_in_range) {
           ++stats.points_invalid;
-        } else if (const float length = d * ray_factor_[row + u];
+        } else if (const float length = d * samples_[row + u].ray_factor;
                    length < config_.min_ray_length_m || length > config_.max_ray_length_m) {
           ++stats.points_out_of_range;
         } else {
           valid = d;
         }
-        samples_[row + u] = {valid, ray_factor_[row + u]};
+        samples_[row + u].depth = valid;
       }
     }
   });

@@ -62,9 +62,8 @@ class ProjectiveTsdfIntegrator {
 
   ApproxHashSet block_set_;
   int width_ = 0, height_ = 0;
-  std::vector<PixelSample> samples_;
-  PinholeIntrinsics factor_camera_;  // the camera ray_factor_ was computed for
-  std::vector<float> ray_factor_;    // per pixel ||(x_n, y_n, 1)||
+  std::vector<PixelSample> samples_;  // per pixel; ray factors for factor_camera_
+  PinholeIntrinsics factor_camera_;
 };
 
 }  // namespace cblox

@@ -219,7 +219,7 @@ void RayCastingIntegrator::castChunks(Frame& frame, ThreadState* state) {
         continue;
       }
       ++stats.rays_cast;
-      walkRay(frame, startRay(frame, candidate.index), state);
+      walkRay(frame, candidate.index, nullptr, state);
     }
   }
 }
@@ -234,7 +234,7 @@ void RayCastingIntegrator::resumeParked(Frame& frame, const std::vector<ParkedRa
       state->stats.rays_cut_by_budget += end - begin;
       continue;
     }
-    for (size_t i = begin; i < end; ++i) walkRay(frame, parked[i], state);
+    for (size_t i = begin; i < end; ++i) walkRay(frame, parked[i].index, &parked[i], state);
   }
 }
 
@@ -264,34 +264,31 @@ bool RayCastingIntegrator::screenPoint(const Frame& frame, uint32_t index, Integ
   return true;
 }
 
-RayCastingIntegrator::ParkedRay RayCastingIntegrator::startRay(const Frame& frame,
-                                                               uint32_t index) const {
-  const Eigen::Vector3f& point_C = frame.cloud_C.points[index];
-  const float length = point_C.norm();
-  const Eigen::Vector3f point_G = frame.R_G_C * point_C + frame.origin_G;
-  const Eigen::Vector3f unit_G = (point_G - frame.origin_G) / length;
-  const float truncation = config_.truncation_distance_m;
-  const Eigen::Vector3f far_G = point_G + unit_G * truncation;
-  const Eigen::Vector3f near_G = config_.voxel_carving_enabled
-                                     ? frame.origin_G
-                                     : Eigen::Vector3f(point_G - unit_G * truncation);
-  const float voxel_size_inv = layer_->voxelSizeInv();
-  return ParkedRay{index, 0, GridRayTraversal(far_G * voxel_size_inv, near_G * voxel_size_inv)};
-}
-
-void RayCastingIntegrator::walkRay(Frame& frame, ParkedRay ray, ThreadState* state) {
+void RayCastingIntegrator::walkRay(Frame& frame, uint32_t index, const ParkedRay* resume,
+                                   ThreadState* state) {
   const bool fast = mode_ == Mode::kFast;
   const float voxel_size = layer_->voxelSize();
   const int vps_log2 = layer_->voxelsPerSideLog2();
   const int member_bits = 3 * vps_log2;
-  const Eigen::Vector3f& point_C = frame.cloud_C.points[ray.index];
+  const Eigen::Vector3f& point_C = frame.cloud_C.points[index];
   const float length = point_C.norm();
   const Eigen::Vector3f point_G = frame.R_G_C * point_C + frame.origin_G;
   const Eigen::Vector3f unit_G = (point_G - frame.origin_G) / length;
+  // A new ray runs from one truncation behind the point towards the sensor (or to one
+  // truncation in front of the point without voxel carving); a parked one goes on.
+  ParkedRay ray = resume != nullptr ? *resume : [&] {
+    const float truncation = config_.truncation_distance_m;
+    const Eigen::Vector3f far_G = point_G + unit_G * truncation;
+    const Eigen::Vector3f near_G = config_.voxel_carving_enabled
+                                       ? frame.origin_G
+                                       : Eigen::Vector3f(point_G - unit_G * truncation);
+    const float voxel_size_inv = layer_->voxelSizeInv();
+    return ParkedRay{index, 0, GridRayTraversal(far_G * voxel_size_inv, near_G * voxel_size_inv)};
+  }();
   // The distance along the ray of voxel centre c is length - (c - origin).unit.
   const float sdf_offset = length + frame.origin_G.dot(unit_G);
   const float weight = frame.updater.measurementWeight(point_C.z() > 0.0f ? point_C.z() : length);
-  const Color color = frame.cloud_C.hasColors() ? frame.cloud_C.colors[ray.index] : Color{};
+  const Color color = frame.cloud_C.hasColors() ? frame.cloud_C.colors[index] : Color{};
   IntegrationStats& stats = state->stats;
 
   // Inside a block the walk steps by index arithmetic: the voxel's linear index and its
@@ -335,7 +332,7 @@ void RayCastingIntegrator::walkRay(Frame& frame, ParkedRay ray, ThreadState* sta
   for (;;) {
     // Collisions count everywhere along the ray, as in the paper. Counting them only
     // outside the truncation band was tried: 2.5x the voxel updates for the same median
-    // surface error (BENCHMARKS.md, "fast integrator accuracy").
+    // surface error (BENCHMARKS.md, "Accuracy: against exact ground truth").
     if (fast) {
       const bool fresh = visited_voxel_set_
                              ? visited_voxel_set_->insertInCluster(

@@ -69,8 +69,8 @@ class RayCastingIntegrator {
   void resumeParked(Frame& frame, const std::vector<ParkedRay>& parked, ThreadState* state);
   bool screenPoint(const Frame& frame, uint32_t index, IntegrationStats* stats,
                    StartCell* start_cell) const;
-  void walkRay(Frame& frame, ParkedRay ray, ThreadState* state);
-  ParkedRay startRay(const Frame& frame, uint32_t index) const;
+  // Walks the ray of point `index`: a new one when `resume` is null, else the parked one.
+  void walkRay(Frame& frame, uint32_t index, const ParkedRay* resume, ThreadState* state);
 
   Mode mode_;
   IntegratorConfig config_;

@@ -1,5 +1,7 @@
 #include "daemon/config/yaml_config.h"
 
+#include <utility>
+
 #include <gtest/gtest.h>
 
 namespace cblox {
@@ -74,22 +76,17 @@ TEST(YamlConfig, ErrorsNameTheKey) {
               loadLayerConfig(YAML::Load("voxels_per_sid: 8"));
             }).find("layer.voxels_per_sid: unknown setting"),
             std::string::npos);
-  EXPECT_NE(errorOf([&] {
-              loadIntegratorConfig(YAML::Load("num_threads: two"), 0.02f, &type);
-            }).find("integrator.num_threads"),
-            std::string::npos);
-  EXPECT_NE(errorOf([&] {
-              loadIntegratorConfig(YAML::Load("type: magic"), 0.02f, &type);
-            }).find("integrator.type"),
-            std::string::npos);
-  EXPECT_NE(errorOf([&] {
-              loadIntegratorConfig(YAML::Load("weight_model: cubic"), 0.02f, &type);
-            }).find("integrator.weight_model"),
-            std::string::npos);
-  EXPECT_NE(errorOf([&] {
-              loadIntegratorConfig(YAML::Load("truncation_distance_m: 0.001"), 0.02f, &type);
-            }).find("integrator.truncation_distance_m"),
-            std::string::npos);
+  const std::pair<const char*, const char*> integrator_cases[] = {
+      {"num_threads: two", "integrator.num_threads"},
+      {"type: magic", "integrator.type"},
+      {"weight_model: cubic", "integrator.weight_model"},
+      {"truncation_distance_m: 0.001", "integrator.truncation_distance_m"},
+  };
+  for (const auto& [yaml, key] : integrator_cases) {
+    EXPECT_NE(errorOf([&] { loadIntegratorConfig(YAML::Load(yaml), 0.02f, &type); }).find(key),
+              std::string::npos)
+        << yaml;
+  }
   EXPECT_NE(errorOf([] { loadMeshConfig(YAML::Load("- a list")); }).find("mesh: expected a map"),
             std::string::npos);
   EXPECT_NE(

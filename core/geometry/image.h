@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -55,5 +56,7 @@ struct Image {
 using DepthImage = Image<float>;
 /// RGB colour image.
 using ColorImage = Image<Color>;
+/// 8-bit intensity image (e.g. one camera of a stereo pair).
+using GrayImage = Image<uint8_t>;
 
 }  // namespace cblox

@@ -1,0 +1,56 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace cblox {
+
+/// Parameters of the procedural surface texture that gives simulated images their features.
+struct ProceduralTextureConfig {
+  /// Wavelength of the coarsest noise octave, metres. Each further octave halves it.
+  double base_wavelength_m = 0.4;
+  /// Number of octaves (1..8).
+  int octaves = 6;
+  /// Brightness spread: the factor ranges over [1 - contrast, 1]. In [0, 1].
+  double contrast = 0.75;
+  /// Share of hard-edged blobs (the thresholded third octave) mixed into the smooth noise; hard edges
+  /// make corners for feature detectors. In [0, 1].
+  double hard_edge_share = 0.35;
+  /// Seed of the noise lattice; the same seed gives the same texture.
+  uint32_t seed = 1;
+
+  /// Empty when valid, else a message naming the first bad field. Thread-safe.
+  std::string validate() const;
+};
+
+/// A deterministic, anti-aliased 2D value-noise texture applied tri-planarly in world
+/// coordinates (the plane is chosen by the surface normal's largest component), so it needs
+/// no texture coordinates and looks the same from every camera (stereo-consistent). Octaves
+/// finer than about two pixel footprints fade to their mean, which keeps distant surfaces
+/// from aliasing into noise.
+/// Thread-safety: immutable after construction; brightness() is thread-safe.
+class ProceduralTexture {
+ public:
+  /// Throws std::invalid_argument with validate()'s message if the config is invalid.
+  explicit ProceduralTexture(const ProceduralTextureConfig& config);
+
+  /// Brightness factor in [1 - contrast, 1] at world point p (metres) on a surface with
+  /// normal n (any length), seen with a pixel footprint of `footprint_m` metres (the size of
+  /// one pixel on the surface; 0 renders every octave). Thread-safe.
+  float brightness(const Eigen::Vector3f& p, const Eigen::Vector3f& n, float footprint_m) const;
+
+  const ProceduralTextureConfig& config() const { return config_; }
+
+ private:
+  static constexpr int kLatticeSize = 256;  // power of two: wraps with a mask
+
+  float valueNoise(float x, float y) const;
+
+  ProceduralTextureConfig config_;
+  std::vector<float> lattice_;  // kLatticeSize^2 values in [0, 1]
+};
+
+}  // namespace cblox

@@ -1,0 +1,669 @@
+#include "drivers/dataset/euroc_reader.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <system_error>
+#include <tuple>
+#include <utility>
+
+#include <yaml-cpp/yaml.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/io/tum_trajectory.h"
+
+namespace cblox {
+
+struct EurocReader::RectificationMaps {
+  cv::Mat left1, left2;    // cv::initUndistortRectifyMap output for cam0 (CV_16SC2, CV_16UC1)
+  cv::Mat right1, right2;  // same for cam1
+};
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kMav0 = "mav0";
+constexpr const char* kSensorFile = "sensor.yaml";
+constexpr const char* kImageList = "data.csv";
+constexpr const char* kImageFolder = "data";
+constexpr const char* kGroundTruth = "state_groundtruth_estimate0/data.csv";
+constexpr const char* kRadTan = "radial-tangential";
+constexpr const char* kEquidistant = "equidistant";
+constexpr double kOrthonormalityTolerance = 1e-3;
+constexpr double kLastRowTolerance = 1e-6;
+constexpr double kQuaternionNormTolerance = 1e-3;
+constexpr double kNanosecondsToSeconds = 1e-9;
+
+bool setError(std::string* error, const std::string& message) {
+  if (error != nullptr) *error = message;
+  return false;
+}
+
+bool isFile(const std::string& path) {
+  std::error_code ec;
+  return fs::is_regular_file(path, ec);
+}
+
+bool isDirectory(const std::string& path) {
+  std::error_code ec;
+  return fs::is_directory(path, ec);
+}
+
+std::string join(const std::string& a, const std::string& b) { return (fs::path(a) / b).string(); }
+
+std::string at(const std::string& path, size_t line) {
+  return path + ":" + std::to_string(line) + ": ";
+}
+
+std::string trim(const std::string& s) {
+  const size_t first = s.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) return {};
+  const size_t last = s.find_last_not_of(" \t\r\n");
+  return s.substr(first, last - first + 1);
+}
+
+std::vector<std::string> splitCommas(const std::string& line) {
+  std::vector<std::string> fields;
+  std::string field;
+  std::istringstream in(line);
+  while (std::getline(in, field, ',')) fields.push_back(trim(field));
+  if (!line.empty() && line.back() == ',') fields.emplace_back();
+  return fields;
+}
+
+// Parses a non-negative integer of nanoseconds (digits only).
+bool parseNanoseconds(const std::string& text, int64_t* value) {
+  if (text.empty() || text.size() > 19) return false;
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, *value);
+  return ec == std::errc() && ptr == end && *value >= 0;
+}
+
+// Parses a finite double; the whole text must be the number.
+bool parseDouble(const std::string& text, double* value) {
+  if (text.empty()) return false;
+  char* end = nullptr;
+  *value = std::strtod(text.c_str(), &end);
+  return end == text.c_str() + text.size() && std::isfinite(*value);
+}
+
+std::string describeType(const cv::Mat& image) {
+  const int depth = image.depth();
+  const int bits = depth == CV_8U || depth == CV_8S     ? 8
+                   : depth == CV_16U || depth == CV_16S ? 16
+                   : depth == CV_64F                    ? 64
+                                                        : 32;
+  return std::to_string(bits) + "-bit with " + std::to_string(image.channels()) + " channel(s)";
+}
+
+std::string describeSize(int width, int height) {
+  return std::to_string(width) + "x" + std::to_string(height);
+}
+
+// ---------------------------------------------------------------------------------------------
+// sensor.yaml
+
+// A parsed sensor.yaml with its path and the number of lines dropped before parsing, so that
+// messages can name the line in the file on disk.
+struct SensorYaml {
+  std::string path;
+  int dropped_lines = 0;
+  YAML::Node root;
+
+  // "<path>:<line>: " for a node with a position, else "<path>: ".
+  std::string where(const YAML::Node& node) const {
+    const YAML::Mark mark = node.Mark();
+    if (mark.is_null()) return path + ": ";
+    return at(path, static_cast<size_t>(mark.line + 1 + dropped_lines));
+  }
+
+  // Binds *node to the top-level field `key` (reset(), not operator=, which would overwrite the
+  // node *node already refers to), or returns false with "<path>: field '<key>' is missing".
+  bool field(const std::string& key, YAML::Node* node, std::string* error) const {
+    const YAML::Node found = root[key];  // invalid (not just undefined) when absent
+    if (!found || found.IsNull()) {
+      return setError(error, path + ": field '" + key + "' is missing or empty");
+    }
+    node->reset(found);
+    return true;
+  }
+};
+
+bool loadSensorYaml(const std::string& path, SensorYaml* yaml, std::string* error) {
+  if (!isFile(path)) return setError(error, path + ": camera calibration file is missing");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return setError(error, path + ": cannot open file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  std::string text = buffer.str();
+  yaml->path = path;
+  yaml->dropped_lines = 0;
+  // OpenCV's FileStorage writes "%YAML:1.0", which is not a valid YAML directive.
+  if (text.rfind("%YAML:", 0) == 0) {
+    const size_t end_of_line = text.find('\n');
+    text = end_of_line == std::string::npos ? std::string() : text.substr(end_of_line + 1);
+    yaml->dropped_lines = 1;
+  }
+  try {
+    yaml->root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    const std::string prefix =
+        e.mark.is_null() ? path + ": "
+                         : at(path, static_cast<size_t>(e.mark.line + 1 + yaml->dropped_lines));
+    return setError(error, prefix + "YAML parse error: " + e.msg);
+  }
+  if (!yaml->root.IsMap()) return setError(error, path + ": expected a map of fields");
+  return true;
+}
+
+// Reads a sequence of finite numbers; `name` is used in messages.
+bool readNumbers(const SensorYaml& yaml, const YAML::Node& node, const std::string& name,
+                 std::vector<double>* values, std::string* error) {
+  if (!node.IsSequence()) {
+    return setError(error, yaml.where(node) + name + ": expected a [list] of numbers");
+  }
+  values->clear();
+  for (const YAML::Node& item : node) {
+    double value = 0.0;
+    if (!item.IsScalar() || !parseDouble(item.Scalar(), &value)) {
+      const std::string text = item.IsScalar() ? item.Scalar() : std::string("(not a scalar)");
+      return setError(error, yaml.where(item) + name + ": '" + text + "' is not a finite number");
+    }
+    values->push_back(value);
+  }
+  return true;
+}
+
+bool readNumbers(const SensorYaml& yaml, const YAML::Node& node, const std::string& name,
+                 size_t expected, std::vector<double>* values, std::string* error) {
+  if (!readNumbers(yaml, node, name, values, error)) return false;
+  if (values->size() != expected) {
+    return setError(error, yaml.where(node) + name + ": expected " + std::to_string(expected) +
+                               " numbers, got " + std::to_string(values->size()));
+  }
+  return true;
+}
+
+bool readScalarField(const SensorYaml& yaml, const std::string& key, YAML::Node* node,
+                     std::string* value, std::string* error) {
+  if (!yaml.field(key, node, error)) return false;
+  if (!node->IsScalar()) return setError(error, yaml.where(*node) + key + ": expected a scalar");
+  *value = node->Scalar();
+  return true;
+}
+
+bool readTransform(const SensorYaml& yaml, Transformationd* T_B_S, std::string* error) {
+  YAML::Node node;
+  if (!yaml.field("T_BS", &node, error)) return false;
+  if (!node.IsMap()) return setError(error, yaml.where(node) + "T_BS: expected rows, cols, data");
+  for (const char* dimension : {"rows", "cols"}) {
+    const YAML::Node n = node[dimension];
+    if (n && !(n.IsScalar() && n.Scalar() == "4")) {
+      return setError(error, yaml.where(n) + "T_BS." + dimension + " must be 4");
+    }
+  }
+  const YAML::Node data = node["data"];
+  if (!data) return setError(error, yaml.where(node) + "T_BS: field 'data' is missing");
+  std::vector<double> values;
+  if (!readNumbers(yaml, data, "T_BS.data", 16, &values, error)) return false;
+  Eigen::Matrix4d M;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) M(r, c) = values[static_cast<size_t>(r * 4 + c)];
+  }
+  if ((M.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > kLastRowTolerance) {
+    std::ostringstream os;
+    os << yaml.where(data) << "T_BS: last row must be 0 0 0 1, got " << M.row(3);
+    return setError(error, os.str());
+  }
+  const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
+  const double deviation = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (deviation > kOrthonormalityTolerance) {
+    std::ostringstream os;
+    os << yaml.where(data) << "T_BS: rotation is not orthonormal (max |R^T R - I| = " << deviation
+       << ", tolerance " << kOrthonormalityTolerance << ")";
+    return setError(error, os.str());
+  }
+  if (R.determinant() < 0) {
+    return setError(error, yaml.where(data) + "T_BS: rotation is a reflection (det < 0)");
+  }
+  *T_B_S = Transformationd::fromMatrix(M);
+  return true;
+}
+
+bool readCamera(const std::string& path, EurocCameraCalibration* camera, std::string* error) {
+  SensorYaml yaml;
+  if (!loadSensorYaml(path, &yaml, error)) return false;
+  EurocCameraCalibration out;
+  if (!readTransform(yaml, &out.T_B_S, error)) return false;
+
+  YAML::Node node;
+  std::vector<double> values;
+  if (!yaml.field("resolution", &node, error)) return false;
+  if (!readNumbers(yaml, node, "resolution", 2, &values, error)) return false;
+  for (const double v : values) {
+    if (!(v >= 1 && v <= 1e5) || v != std::floor(v)) {
+      return setError(
+          error, yaml.where(node) + "resolution: expected [width, height] as positive integers");
+    }
+  }
+  out.intrinsics.width = static_cast<int>(values[0]);
+  out.intrinsics.height = static_cast<int>(values[1]);
+
+  std::string text;
+  if (!readScalarField(yaml, "camera_model", &node, &text, error)) return false;
+  if (text != "pinhole") {
+    return setError(error, yaml.where(node) + "camera_model must be 'pinhole', got '" + text + "'");
+  }
+
+  if (!yaml.field("intrinsics", &node, error)) return false;
+  if (!readNumbers(yaml, node, "intrinsics", 4, &values, error)) return false;
+  out.intrinsics.fx = values[0];
+  out.intrinsics.fy = values[1];
+  out.intrinsics.cx = values[2];
+  out.intrinsics.cy = values[3];
+  const std::string invalid = validate(out.intrinsics);
+  if (!invalid.empty()) return setError(error, yaml.where(node) + "intrinsics: " + invalid);
+
+  if (!readScalarField(yaml, "distortion_model", &node, &out.distortion_model, error)) {
+    return false;
+  }
+  if (out.distortion_model == "radtan") out.distortion_model = kRadTan;
+  if (out.distortion_model != kRadTan && out.distortion_model != kEquidistant) {
+    return setError(error, yaml.where(node) + "distortion_model '" + out.distortion_model +
+                               "' is not supported (radial-tangential or equidistant)");
+  }
+  if (!yaml.field("distortion_coefficients", &node, error)) return false;
+  if (!readNumbers(yaml, node, "distortion_coefficients", &out.distortion_coefficients, error)) {
+    return false;
+  }
+  const size_t count = out.distortion_coefficients.size();
+  if (out.distortion_model == kRadTan && count != 4 && count != 5) {
+    return setError(error, yaml.where(node) +
+                               "distortion_coefficients: radial-tangential needs 4 (k1 k2 p1 p2) "
+                               "or 5 (k1 k2 p1 p2 k3) numbers, got " +
+                               std::to_string(count));
+  }
+  if (out.distortion_model == kEquidistant && count != 4) {
+    return setError(error, yaml.where(node) +
+                               "distortion_coefficients: equidistant needs 4 numbers (k1 k2 k3 "
+                               "k4), got " +
+                               std::to_string(count));
+  }
+
+  if (!yaml.field("rate_hz", &node, error)) return false;
+  if (!node.IsScalar() || !parseDouble(node.Scalar(), &out.rate_hz) || !(out.rate_hz > 0)) {
+    return setError(error, yaml.where(node) + "rate_hz must be a number > 0, got '" +
+                               (node.IsScalar() ? node.Scalar() : std::string("?")) + "'");
+  }
+  *camera = std::move(out);
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// data.csv files
+
+struct ImageEntry {
+  int64_t timestamp_ns = 0;
+  std::string filename;
+};
+
+// Reads "timestamp [ns],filename" lines; '#' lines and empty lines are skipped.
+bool readImageList(const std::string& path, std::vector<ImageEntry>* entries, std::string* error) {
+  if (!isFile(path)) return setError(error, path + ": image list is missing");
+  std::ifstream in(path);
+  if (!in) return setError(error, path + ": cannot open file");
+  entries->clear();
+  std::string line;
+  size_t line_number = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const std::string text = trim(line);
+    if (text.empty() || text[0] == '#') continue;
+    const std::vector<std::string> fields = splitCommas(text);
+    if (fields.size() != 2 || fields[1].empty()) {
+      return setError(
+          error, at(path, line_number) + "expected 'timestamp [ns],filename', got '" + text + "'");
+    }
+    ImageEntry entry;
+    if (!parseNanoseconds(fields[0], &entry.timestamp_ns)) {
+      return setError(error, at(path, line_number) + "timestamp '" + fields[0] +
+                                 "' is not a non-negative integer of nanoseconds");
+    }
+    if (!entries->empty() && entry.timestamp_ns <= entries->back().timestamp_ns) {
+      return setError(error, at(path, line_number) + "timestamp " +
+                                 std::to_string(entry.timestamp_ns) +
+                                 " does not increase (previous " +
+                                 std::to_string(entries->back().timestamp_ns) + ")");
+    }
+    entry.filename = fields[1];
+    entries->push_back(std::move(entry));
+  }
+  if (in.bad()) return setError(error, path + ": read error");
+  return true;
+}
+
+// Reads the ground-truth csv: t [ns], p_RS_R x y z [m], q_RS w x y z, then any further columns.
+// Times are stored in seconds relative to epoch_ns to keep double precision.
+bool readGroundTruth(const std::string& path, int64_t epoch_ns, StampedTrajectory* trajectory,
+                     std::string* error) {
+  std::ifstream in(path);
+  if (!in) return setError(error, path + ": cannot open file");
+  trajectory->clear();
+  std::string line;
+  size_t line_number = 0;
+  int64_t previous_ns = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const std::string text = trim(line);
+    if (text.empty() || text[0] == '#') continue;
+    const std::vector<std::string> fields = splitCommas(text);
+    if (fields.size() < 8) {
+      return setError(error, at(path, line_number) +
+                                 "expected at least 8 comma-separated values (t [ns], p_RS_R x y "
+                                 "z, q_RS w x y z), got " +
+                                 std::to_string(fields.size()));
+    }
+    int64_t timestamp_ns = 0;
+    if (!parseNanoseconds(fields[0], &timestamp_ns)) {
+      return setError(error, at(path, line_number) + "timestamp '" + fields[0] +
+                                 "' is not a non-negative integer of nanoseconds");
+    }
+    double v[7];
+    for (int k = 0; k < 7; ++k) {
+      if (!parseDouble(fields[static_cast<size_t>(k + 1)], &v[k])) {
+        return setError(error, at(path, line_number) + "'" + fields[static_cast<size_t>(k + 1)] +
+                                   "' is not a finite number");
+      }
+    }
+    if (!trajectory->empty() && timestamp_ns <= previous_ns) {
+      return setError(error, at(path, line_number) + "timestamp " + std::to_string(timestamp_ns) +
+                                 " does not increase (previous " + std::to_string(previous_ns) +
+                                 ")");
+    }
+    const Eigen::Quaterniond q(v[3], v[4], v[5], v[6]);
+    if (std::abs(q.norm() - 1.0) > kQuaternionNormTolerance) {
+      return setError(error, at(path, line_number) + "quaternion norm is " +
+                                 std::to_string(q.norm()) + ", not 1 (within 1e-3)");
+    }
+    const double t_s = static_cast<double>(timestamp_ns - epoch_ns) * kNanosecondsToSeconds;
+    trajectory->push_back({t_s, Transformationd(q, Eigen::Vector3d(v[0], v[1], v[2]))});
+    previous_ns = timestamp_ns;
+  }
+  if (in.bad()) return setError(error, path + ": read error");
+  if (trajectory->empty()) return setError(error, path + ": no pose in ground-truth file");
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rectification
+
+cv::Mat cameraMatrix(const PinholeIntrinsics& in) {
+  return (cv::Mat_<double>(3, 3) << in.fx, 0, in.cx, 0, in.fy, in.cy, 0, 0, 1);
+}
+
+cv::Mat distortionVector(const EurocCameraCalibration& camera) {
+  cv::Mat d(1, static_cast<int>(camera.distortion_coefficients.size()), CV_64F);
+  for (int k = 0; k < d.cols; ++k) d.at<double>(0, k) = camera.distortion_coefficients[k];
+  return d;
+}
+
+}  // namespace
+
+std::string EurocReader::Options::validate() const {
+  if (!(groundtruth_max_gap_s > 0) || !std::isfinite(groundtruth_max_gap_s)) {
+    return "groundtruth_max_gap_s must be > 0 and finite, got " +
+           std::to_string(groundtruth_max_gap_s);
+  }
+  return {};
+}
+
+std::optional<EurocReader> EurocReader::open(const std::string& folder, const Options& options,
+                                             std::string* error) {
+  const std::string invalid_options = options.validate();
+  if (!invalid_options.empty()) {
+    setError(error, "EurocReader::Options: " + invalid_options);
+    return std::nullopt;
+  }
+  if (!isDirectory(folder)) {
+    setError(error, folder + ": not a readable directory");
+    return std::nullopt;
+  }
+  EurocReader reader;
+  if (isDirectory(join(folder, kMav0))) {
+    reader.mav0_ = join(folder, kMav0);
+  } else if (isDirectory(join(folder, "cam0")) && isDirectory(join(folder, "cam1"))) {
+    reader.mav0_ = folder;
+  } else {
+    setError(error, folder + ": not a EuRoC folder (neither mav0/ nor cam0/ and cam1/ inside)");
+    return std::nullopt;
+  }
+  const std::string& mav0 = reader.mav0_;
+
+  // Calibration.
+  const std::string cam0_yaml = join(join(mav0, "cam0"), kSensorFile);
+  const std::string cam1_yaml = join(join(mav0, "cam1"), kSensorFile);
+  if (!readCamera(cam0_yaml, &reader.cam0_, error)) return std::nullopt;
+  if (!readCamera(cam1_yaml, &reader.cam1_, error)) return std::nullopt;
+  const PinholeIntrinsics& in0 = reader.cam0_.intrinsics;
+  const PinholeIntrinsics& in1 = reader.cam1_.intrinsics;
+  if (in0.width != in1.width || in0.height != in1.height) {
+    setError(error, cam1_yaml + ": resolution " + describeSize(in1.width, in1.height) +
+                        " differs from cam0's " + describeSize(in0.width, in0.height));
+    return std::nullopt;
+  }
+  if (reader.cam0_.distortion_model != reader.cam1_.distortion_model) {
+    setError(error, cam1_yaml + ": distortion_model '" + reader.cam1_.distortion_model +
+                        "' differs from cam0's '" + reader.cam0_.distortion_model + "'");
+    return std::nullopt;
+  }
+
+  // Image lists, paired by identical timestamps.
+  std::vector<ImageEntry> list0;
+  std::vector<ImageEntry> list1;
+  if (!readImageList(join(join(mav0, "cam0"), kImageList), &list0, error)) return std::nullopt;
+  if (!readImageList(join(join(mav0, "cam1"), kImageList), &list1, error)) return std::nullopt;
+  const auto relative = [](const char* camera, const ImageEntry& entry) {
+    return std::string(camera) + "/" + kImageFolder + "/" + entry.filename;
+  };
+  size_t i0 = 0;
+  size_t i1 = 0;
+  while (i0 < list0.size() || i1 < list1.size()) {
+    if (i1 == list1.size() ||
+        (i0 < list0.size() && list0[i0].timestamp_ns < list1[i1].timestamp_ns)) {
+      reader.skipped_.push_back(relative("cam0", list0[i0]) + ": no cam1 image with timestamp " +
+                                std::to_string(list0[i0].timestamp_ns) + ", skipped");
+      ++i0;
+      continue;
+    }
+    if (i0 == list0.size() || list1[i1].timestamp_ns < list0[i0].timestamp_ns) {
+      reader.skipped_.push_back(relative("cam1", list1[i1]) + ": no cam0 image with timestamp " +
+                                std::to_string(list1[i1].timestamp_ns) + ", skipped");
+      ++i1;
+      continue;
+    }
+    const int64_t timestamp_ns = list0[i0].timestamp_ns;
+    FrameFiles files;
+    files.timestamp_ns = timestamp_ns;
+    files.left_path = join(mav0, relative("cam0", list0[i0]));
+    files.right_path = join(mav0, relative("cam1", list1[i1]));
+    bool complete = true;
+    for (const auto& [camera, entry, path] : {std::tuple{"cam0", &list0[i0], &files.left_path},
+                                              std::tuple{"cam1", &list1[i1], &files.right_path}}) {
+      if (!isFile(*path)) {
+        reader.skipped_.push_back(relative(camera, *entry) + ": missing, frame " +
+                                  std::to_string(timestamp_ns) + " skipped");
+        complete = false;
+      }
+    }
+    if (complete) reader.frames_.push_back(std::move(files));
+    ++i0;
+    ++i1;
+  }
+  if (reader.frames_.empty()) {
+    setError(error, mav0 + ": no complete stereo pair (" + std::to_string(list0.size()) +
+                        " cam0 and " + std::to_string(list1.size()) + " cam1 entries" +
+                        (reader.skipped_.empty() ? std::string()
+                                                 : "; first skipped: " + reader.skipped_.front()) +
+                        ")");
+    return std::nullopt;
+  }
+  if (!reader.skipped_.empty()) {
+    reader.notes_.push_back(std::to_string(reader.skipped_.size()) +
+                            " image entries skipped (unpaired or missing on disk), see skipped()");
+  }
+
+  // Rectification: stereoRectify wants the motion from cam0 to cam1 coordinates, T_C1_C0.
+  const Transformationd T_C0_C1 = reader.cam0_.T_B_S.inverse() * reader.cam1_.T_B_S;
+  const Transformationd T_C1_C0 = T_C0_C1.inverse();
+  cv::Mat R(3, 3, CV_64F);
+  cv::Mat t(3, 1, CV_64F);
+  const Eigen::Matrix3d R_C1_C0 = T_C1_C0.rotationMatrix();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) R.at<double>(r, c) = R_C1_C0(r, c);
+    t.at<double>(r, 0) = T_C1_C0.translation()(r);
+  }
+  const cv::Size size(in0.width, in0.height);
+  const cv::Mat K0 = cameraMatrix(in0);
+  const cv::Mat K1 = cameraMatrix(in1);
+  const cv::Mat D0 = distortionVector(reader.cam0_);
+  const cv::Mat D1 = distortionVector(reader.cam1_);
+  cv::Mat R1, R2, P1, P2, Q;
+  auto maps = std::make_shared<RectificationMaps>();
+  try {
+    if (reader.cam0_.distortion_model == kEquidistant) {
+      cv::fisheye::stereoRectify(K0, D0, K1, D1, size, R, t, R1, R2, P1, P2, Q,
+                                 cv::fisheye::CALIB_ZERO_DISPARITY, size, /*balance=*/0.0);
+      cv::fisheye::initUndistortRectifyMap(K0, D0, R1, P1, size, CV_16SC2, maps->left1,
+                                           maps->left2);
+      cv::fisheye::initUndistortRectifyMap(K1, D1, R2, P2, size, CV_16SC2, maps->right1,
+                                           maps->right2);
+    } else {
+      cv::stereoRectify(K0, D0, K1, D1, size, R, t, R1, R2, P1, P2, Q, cv::CALIB_ZERO_DISPARITY,
+                        /*alpha=*/0.0, size);
+      cv::initUndistortRectifyMap(K0, D0, R1, P1, size, CV_16SC2, maps->left1, maps->left2);
+      cv::initUndistortRectifyMap(K1, D1, R2, P2, size, CV_16SC2, maps->right1, maps->right2);
+    }
+  } catch (const cv::Exception& e) {
+    setError(error, mav0 + ": stereo rectification failed: " + e.what());
+    return std::nullopt;
+  }
+  P1.convertTo(P1, CV_64F);
+  P2.convertTo(P2, CV_64F);
+  R1.convertTo(R1, CV_64F);
+  PinholeIntrinsics& rectified = reader.calibration_.intrinsics;
+  rectified.fx = P1.at<double>(0, 0);
+  rectified.fy = P1.at<double>(1, 1);
+  rectified.cx = P1.at<double>(0, 2);
+  rectified.cy = P1.at<double>(1, 2);
+  rectified.width = in0.width;
+  rectified.height = in0.height;
+  const std::string invalid = validate(rectified);
+  if (!invalid.empty()) {
+    setError(error, mav0 + ": stereo rectification gave invalid intrinsics: " + invalid);
+    return std::nullopt;
+  }
+  const double fx_tx = P2.at<double>(0, 3);  // = -fx * baseline for the right camera at +x
+  if (std::abs(P2.at<double>(1, 3)) > std::abs(fx_tx)) {
+    setError(error, cam1_yaml + ": cam1 is displaced vertically from cam0 (T_BS); only " +
+                        "horizontal stereo is supported");
+    return std::nullopt;
+  }
+  if (!(fx_tx < 0)) {
+    std::ostringstream os;
+    os << cam1_yaml << ": cam1 must be to the right (+x) of cam0 after rectification, but "
+       << "P2(0,3) = " << fx_tx << " (cameras swapped? T_C0_C1 translation "
+       << T_C0_C1.translation().transpose() << " m)";
+    setError(error, os.str());
+    return std::nullopt;
+  }
+  reader.calibration_.baseline_m = -fx_tx / P2.at<double>(0, 0);
+  Eigen::Matrix3d R_L_C0;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) R_L_C0(r, c) = R1.at<double>(r, c);
+  }
+  reader.calibration_.T_B_L =
+      reader.cam0_.T_B_S *
+      Transformationd(Eigen::Matrix3d(R_L_C0.transpose()), Eigen::Vector3d::Zero());
+  reader.maps_ = std::move(maps);
+
+  // Ground truth.
+  const std::string groundtruth_path = join(mav0, kGroundTruth);
+  if (isFile(groundtruth_path)) {
+    StampedTrajectory trajectory;
+    const int64_t epoch_ns = reader.frames_.front().timestamp_ns;
+    if (!readGroundTruth(groundtruth_path, epoch_ns, &trajectory, error)) return std::nullopt;
+    reader.has_groundtruth_ = true;
+    size_t without = 0;
+    for (FrameFiles& files : reader.frames_) {
+      const double t_s = static_cast<double>(files.timestamp_ns - epoch_ns) * kNanosecondsToSeconds;
+      const std::optional<Transformationd> T_W_B =
+          interpolatePose(trajectory, t_s, options.groundtruth_max_gap_s);
+      if (T_W_B) {
+        files.T_G_L = *T_W_B * reader.calibration_.T_B_L;
+      } else {
+        ++without;
+      }
+    }
+    if (without > 0) {
+      std::ostringstream os;
+      os << without << " of " << reader.frames_.size() << " frames have no ground truth "
+         << "(outside " << kMav0 << "/" << kGroundTruth << "'s time range or in a gap > "
+         << options.groundtruth_max_gap_s << " s)";
+      reader.notes_.push_back(os.str());
+    }
+  } else {
+    reader.notes_.push_back(std::string("no ground truth: ") + kMav0 + "/" + kGroundTruth +
+                            " absent");
+  }
+  return reader;
+}
+
+bool EurocReader::read(size_t i, EurocStereoFrame* frame, std::string* error) const {
+  if (i >= frames_.size()) {
+    return setError(error, mav0_ + ": frame " + std::to_string(i) + " out of range (size " +
+                               std::to_string(frames_.size()) + ")");
+  }
+  const FrameFiles& files = frames_[i];
+  const int width = cam0_.intrinsics.width;
+  const int height = cam0_.intrinsics.height;
+
+  EurocStereoFrame out;
+  out.timestamp_ns = files.timestamp_ns;
+  out.T_G_L = files.T_G_L;
+  const auto load = [&](const std::string& path, const cv::Mat& map1, const cv::Mat& map2,
+                        GrayImage* image) {
+    if (!isFile(path)) return setError(error, path + ": image is missing");
+    const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
+    if (raw.empty()) return setError(error, path + ": cannot read image");
+    if (raw.type() != CV_8UC1) {
+      return setError(
+          error, path + ": image must be 8-bit single-channel (grey), got " + describeType(raw));
+    }
+    if (raw.cols != width || raw.rows != height) {
+      return setError(error, path + ": size " + describeSize(raw.cols, raw.rows) +
+                                 " does not match sensor.yaml's resolution " +
+                                 describeSize(width, height));
+    }
+    *image = GrayImage(width, height);
+    cv::Mat rectified(height, width, CV_8UC1, image->data.data());
+    // With alpha = 0 every rectified pixel maps inside the raw image, except that OpenCV's
+    // approximate inner rectangle lets a few edge pixels land up to ~0.1 px outside; replicating
+    // the border keeps those from blending with black.
+    cv::remap(raw, rectified, map1, map2, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    return true;
+  };
+  if (!load(files.left_path, maps_->left1, maps_->left2, &out.left)) return false;
+  if (!load(files.right_path, maps_->right1, maps_->right2, &out.right)) return false;
+  *frame = std::move(out);
+  return true;
+}
+
+}  // namespace cblox

@@ -1,11 +1,12 @@
 #include "core/eval/trajectory_metrics.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
 #include <tuple>
+
+#include "core/eval/json_writer.h"
 
 namespace cblox {
 namespace {
@@ -17,51 +18,6 @@ void setError(std::string* error, std::string message) {
 // Rotation angle of a unit quaternion in [0, pi] radians (accurate near 0 and pi).
 double rotationAngle(const Eigen::Quaterniond& q) {
   return 2.0 * std::atan2(q.vec().norm(), std::abs(q.w()));
-}
-
-// Shortest text that reads back to the same double; "null" when not finite.
-std::string number(double value) {
-  if (!std::isfinite(value)) return "null";
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
-}
-
-std::string quoted(const std::string& text) {
-  std::string out = "\"";
-  for (const char c : text) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
-}
-
-// Appends `"key": value` as one line of an object at the given indent.
-class JsonObject {
- public:
-  explicit JsonObject(std::string indent) : indent_(std::move(indent)) {}
-
-  void raw(const std::string& key, const std::string& value) {
-    if (!body_.empty()) body_ += ",\n";
-    body_ += indent_ + "  " + quoted(key) + ": " + value;
-  }
-  void num(const std::string& key, double value) { raw(key, number(value)); }
-  void count(const std::string& key, size_t value) { raw(key, std::to_string(value)); }
-  void str(const std::string& key, const std::string& value) { raw(key, quoted(value)); }
-  std::string close() const { return "{\n" + body_ + "\n" + indent_ + "}"; }
-
- private:
-  std::string indent_;
-  std::string body_;
-};
-
-std::string array(std::initializer_list<double> values) {
-  std::string out = "[";
-  for (const double v : values) {
-    if (out.size() > 1) out += ", ";
-    out += number(v);
-  }
-  return out + "]";
 }
 
 std::vector<AssociatedPose> associateNearest(const StampedTrajectory& ground_truth,
@@ -178,6 +134,10 @@ ErrorStatistics computeErrorStatistics(std::vector<double> errors) {
   const size_t middle = errors.size() / 2;
   stats.median =
       errors.size() % 2 == 1 ? errors[middle] : 0.5 * (errors[middle - 1] + errors[middle]);
+  const double h = 0.9 * static_cast<double>(errors.size() - 1);
+  const size_t below = std::min(static_cast<size_t>(h), errors.size() - 1);
+  const size_t above = std::min(below + 1, errors.size() - 1);
+  stats.p90 = errors[below] + (h - static_cast<double>(below)) * (errors[above] - errors[below]);
   return stats;
 }
 
@@ -257,7 +217,7 @@ std::optional<RpeResult> computeRpe(const std::vector<AssociatedPose>& pairs,
     }
   }
   if (translation_errors.empty()) {
-    setError(error, "RPE: no pose pair is " + number(options.delta) +
+    setError(error, "RPE: no pose pair is " + jsonNumber(options.delta) +
                         (options.unit == RpeDeltaUnit::kFrames ? " frames" : " s") + " apart (" +
                         std::to_string(pairs.size()) + " associated poses)");
     return std::nullopt;
@@ -286,8 +246,8 @@ std::string TrajectoryEvaluation::toJson() const {
   const Eigen::Vector3d& t = ate.alignment.T_A_B.translation();
   a.str("alignment", alignmentTypeName(ate.alignment_type));
   a.num("scale", ate.alignment.scale);
-  a.raw("rotation_xyzw", array({q.x(), q.y(), q.z(), q.w()}));
-  a.raw("translation_m", array({t.x(), t.y(), t.z()}));
+  a.raw("rotation_xyzw", jsonArray({q.x(), q.y(), q.z(), q.w()}));
+  a.raw("translation_m", jsonArray({t.x(), t.y(), t.z()}));
   a.count("pairs", ate.translation_m.count);
   a.num("rmse_m", ate.translation_m.rmse);
   a.num("mean_m", ate.translation_m.mean);

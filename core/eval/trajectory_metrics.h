@@ -65,6 +65,10 @@ struct ErrorStatistics {
   double rmse = 0.0;  ///< sqrt(mean(e^2))
   double mean = 0.0;
   double median = 0.0;  ///< middle value; mean of the two middle values for an even count
+  /// 90th percentile, linear between order statistics (numpy's default, R type 7): with the
+  /// errors sorted e_0 <= ... <= e_(n-1) and h = 0.9 (n - 1), e_floor(h) + (h - floor(h)) *
+  /// (e_(floor(h)+1) - e_floor(h)).
+  double p90 = 0.0;
   double stddev = 0.0;  ///< population standard deviation sqrt(mean((e - mean)^2)), as TUM
   double min = 0.0;
   double max = 0.0;

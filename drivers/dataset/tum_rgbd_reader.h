@@ -80,6 +80,9 @@ class TumRgbdReader {
   /// True if groundtruth.txt was found and read. Thread-safe.
   bool hasGroundTruth() const { return has_groundtruth_; }
 
+  /// Metres per unit of the 16-bit depth images. Thread-safe.
+  double depthScale() const { return depth_scale_; }
+
   /// One human-readable line per image entry open() dropped (missing on disk) and per depth
   /// frame played without colour. Thread-safe.
   const std::vector<std::string>& skipped() const { return skipped_; }

@@ -62,6 +62,11 @@ TEST(ErrorStatisticsTest, ComputesRmseMeanMedianStdMinMax) {
   EXPECT_DOUBLE_EQ(s.min, 1.0);
   EXPECT_DOUBLE_EQ(s.max, 4.0);
   EXPECT_DOUBLE_EQ(computeErrorStatistics({5.0, 1.0, 2.0}).median, 2.0);
+  // p90, linear between order statistics: h = 0.9 * 3 = 2.7 -> 3 + 0.7 * (4 - 3).
+  EXPECT_DOUBLE_EQ(s.p90, 3.7);
+  // 11 values 0..10: h = 9 exactly.
+  EXPECT_DOUBLE_EQ(computeErrorStatistics({10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0}).p90, 9.0);
+  EXPECT_DOUBLE_EQ(computeErrorStatistics({0.25}).p90, 0.25);
   const ErrorStatistics empty = computeErrorStatistics({});
   EXPECT_EQ(empty.count, 0u);
   EXPECT_EQ(empty.rmse, 0.0);

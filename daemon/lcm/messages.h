@@ -1,0 +1,60 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include <cblox/camera_calibration_t.hpp>
+#include <cblox/depth_frame_t.hpp>
+#include <cblox/image_t.hpp>
+#include <cblox/pose_stamped_t.hpp>
+#include <cblox/pose_t.hpp>
+#include <cblox/stereo_pair_t.hpp>
+
+#include "core/geometry/image.h"
+#include "core/geometry/pinhole_camera.h"
+#include "core/geometry/se3.h"
+#include "drivers/frame_source.h"
+
+namespace cblox {
+
+/// Conversions between core types and the LCM messages of lcmtypes/. All functions are
+/// thread-safe (pure). Decoders validate every field and return false / std::nullopt with a
+/// message naming the field, never crash on a malformed message.
+
+/// How depth images travel: 16-bit millimetres (like a depth sensor: half the bytes, 1 mm
+/// steps, 65.535 m max) or 32-bit float metres (exact).
+enum class DepthEncoding { kUint16Millimetres, kFloat32Metres };
+
+pose_t toPoseMsg(const Transformationd& T);
+/// Fails on non-finite values or a quaternion whose norm is not within 1e-3 of 1.
+std::optional<Transformationd> fromPoseMsg(const pose_t& msg, std::string* error);
+
+camera_calibration_t toCalibrationMsg(const std::string& camera_id,
+                                      const PinholeIntrinsics& intrinsics,
+                                      const Transformationd& T_B_C);
+/// Accepts only distortion model "none" (rectified / registered images).
+std::optional<PinholeIntrinsics> fromCalibrationMsg(const camera_calibration_t& msg,
+                                                    std::string* error);
+
+image_t toImageMsg(const GrayImage& image, int64_t utime, const std::string& camera_id);
+image_t toImageMsg(const ColorImage& image, int64_t utime, const std::string& camera_id);
+image_t toDepthImageMsg(const DepthImage& depth, int64_t utime, const std::string& camera_id,
+                        DepthEncoding encoding);
+
+/// GRAY8 images (RGB8/BGR8/RGBA8 are converted to grey with BT.601 weights).
+bool fromImageMsg(const image_t& msg, GrayImage* image, std::string* error);
+/// RGB8, BGR8, RGBA8 or GRAY8 images.
+bool fromImageMsg(const image_t& msg, ColorImage* image, std::string* error);
+/// DEPTH_U16 (times depth_scale) or DEPTH_F32 images, in metres; invalid readings become 0.
+bool fromDepthImageMsg(const image_t& msg, DepthImage* depth, std::string* error);
+
+/// CBLOX_STEREO message of a frame with a stereo pair (info.stereo must be set).
+stereo_pair_t toStereoPairMsg(const CaptureFrame& frame, const SourceInfo& info, int64_t utime);
+/// CBLOX_DEPTH message of a frame with depth (info.depth_intrinsics must be set).
+depth_frame_t toDepthFrameMsg(const CaptureFrame& frame, const SourceInfo& info, int64_t utime,
+                              DepthEncoding encoding);
+/// CBLOX_GT_POSE message (frame.T_G_C must be set).
+pose_stamped_t toGroundTruthMsg(const CaptureFrame& frame, int64_t utime);
+
+}  // namespace cblox

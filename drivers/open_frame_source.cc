@@ -1,0 +1,138 @@
+#include "drivers/open_frame_source.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+#include "core/io/ply_io.h"
+#include "drivers/dataset/dataset_sources.h"
+#include "drivers/sim/builtin_scenes.h"
+#include "drivers/sim/scene_mesh_loader.h"
+
+namespace cblox {
+namespace {
+
+void setError(std::string* error, std::string message) {
+  if (error != nullptr) *error = std::move(message);
+}
+
+bool isBuiltin(const std::string& name) {
+  const std::vector<std::string> names = builtinSceneNames();
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+/// An orbit around the mesh: radius 0.75 of the larger horizontal half-size plus a margin,
+/// at 60 % of the height, looking at the bounding-box centre.
+StampedTrajectory orbitAroundMesh(const Mesh& mesh, const MotionProfile& motion, int laps) {
+  Eigen::AlignedBox3d bounds;
+  for (const Eigen::Vector3f& v : mesh.vertices) bounds.extend(v.cast<double>());
+  const Eigen::Vector3d centre = bounds.center();
+  const Eigen::Vector3d size = bounds.sizes();
+  const double radius = 0.5 * std::max(size.x(), size.y()) + 0.5 * std::max(1.0, size.z());
+  Eigen::Vector3d orbit_centre = centre;
+  orbit_centre.z() = bounds.min().z() + 0.6 * size.z() + 0.5;
+  return followPath(orbitWaypoints(orbit_centre, radius), true, laps, motion, centre);
+}
+
+std::unique_ptr<FrameSource> openSim(const std::string& what, const SourceOptions& options,
+                                     std::string* error) {
+  std::shared_ptr<const Mesh> mesh = loadSimSceneMesh("sim:" + what, error);
+  if (mesh == nullptr) return nullptr;
+  SimSourceConfig config = options.sim;
+  config.max_frames = options.max_frames > 0 ? options.max_frames : config.max_frames;
+  StampedTrajectory trajectory;
+  std::string trajectory_name = options.trajectory;
+  try {
+    const bool is_file = std::filesystem::exists(options.trajectory) ||
+                         options.trajectory.find('/') != std::string::npos ||
+                         options.trajectory.ends_with(".txt");
+    if (is_file) {
+      auto read = readTumTrajectory(options.trajectory, error);
+      if (!read.has_value()) return nullptr;
+      trajectory = std::move(*read);
+      trajectory_name = std::filesystem::path(options.trajectory).filename().string();
+    } else if (isBuiltin(what)) {
+      const BuiltinScene scene = makeBuiltinScene(what);
+      trajectory = makeSceneTrajectory(scene, parseTrajectoryKind(options.trajectory),
+                                       std::max(config.rate_hz, 50.0), options.laps);
+      if (!options.keep_rig_range) {
+        config.renderer.rig.depth_max_m = scene.depth_max_m;
+        config.renderer.texture.base_wavelength_m = scene.texture_wavelength_m;
+      }
+    } else if (options.trajectory == "orbit") {
+      trajectory = orbitAroundMesh(*mesh, MotionProfile{}, options.laps);
+    } else {
+      setError(error, "sim:" + what + ": a mesh file needs --trajectory orbit or a TUM file, got '" +
+                          options.trajectory + "'");
+      return nullptr;
+    }
+  } catch (const std::invalid_argument& e) {
+    setError(error, e.what());
+    return nullptr;
+  }
+  std::string build_error;
+  std::shared_ptr<const TriangleMeshRaycaster> scene =
+      TriangleMeshRaycaster::create(*mesh, &build_error);
+  if (scene == nullptr) {
+    setError(error, "sim:" + what + ": " + build_error);
+    return nullptr;
+  }
+  try {
+    return std::make_unique<SimSource>("sim:" + what + "/" + trajectory_name, std::move(scene),
+                                       std::move(trajectory), config);
+  } catch (const std::invalid_argument& e) {
+    setError(error, e.what());
+    return nullptr;
+  }
+}
+
+}  // namespace
+
+std::shared_ptr<const Mesh> loadSimSceneMesh(const std::string& spec, std::string* error) {
+  if (!spec.starts_with("sim:")) {
+    setError(error, "'" + spec + "' is not a sim source");
+    return nullptr;
+  }
+  const std::string what = spec.substr(4);
+  if (isBuiltin(what)) return std::make_shared<const Mesh>(makeBuiltinScene(what).mesh);
+  if (what.empty()) {
+    setError(error, "sim: needs a scene: room, hall, town or a .ply/.obj mesh path");
+    return nullptr;
+  }
+  std::optional<Mesh> mesh = loadSceneMesh(what, SceneMeshCheck{}, error, nullptr);
+  if (!mesh.has_value()) return nullptr;
+  return std::make_shared<const Mesh>(std::move(*mesh));
+}
+
+std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const SourceOptions& options,
+                                             std::string* error) {
+  const size_t colon = spec.find(':');
+  if (colon == std::string::npos) {
+    setError(error, "source '" + spec +
+                        "' has no kind: use sim:room|hall|town|MESH, euroc:DIR, tum:DIR or "
+                        "7scenes:DIR");
+    return nullptr;
+  }
+  const std::string kind = spec.substr(0, colon), what = spec.substr(colon + 1);
+  if (kind == "sim") return openSim(what, options, error);
+  if (kind == "euroc") {
+    auto reader = EurocReader::open(what, options.euroc, error);
+    if (!reader.has_value()) return nullptr;
+    return std::make_unique<EurocSource>(std::move(*reader), options.max_frames);
+  }
+  if (kind == "tum") {
+    auto reader = TumRgbdReader::open(what, options.tum, error);
+    if (!reader.has_value()) return nullptr;
+    return std::make_unique<TumRgbdSource>(std::move(*reader), options.max_frames);
+  }
+  if (kind == "7scenes") {
+    auto reader = SevenScenesReader::open(what, error);
+    if (!reader.has_value()) return nullptr;
+    return std::make_unique<SevenScenesSource>(std::move(*reader), options.max_frames);
+  }
+  setError(error, "unknown source kind '" + kind + "' (known: sim, euroc, tum, 7scenes)");
+  return nullptr;
+}
+
+}  // namespace cblox

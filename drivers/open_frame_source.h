@@ -1,0 +1,47 @@
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+
+#include "drivers/dataset/euroc_reader.h"
+#include "drivers/dataset/tum_rgbd_reader.h"
+#include "drivers/frame_source.h"
+#include "drivers/sim/sim_source.h"
+
+namespace cblox {
+
+/// How to open a source named by a spec string (see openFrameSource). Plain value type.
+struct SourceOptions {
+  /// Simulator: the trajectory, either a kind ("loop", "orbit", "lawnmower", "figure-eight")
+  /// or the path of a TUM trajectory file (poses of the left camera).
+  std::string trajectory = "loop";
+  int laps = 1;
+  /// Simulator: rig, renderer, noise and rate. For built-in scenes, depth_max_m and the
+  /// texture wavelength are taken from the scene unless `keep_rig_range` is true.
+  SimSourceConfig sim;
+  bool keep_rig_range = false;
+  /// Datasets.
+  EurocReader::Options euroc;
+  TumRgbdReader::Options tum;
+  /// Stop after this many frames (0 = all).
+  size_t max_frames = 0;
+};
+
+/// Opens a capture source from a spec:
+///   sim:room | sim:hall | sim:town   built-in procedural scene (exact ground truth)
+///   sim:<mesh.ply|mesh.obj>          any triangle mesh; trajectory must be a TUM file or
+///                                    "orbit" (around the mesh's bounding box)
+///   euroc:<folder>                   EuRoC/ASL stereo folder (with or without mav0/)
+///   tum:<folder>                     TUM RGB-D folder
+///   7scenes:<folder>                 7-Scenes frame folder
+/// Returns nullptr and a message (naming the file and line where there is one) when the spec
+/// is unknown or the source cannot be opened. Thread-safe (no shared state).
+std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const SourceOptions& options,
+                                             std::string* error);
+
+/// For sim sources: the ground-truth mesh of the scene a spec names (built-in or loaded), or
+/// nullptr with a message. Thread-safe.
+std::shared_ptr<const Mesh> loadSimSceneMesh(const std::string& spec, std::string* error);
+
+}  // namespace cblox

@@ -1,0 +1,87 @@
+#include "daemon/config/capture_config.h"
+
+#include <gtest/gtest.h>
+
+#include "daemon/config/yaml_config.h"
+
+namespace cblox {
+namespace {
+
+TEST(CaptureConfigTest, ShippedYamlMatchesTheCodeDefaults) {
+  const CaptureConfig shipped =
+      loadCaptureConfig(loadYamlFile(std::string(CBLOX_CONFIG_DIR) + "/capture.yaml"));
+  const CaptureConfig defaults;
+  EXPECT_EQ(shipped.source, defaults.source);
+  EXPECT_EQ(shipped.source_options.trajectory, defaults.source_options.trajectory);
+  EXPECT_EQ(shipped.source_options.laps, defaults.source_options.laps);
+  EXPECT_EQ(shipped.pacing, defaults.pacing);
+  EXPECT_EQ(shipped.source_options.max_frames, defaults.source_options.max_frames);
+  EXPECT_EQ(shipped.lcm_url, defaults.lcm_url);
+  EXPECT_EQ(shipped.depth_encoding, defaults.depth_encoding);
+  EXPECT_EQ(shipped.stereo_channel, defaults.stereo_channel);
+  EXPECT_EQ(shipped.depth_channel, defaults.depth_channel);
+  EXPECT_EQ(shipped.ground_truth_channel, defaults.ground_truth_channel);
+  EXPECT_EQ(shipped.heartbeat_channel, defaults.heartbeat_channel);
+  const SimSourceConfig& a = shipped.source_options.sim;
+  const SimSourceConfig& b = defaults.source_options.sim;
+  EXPECT_EQ(a.rate_hz, b.rate_hz);
+  EXPECT_EQ(a.renderer.num_threads, b.renderer.num_threads);
+  EXPECT_EQ(a.renderer.rig.stereo.width, b.renderer.rig.stereo.width);
+  EXPECT_EQ(a.renderer.rig.stereo.height, b.renderer.rig.stereo.height);
+  EXPECT_EQ(a.renderer.rig.stereo.fx, b.renderer.rig.stereo.fx);
+  EXPECT_EQ(a.renderer.rig.stereo.cx, b.renderer.rig.stereo.cx);
+  EXPECT_EQ(a.renderer.rig.stereo.cy, b.renderer.rig.stereo.cy);
+  EXPECT_EQ(a.renderer.rig.baseline_m, b.renderer.rig.baseline_m);
+  EXPECT_EQ(a.renderer.rig.depth_min_m, b.renderer.rig.depth_min_m);
+  EXPECT_EQ(a.renderer.rig.depth_max_m, b.renderer.rig.depth_max_m);
+  EXPECT_FALSE(a.noise.any());
+}
+
+TEST(CaptureConfigTest, ReadsOverridesAndPresets) {
+  const CaptureConfig config = loadCaptureConfig(YAML::Load(
+      "source: euroc:/data\nrate: 10\nframes: 5\ndepth_encoding: f32\n"
+      "channels: {stereo: S}\npublish: {depth: false}\n"
+      "sim: {rig: {width: 320, T_L_D_position: [0.05, 0, 0]}, noise: {preset: realistic, "
+      "image_noise_sigma: 3}}\n"));
+  EXPECT_EQ(config.source, "euroc:/data");
+  EXPECT_EQ(config.pacing, CapturePacing::kFixed);
+  EXPECT_EQ(config.fixed_rate_hz, 10.0);
+  EXPECT_EQ(config.source_options.max_frames, 5u);
+  EXPECT_EQ(config.depth_encoding, DepthEncoding::kFloat32Metres);
+  EXPECT_EQ(config.stereo_channel, "S");
+  EXPECT_FALSE(config.publish_depth);
+  EXPECT_EQ(config.source_options.sim.renderer.rig.stereo.width, 320);
+  EXPECT_EQ(config.source_options.sim.renderer.rig.T_L_D.translation().x(), 0.05);
+  EXPECT_EQ(config.source_options.sim.noise.image_noise_sigma, 3.0);
+  EXPECT_EQ(config.source_options.sim.noise.depth_noise_per_m2, 0.0012);  // from the preset
+}
+
+TEST(CaptureConfigTest, RejectsBadKeysAndValuesNamingThem) {
+  struct Case {
+    const char* yaml;
+    const char* message;
+  };
+  const Case cases[] = {
+      {"sorce: sim:room\n", "sorce"},
+      {"rate: fast\n", "rate must be 'source', 'max' or a rate in Hz"},
+      {"frames: -1\n", "capture.frames"},
+      {"depth_encoding: u8\n", "depth_encoding"},
+      {"sim: {noise: {preset: noisy}}\n", "noise preset"},
+      {"sim: {rig: {baseline_m: -1}}\n", "baseline_m"},
+      {"sim: {noise: {depth_hole_probability: 2}}\n", "depth_hole_probability"},
+      {"channels: {sterio: X}\n", "sterio"},
+      {"laps: 0\n", "laps"},
+  };
+  for (const Case& c : cases) {
+    try {
+      loadCaptureConfig(YAML::Load(c.yaml));
+      ADD_FAILURE() << "accepted: " << c.yaml;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos)
+          << c.yaml << " -> " << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace cblox

@@ -1,0 +1,140 @@
+// Multi-process test: cblox-capture publishes the simulator over LCM, this process
+// subscribes and checks every message against the same source rendered in-process.
+// Must run inside a private network namespace (scripts/netns-run.sh; ctest does this).
+
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <cblox/depth_frame_t.hpp>
+#include <cblox/heartbeat_t.hpp>
+#include <cblox/pose_stamped_t.hpp>
+#include <cblox/stereo_pair_t.hpp>
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include "daemon/lcm/messages.h"
+#include "drivers/open_frame_source.h"
+
+extern char** environ;
+
+namespace cblox {
+namespace {
+
+const char* kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+
+struct Received {
+  std::map<int64_t, stereo_pair_t> stereo;
+  std::map<int64_t, depth_frame_t> depth;
+  std::map<int64_t, pose_stamped_t> gt;
+  std::vector<heartbeat_t> heartbeats;
+
+  void onStereo(const lcm::ReceiveBuffer*, const std::string&, const stereo_pair_t* m) {
+    stereo[m->frame_id] = *m;
+  }
+  void onDepth(const lcm::ReceiveBuffer*, const std::string&, const depth_frame_t* m) {
+    depth[m->frame_id] = *m;
+  }
+  void onGt(const lcm::ReceiveBuffer*, const std::string&, const pose_stamped_t* m) {
+    gt[m->frame_id] = *m;
+  }
+  void onHeartbeat(const lcm::ReceiveBuffer*, const std::string&, const heartbeat_t* m) {
+    heartbeats.push_back(*m);
+  }
+};
+
+pid_t spawn(const std::vector<std::string>& args) {
+  std::vector<char*> argv;
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = -1;
+  EXPECT_EQ(posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ), 0);
+  return pid;
+}
+
+TEST(CaptureLcmTest, PublishesSimulatorFramesThatMatchTheSourceExactly) {
+  constexpr int kFrames = 12;
+  lcm::LCM lcm(kUrl);
+  ASSERT_TRUE(lcm.good());
+  Received received;
+  lcm.subscribe("CBLOX_STEREO", &Received::onStereo, &received);
+  lcm.subscribe("CBLOX_DEPTH", &Received::onDepth, &received);
+  lcm.subscribe("CBLOX_GT_POSE", &Received::onGt, &received);
+  lcm.subscribe("CBLOX_HEARTBEAT", &Received::onHeartbeat, &received);
+
+  const pid_t pid = spawn({CBLOX_CAPTURE_EXE, "--source", "sim:room", "--trajectory", "orbit",
+                           "--frames", std::to_string(kFrames), "--rate", "20",
+                           "--depth-encoding", "f32", "--lcm-url", kUrl, "--quiet"});
+  ASSERT_GT(pid, 0);
+  int status = 0;
+  bool exited = false;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  auto drain_until = deadline;
+  while (std::chrono::steady_clock::now() < drain_until) {
+    lcm.handleTimeout(100);
+    if (!exited && waitpid(pid, &status, WNOHANG) == pid) {
+      exited = true;
+      drain_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
+    }
+  }
+  if (!exited) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+    FAIL() << "cblox-capture did not finish within 60 s";
+  }
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+
+  ASSERT_EQ(received.stereo.size(), static_cast<size_t>(kFrames));
+  ASSERT_EQ(received.depth.size(), static_cast<size_t>(kFrames));
+  ASSERT_EQ(received.gt.size(), static_cast<size_t>(kFrames));
+  ASSERT_FALSE(received.heartbeats.empty());
+  EXPECT_EQ(received.heartbeats.back().process, "cblox-capture");
+  EXPECT_EQ(received.heartbeats.back().state, "finished");
+
+  // The same source in this process renders the same frames.
+  SourceOptions options;
+  options.trajectory = "orbit";
+  options.max_frames = kFrames;
+  std::string error;
+  auto source = openFrameSource("sim:room", options, &error);
+  ASSERT_NE(source, nullptr) << error;
+  CaptureFrame frame;
+  while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+    const stereo_pair_t& stereo = received.stereo.at(frame.frame_id);
+    EXPECT_EQ(stereo.utime, frame.timestamp_ns / 1000);
+    GrayImage left, right;
+    ASSERT_TRUE(fromImageMsg(stereo.left, &left, &error)) << error;
+    ASSERT_TRUE(fromImageMsg(stereo.right, &right, &error)) << error;
+    EXPECT_EQ(left.data, frame.left.data);
+    EXPECT_EQ(right.data, frame.right.data);
+    EXPECT_DOUBLE_EQ(stereo.T_L_R.position[0], source->info().stereo->baseline_m);
+
+    DepthImage depth;
+    ASSERT_TRUE(fromDepthImageMsg(received.depth.at(frame.frame_id).depth, &depth, &error));
+    EXPECT_EQ(depth.data, frame.depth.data);  // f32: exact
+    const auto pose = fromPoseMsg(received.gt.at(frame.frame_id).T_G_C, &error);
+    ASSERT_TRUE(pose.has_value()) << error;
+    EXPECT_TRUE(pose->isApprox(*frame.T_G_C, 1e-12));
+  }
+}
+
+TEST(CaptureLcmTest, BadSourceExitsWithStatusTwo) {
+  const pid_t pid = spawn({CBLOX_CAPTURE_EXE, "--source", "euroc:/nonexistent", "--quiet"});
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  const pid_t pid2 = spawn({CBLOX_CAPTURE_EXE, "--rate", "fast"});
+  ASSERT_EQ(waitpid(pid2, &status, 0), pid2);
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+}
+
+}  // namespace
+}  // namespace cblox

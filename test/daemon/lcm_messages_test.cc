@@ -1,0 +1,145 @@
+#include "daemon/lcm/messages.h"
+
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace cblox {
+namespace {
+
+/// Encodes and decodes through LCM's wire format.
+template <typename Msg>
+Msg wireRoundTrip(const Msg& msg) {
+  std::vector<uint8_t> buffer(static_cast<size_t>(msg.getEncodedSize()));
+  EXPECT_EQ(msg.encode(buffer.data(), 0, static_cast<int>(buffer.size())),
+            static_cast<int>(buffer.size()));
+  Msg decoded;
+  EXPECT_EQ(decoded.decode(buffer.data(), 0, static_cast<int>(buffer.size())),
+            static_cast<int>(buffer.size()));
+  return decoded;
+}
+
+TEST(LcmMessagesTest, ImagesRoundTrip) {
+  GrayImage gray(5, 3);
+  for (size_t i = 0; i < gray.data.size(); ++i) gray.data[i] = static_cast<uint8_t>(17 * i);
+  GrayImage gray_back;
+  std::string error;
+  ASSERT_TRUE(fromImageMsg(wireRoundTrip(toImageMsg(gray, 42, "left")), &gray_back, &error))
+      << error;
+  EXPECT_EQ(gray_back.data, gray.data);
+
+  ColorImage color(4, 2);
+  color(1, 1) = Color{255, 10, 3};
+  ColorImage color_back;
+  const image_t color_msg = toImageMsg(color, 42, "rgb");
+  EXPECT_EQ(color_msg.pixel_format, image_t::RGB8);
+  ASSERT_TRUE(fromImageMsg(wireRoundTrip(color_msg), &color_back, &error)) << error;
+  EXPECT_EQ(color_back(1, 1), (Color{255, 10, 3}));
+  // Colour to grey with BT.601 weights: (299 * 255 + 587 * 10 + 114 * 3) / 1000 = 82.
+  ASSERT_TRUE(fromImageMsg(color_msg, &gray_back, &error));
+  EXPECT_EQ(gray_back(1, 1), 82);
+}
+
+TEST(LcmMessagesTest, DepthRoundTripsExactlyAsFloatAndToTheMillimetreAsUint16) {
+  DepthImage depth(3, 2);
+  depth(0, 0) = 1.23456f;
+  depth(1, 0) = 0.0f;
+  depth(2, 0) = std::nanf("");
+  depth(0, 1) = 70.0f;  // beyond 65.535 m: saturates in u16
+  DepthImage back;
+  std::string error;
+  ASSERT_TRUE(fromDepthImageMsg(
+      wireRoundTrip(toDepthImageMsg(depth, 1, "d", DepthEncoding::kFloat32Metres)), &back, &error))
+      << error;
+  EXPECT_EQ(back(0, 0), 1.23456f);
+  EXPECT_EQ(back(1, 0), 0.0f);
+  EXPECT_EQ(back(2, 0), 0.0f);
+  EXPECT_EQ(back(0, 1), 70.0f);
+  const image_t u16 = toDepthImageMsg(depth, 1, "d", DepthEncoding::kUint16Millimetres);
+  EXPECT_EQ(u16.depth_scale, 0.001);
+  ASSERT_TRUE(fromDepthImageMsg(wireRoundTrip(u16), &back, &error)) << error;
+  EXPECT_NEAR(back(0, 0), 1.235f, 1e-6f);
+  EXPECT_EQ(back(2, 0), 0.0f);
+  EXPECT_NEAR(back(0, 1), 65.535f, 1e-4f);
+}
+
+TEST(LcmMessagesTest, PosesAndCalibrationRoundTrip) {
+  Eigen::Matrix<double, 6, 1> xi;
+  xi << 0.1, -0.2, 3.0, 0.3, 0.2, -0.1;
+  const Transformationd T = Transformationd::exp(xi);
+  std::string error;
+  const auto back = fromPoseMsg(wireRoundTrip(toPoseMsg(T)), &error);
+  ASSERT_TRUE(back.has_value()) << error;
+  EXPECT_TRUE(back->isApprox(T, 1e-12));
+  pose_t bad = toPoseMsg(T);
+  bad.orientation[0] = 2.0;
+  EXPECT_FALSE(fromPoseMsg(bad, &error).has_value());
+  EXPECT_NE(error.find("norm"), std::string::npos);
+
+  const PinholeIntrinsics K{458.0, 457.0, 367.2, 248.4, 752, 480};
+  const auto K_back = fromCalibrationMsg(wireRoundTrip(toCalibrationMsg("cam0", K, T)), &error);
+  ASSERT_TRUE(K_back.has_value()) << error;
+  EXPECT_EQ(K_back->fx, 458.0);
+  EXPECT_EQ(K_back->cy, 248.4);
+  EXPECT_EQ(K_back->width, 752);
+  camera_calibration_t distorted = toCalibrationMsg("cam0", K, T);
+  distorted.distortion_model = "radtan";
+  EXPECT_FALSE(fromCalibrationMsg(distorted, &error).has_value());
+  EXPECT_NE(error.find("radtan"), std::string::npos);
+}
+
+TEST(LcmMessagesTest, RejectsMalformedImages) {
+  image_t msg = toImageMsg(GrayImage(4, 4, 7), 0, "cam");
+  GrayImage gray;
+  DepthImage depth;
+  std::string error;
+  image_t truncated = msg;
+  truncated.data.resize(10);
+  EXPECT_FALSE(fromImageMsg(truncated, &gray, &error));
+  EXPECT_NE(error.find("expected 16"), std::string::npos) << error;
+  image_t bad_format = msg;
+  bad_format.pixel_format = 42;
+  EXPECT_FALSE(fromImageMsg(bad_format, &gray, &error));
+  EXPECT_NE(error.find("unknown pixel_format 42"), std::string::npos) << error;
+  image_t bad_stride = msg;
+  bad_stride.row_stride = 2;
+  EXPECT_FALSE(fromImageMsg(bad_stride, &gray, &error));
+  EXPECT_FALSE(fromDepthImageMsg(msg, &depth, &error));  // grey is not depth
+  EXPECT_NE(error.find("not DEPTH_U16"), std::string::npos) << error;
+  image_t zero_scale = toDepthImageMsg(DepthImage(2, 2, 1.0f), 0, "d", DepthEncoding::kUint16Millimetres);
+  zero_scale.depth_scale = 0.0;
+  EXPECT_FALSE(fromDepthImageMsg(zero_scale, &depth, &error));
+}
+
+TEST(LcmMessagesTest, FrameMessagesCarryCalibrationIdsAndPoses) {
+  SourceInfo info;
+  info.stereo = RectifiedStereoCalibration{PinholeIntrinsics{400, 400, 79.5, 59.5, 160, 120}, 0.11,
+                                           Transformationd::Identity()};
+  info.depth_intrinsics = PinholeIntrinsics{400, 400, 79.5, 59.5, 160, 120};
+  info.depth_max_m = 8.0;
+  CaptureFrame frame;
+  frame.frame_id = 7;
+  frame.left = GrayImage(160, 120, 1);
+  frame.right = GrayImage(160, 120, 2);
+  frame.depth = DepthImage(160, 120, 2.0f);
+  frame.T_G_C = Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d(1, 2, 3));
+  const stereo_pair_t stereo = wireRoundTrip(toStereoPairMsg(frame, info, 1000));
+  EXPECT_EQ(stereo.frame_id, 7);
+  EXPECT_EQ(stereo.utime, 1000);
+  EXPECT_TRUE(stereo.rectified);
+  EXPECT_DOUBLE_EQ(stereo.T_L_R.position[0], 0.11);
+  EXPECT_DOUBLE_EQ(stereo.right_calibration.T_B_C.position[0], 0.11);
+  EXPECT_EQ(stereo.right.data[0], 2);
+  const depth_frame_t depth = wireRoundTrip(toDepthFrameMsg(frame, info, 1000, DepthEncoding::kFloat32Metres));
+  EXPECT_FALSE(depth.has_color);
+  EXPECT_EQ(depth.color.width, 0);
+  EXPECT_EQ(depth.max_depth_m, 8.0f);
+  const pose_stamped_t gt = wireRoundTrip(toGroundTruthMsg(frame, 1000));
+  EXPECT_EQ(gt.frame, "G");
+  EXPECT_EQ(gt.frame_id, 7);
+  EXPECT_EQ(gt.T_G_C.position[2], 3.0);
+}
+
+}  // namespace
+}  // namespace cblox

@@ -1,0 +1,174 @@
+#include "drivers/open_frame_source.h"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "core/io/ply_io.h"
+#include "core/mesh/primitive_meshes.h"
+#include "drivers/dataset/tum_rgbd_reader.h"
+#include "drivers/frame_folder_writer.h"
+
+namespace cblox {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kData = CBLOX_SHARED_DATA_DIR;
+
+class OpenFrameSourceTest : public testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("cblox_sources_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+SourceOptions smallSim(size_t frames) {
+  SourceOptions options;
+  options.sim.renderer.rig.stereo = PinholeIntrinsics{160.0, 160.0, 79.5, 59.5, 160, 120};
+  options.max_frames = frames;
+  return options;
+}
+
+TEST_F(OpenFrameSourceTest, BuiltinSimScenesPlayWithGroundTruth) {
+  for (const char* spec : {"sim:room", "sim:hall", "sim:town"}) {
+    std::string error;
+    auto source = openFrameSource(spec, smallSim(2), &error);
+    ASSERT_NE(source, nullptr) << spec << ": " << error;
+    EXPECT_EQ(source->info().name, std::string(spec) + "/loop");
+    EXPECT_TRUE(source->info().has_ground_truth);
+    ASSERT_TRUE(source->info().stereo.has_value());
+    EXPECT_EQ(*source->info().frame_count, 2u);
+    CaptureFrame frame;
+    ASSERT_EQ(source->next(&frame, &error), FrameSource::Status::kFrame) << error;
+    EXPECT_EQ(frame.left.width, 160);
+    EXPECT_TRUE(frame.T_G_C.has_value());
+    int valid = 0;
+    for (float d : frame.depth.data) valid += d > 0.0f;
+    EXPECT_GT(valid, 160 * 120 / 3) << spec;  // the town has sky above the horizon
+  }
+}
+
+TEST_F(OpenFrameSourceTest, MeshFileWithOrbitOrTumTrajectory) {
+  Mesh mesh;
+  appendBox(&mesh, Eigen::AlignedBox3f(Eigen::Vector3f(-1, -1, 0), Eigen::Vector3f(1, 1, 1)),
+            Color{200, 100, 50});
+  const std::string ply = (dir_ / "box.ply").string();
+  std::string error;
+  ASSERT_TRUE(writePly(ply, mesh, PlyFormat::kBinaryLittleEndian, &error)) << error;
+  SourceOptions options = smallSim(3);
+  options.trajectory = "orbit";
+  auto source = openFrameSource("sim:" + ply, options, &error);
+  ASSERT_NE(source, nullptr) << error;
+  CaptureFrame frame;
+  ASSERT_EQ(source->next(&frame, &error), FrameSource::Status::kFrame);
+  EXPECT_GT(frame.depth(80, 60), 0.0f);  // looks at the box
+
+  // A TUM trajectory file: two poses 1 s apart looking at the box from -y.
+  const std::string tum = (dir_ / "path.txt").string();
+  std::ofstream(tum) << "0 0 -5 0.5 -0.7071067811865476 0 0 0.7071067811865476\n"
+                        "1 0.5 -5 0.5 -0.7071067811865476 0 0 0.7071067811865476\n";
+  options.trajectory = tum;
+  options.sim.rate_hz = 10.0;
+  options.max_frames = 0;
+  source = openFrameSource("sim:" + ply, options, &error);
+  ASSERT_NE(source, nullptr) << error;
+  EXPECT_EQ(*source->info().frame_count, 11u);
+  ASSERT_EQ(source->next(&frame, &error), FrameSource::Status::kFrame);
+  // Camera at y = -5 looking along +y (R maps z_C to +y): the box face y = -1 is 4 m away.
+  EXPECT_NEAR(frame.depth(80, 60), 4.0f, 1e-5f);
+
+  options.trajectory = "loop";  // a mesh file has no built-in loop
+  EXPECT_EQ(openFrameSource("sim:" + ply, options, &error), nullptr);
+  EXPECT_NE(error.find("needs --trajectory orbit or a TUM file"), std::string::npos) << error;
+}
+
+TEST_F(OpenFrameSourceTest, RenderedFolderReadsBackAsTumRgbd) {
+  std::string error;
+  auto source = openFrameSource("sim:room", smallSim(4), &error);
+  ASSERT_NE(source, nullptr) << error;
+  FrameFolderWriter writer;
+  const std::string folder = (dir_ / "render").string();
+  ASSERT_TRUE(writer.open(folder, source->info(), &error)) << error;
+  std::vector<CaptureFrame> frames;
+  CaptureFrame frame;
+  while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+    ASSERT_TRUE(writer.write(frame, &error)) << error;
+    frames.push_back(frame);
+  }
+  ASSERT_TRUE(writer.close(&error)) << error;
+  for (const char* file : {"rgb.txt", "depth.txt", "left.txt", "right.txt", "groundtruth.txt",
+                           "camera-intrinsics.txt", "stereo.yaml", "source.txt"}) {
+    EXPECT_TRUE(fs::exists(fs::path(folder) / file)) << file;
+  }
+  // Read it back through the TUM RGB-D source.
+  auto tum = openFrameSource("tum:" + folder, SourceOptions{}, &error);
+  ASSERT_NE(tum, nullptr) << error;
+  EXPECT_EQ(tum->info().depth_intrinsics->fx, 160.0);
+  EXPECT_EQ(tum->info().depth_intrinsics->width, 160);
+  for (const CaptureFrame& original : frames) {
+    CaptureFrame back;
+    ASSERT_EQ(tum->next(&back, &error), FrameSource::Status::kFrame) << error;
+    EXPECT_NEAR(back.timestamp_ns, original.timestamp_ns, 1000);  // microsecond stamps
+    ASSERT_TRUE(back.T_G_C.has_value());
+    EXPECT_TRUE(back.T_G_C->isApprox(*original.T_G_C, 1e-9));
+    ASSERT_EQ(back.depth.width, original.depth.width);
+    for (size_t i = 0; i < back.depth.data.size(); ++i) {
+      ASSERT_NEAR(back.depth.data[i], original.depth.data[i], 0.5f / 5000.0f + 1e-6f) << i;
+    }
+    EXPECT_EQ(back.color.data, original.color.data);
+  }
+  EXPECT_EQ(tum->next(&frame, &error), FrameSource::Status::kEnd);
+}
+
+TEST_F(OpenFrameSourceTest, DatasetFoldersFromSharedData) {
+  if (!fs::is_directory(kData)) GTEST_SKIP() << "shared data not present at " << kData;
+  std::string error;
+  SourceOptions options;
+  options.max_frames = 3;
+  auto euroc = openFrameSource("euroc:" + kData + "/euroc-v101-micro", options, &error);
+  ASSERT_NE(euroc, nullptr) << error;
+  EXPECT_TRUE(euroc->info().stereo.has_value());
+  EXPECT_FALSE(euroc->info().depth_intrinsics.has_value());
+  EXPECT_FALSE(euroc->info().has_ground_truth);
+  EXPECT_NEAR(euroc->info().rate_hz, 20.0, 1e-9);
+  CaptureFrame frame;
+  ASSERT_EQ(euroc->next(&frame, &error), FrameSource::Status::kFrame) << error;
+  EXPECT_EQ(frame.timestamp_ns, 1403715273262142976LL);
+  EXPECT_EQ(frame.left.width, 752);
+  EXPECT_TRUE(frame.depth.empty());
+
+  auto scenes = openFrameSource("7scenes:" + kData + "/7scenes-rgbd-50", options, &error);
+  ASSERT_NE(scenes, nullptr) << error;
+  ASSERT_EQ(scenes->next(&frame, &error), FrameSource::Status::kFrame);
+  ASSERT_EQ(scenes->next(&frame, &error), FrameSource::Status::kFrame);
+  EXPECT_EQ(frame.frame_id, 1);
+  EXPECT_EQ(frame.timestamp_ns, 33333333);
+  EXPECT_EQ(frame.depth.width, 640);
+  EXPECT_TRUE(frame.T_G_C.has_value());
+}
+
+TEST_F(OpenFrameSourceTest, RejectsUnknownSpecsAndMissingFolders) {
+  std::string error;
+  EXPECT_EQ(openFrameSource("room", SourceOptions{}, &error), nullptr);
+  EXPECT_NE(error.find("has no kind"), std::string::npos) << error;
+  EXPECT_EQ(openFrameSource("kinect:x", SourceOptions{}, &error), nullptr);
+  EXPECT_NE(error.find("unknown source kind 'kinect'"), std::string::npos) << error;
+  EXPECT_EQ(openFrameSource("sim:moon.ply", SourceOptions{}, &error), nullptr);
+  EXPECT_NE(error.find("moon.ply"), std::string::npos) << error;
+  EXPECT_EQ(openFrameSource("euroc:/nonexistent", SourceOptions{}, &error), nullptr);
+  EXPECT_NE(error.find("/nonexistent"), std::string::npos) << error;
+  SourceOptions bad;
+  bad.trajectory = "spiral";
+  EXPECT_EQ(openFrameSource("sim:room", bad, &error), nullptr);
+  EXPECT_NE(error.find("unknown trajectory 'spiral'"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace cblox

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -13,7 +14,7 @@ struct ProceduralTextureConfig {
   /// Wavelength of the coarsest noise octave, metres. Each further octave halves it.
   double base_wavelength_m = 0.4;
   /// Number of octaves (1..8).
-  int octaves = 6;
+  int octaves = 5;
   /// Brightness spread: the factor ranges over [1 - contrast, 1]. In [0, 1].
   double contrast = 0.75;
   /// Share of hard-edged blobs (the thresholded third octave) mixed into the smooth noise; hard edges
@@ -30,7 +31,8 @@ struct ProceduralTextureConfig {
 /// coordinates (the plane is chosen by the surface normal's largest component), so it needs
 /// no texture coordinates and looks the same from every camera (stereo-consistent). Octaves
 /// finer than about two pixel footprints fade to their mean, which keeps distant surfaces
-/// from aliasing into noise.
+/// from aliasing into noise. The value is normalised by the weight of all octaves, so a
+/// faded octave contributes its mean (0.5).
 /// Thread-safety: immutable after construction; brightness() is thread-safe.
 class ProceduralTexture {
  public:
@@ -42,15 +44,25 @@ class ProceduralTexture {
   /// one pixel on the surface; 0 renders every octave). Thread-safe.
   float brightness(const Eigen::Vector3f& p, const Eigen::Vector3f& n, float footprint_m) const;
 
+  /// One sample for the batched brightness(): world point, surface normal, pixel footprint.
+  struct TextureSample {
+    Eigen::Vector3f point;
+    Eigen::Vector3f normal;
+    float footprint_m;
+  };
+
+  /// out[i] = brightness(samples[i]...) for i < min(samples.size(), out.size()), eight at a
+  /// time with SIMD; the single-sample overload calls this, so both give identical values.
+  /// Thread-safe.
+  void brightness(std::span<const TextureSample> samples, std::span<float> out) const;
+
   const ProceduralTextureConfig& config() const { return config_; }
 
  private:
   static constexpr int kLatticeSize = 256;  // power of two: wraps with a mask
 
-  float valueNoise(float x, float y) const;
-
   ProceduralTextureConfig config_;
-  std::vector<float> lattice_;  // kLatticeSize^2 values in [0, 1]
+  std::vector<uint8_t> lattice_;  // kLatticeSize^2 values, 0..255 for [0, 1] (64 KiB)
 };
 
 }  // namespace cblox

@@ -53,6 +53,11 @@ class SimRenderer {
   const TriangleMeshRaycaster& scene() const { return *scene_; }
 
  private:
+  /// Renders rows band by band: bands of 8 rows, band b on thread b % num_threads.
+  void renderRows(const Transformationd& T_G_C, const PinholeIntrinsics& intrinsics,
+                  GrayImage* gray, ColorImage* color, DepthImage* depth, int thread_id,
+                  int num_threads) const;
+
   std::shared_ptr<const TriangleMeshRaycaster> scene_;
   SimRendererConfig config_;
   ProceduralTexture texture_;

@@ -1,0 +1,122 @@
+// Simulator render benchmark: time per stereo + depth frame at 752x480 for every built-in
+// scene, with the depth camera registered to the left camera (two ray-traced views: left
+// with colour and depth, right) and with a separate depth camera (three views), for 1 and
+// 2 render threads. The simulator must beat real time at 20 Hz (50 ms per frame).
+//
+//   cblox-bench-sim-render [--frames N] [--json FILE] [--scene room|hall|town]
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "drivers/sim/builtin_scenes.h"
+#include "drivers/sim/sim_renderer.h"
+
+namespace cblox {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Row {
+  std::string scene, rig;
+  int threads;
+  size_t triangles;
+  double build_ms, median_ms, p90_ms, max_ms;
+};
+
+double percentile(std::vector<double> v, double p) {
+  std::sort(v.begin(), v.end());
+  const size_t i = std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5));
+  return v[i];
+}
+
+int run(int argc, char** argv) {
+  int frames = 60;
+  std::string json_path, only;
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (flag == "--frames" && i + 1 < argc) {
+      frames = std::max(1, std::atoi(argv[++i]));
+    } else if (flag == "--json" && i + 1 < argc) {
+      json_path = argv[++i];
+    } else if (flag == "--scene" && i + 1 < argc) {
+      only = argv[++i];
+    } else {
+      std::fprintf(stderr, "usage: cblox-bench-sim-render [--frames N] [--json FILE] [--scene NAME]\n");
+      return 2;
+    }
+  }
+  std::vector<Row> rows;
+  for (const std::string& name : builtinSceneNames()) {
+    if (!only.empty() && name != only) continue;
+    const BuiltinScene scene = makeBuiltinScene(name);
+    const auto t0 = Clock::now();
+    std::string error;
+    std::shared_ptr<const TriangleMeshRaycaster> raycaster =
+        TriangleMeshRaycaster::create(scene.mesh, &error);
+    const double build_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    if (raycaster == nullptr) {
+      std::fprintf(stderr, "%s: %s\n", name.c_str(), error.c_str());
+      return 1;
+    }
+    const StampedTrajectory trajectory =
+        makeSceneTrajectory(scene, TrajectoryKind::kLoop, 20.0);
+    for (const bool separate_depth : {false, true}) {
+      for (const int threads : {1, 2}) {
+        SimRendererConfig config;  // 752x480 EuRoC-like rig
+        config.num_threads = threads;
+        config.rig.depth_max_m = scene.depth_max_m;
+        config.texture.base_wavelength_m = scene.texture_wavelength_m;
+        if (separate_depth) {
+          config.rig.depth = config.rig.stereo;
+          config.rig.T_L_D =
+              Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.03, 0.0, 0.0));
+        }
+        const SimRenderer renderer(raycaster, config);
+        SimImages images;
+        renderer.render(trajectory.front().T_G_C, &images);  // warm-up
+        std::vector<double> ms;
+        const size_t step = std::max<size_t>(1, trajectory.size() / static_cast<size_t>(frames));
+        for (int f = 0; f < frames; ++f) {
+          const Transformationd& pose =
+              trajectory[std::min(trajectory.size() - 1, static_cast<size_t>(f) * step)].T_G_C;
+          const auto start = Clock::now();
+          renderer.render(pose, &images);
+          ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+        }
+        const Row row{name, separate_depth ? "stereo+separate depth (3 views)"
+                                           : "stereo+registered depth (2 views)",
+                      threads, scene.mesh.numTriangles(), build_ms, percentile(ms, 0.5),
+                      percentile(ms, 0.9), *std::max_element(ms.begin(), ms.end())};
+        std::printf("%-5s %-34s threads %d: median %6.1f ms  p90 %6.1f ms  max %6.1f ms  "
+                    "(%5.1f frames/s, %zu triangles, BVH %.0f ms)\n",
+                    row.scene.c_str(), row.rig.c_str(), threads, row.median_ms, row.p90_ms,
+                    row.max_ms, 1000.0 / row.median_ms, row.triangles, row.build_ms);
+        std::fflush(stdout);
+        rows.push_back(row);
+      }
+    }
+  }
+  if (!json_path.empty()) {
+    std::ofstream out(json_path);
+    out << "[\n";
+    for (size_t i = 0; i < rows.size(); ++i) {
+      const Row& r = rows[i];
+      out << "  {\"scene\": \"" << r.scene << "\", \"rig\": \"" << r.rig
+          << "\", \"threads\": " << r.threads << ", \"triangles\": " << r.triangles
+          << ", \"bvh_build_ms\": " << r.build_ms << ", \"median_ms\": " << r.median_ms
+          << ", \"p90_ms\": " << r.p90_ms << ", \"max_ms\": " << r.max_ms << "}"
+          << (i + 1 < rows.size() ? "," : "") << "\n";
+    }
+    out << "]\n";
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace cblox
+
+int main(int argc, char** argv) { return cblox::run(argc, argv); }

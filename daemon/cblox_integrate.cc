@@ -1,12 +1,13 @@
 // cblox-integrate: integrates a depth source into one TSDF volume and writes a PLY mesh.
 //
-//   cblox-integrate --config config/integrate.yaml --source synthetic-room --output room.ply
+//   cblox-integrate --config config/integrate.yaml --source sim:room --output room.ply
 //   cblox-integrate --source 7scenes:../shared/data/7scenes-rgbd-50 --integrator projective
 //
-// Sources: "synthetic-room" (the built-in analytic room rendered along an orbit, with
-// exact ground truth: the mesh error against the true surface is printed) and
-// "7scenes:<folder>" (Microsoft 7-Scenes frame layout). Exit status 0 on success,
-// 1 on a runtime error, 2 on a usage or configuration error.
+// Sources: any capture source with depth (drivers/open_frame_source.h: sim:room|hall|town|
+// MESH, tum:DIR, 7scenes:DIR) and "synthetic-room" (the analytic room of the unit tests).
+// Simulated sources have an exact ground-truth mesh: the reconstruction's accuracy and
+// completeness against it are printed. Exit status 0 on success, 1 on a runtime error,
+// 2 on a usage or configuration error.
 
 #include <algorithm>
 #include <chrono>
@@ -26,7 +27,10 @@
 #include "core/mesh/mesh_integrator.h"
 #include "core/tsdf/tsdf_layer.h"
 #include "daemon/config/yaml_config.h"
-#include "drivers/dataset/seven_scenes_reader.h"
+#include "core/eval/mesh_accuracy.h"
+#include "core/raycast/triangle_mesh_raycaster.h"
+#include "daemon/config/capture_config.h"
+#include "drivers/open_frame_source.h"
 #include "drivers/synthetic/scenes.h"
 #include "drivers/synthetic/synthetic_frame_source.h"
 
@@ -37,17 +41,24 @@ using Clock = std::chrono::steady_clock;
 
 struct Options {
   std::string config_file;
-  std::string source = "synthetic-room";
+  std::string source = "sim:room";
   std::string output = "out/mesh.ply";
   std::optional<std::string> integrator;
   std::optional<int> frames;
+  std::string trajectory = "orbit";
+  std::string noise = "none";
+  std::string ground_truth_output;
   bool ascii = false;
 };
 
 void printUsage() {
-  std::cout << "usage: cblox-integrate [--config FILE] [--source synthetic-room|7scenes:DIR]\n"
-               "                       [--integrator fast|simple|projective] [--frames N]\n"
-               "                       [--output FILE.ply] [--ascii]\n";
+  std::cout << "usage: cblox-integrate [--config FILE] [--source SPEC] [--frames N]\n"
+               "                       [--integrator fast|simple|projective]\n"
+               "                       [--trajectory KIND|FILE] [--noise none|realistic]\n"
+               "                       [--output FILE.ply] [--write-ground-truth FILE.ply] [--ascii]\n"
+               "  SPEC: sim:room|hall|town|MESH.ply (default sim:room), tum:DIR, 7scenes:DIR,\n"
+               "        synthetic-room (analytic)\n"
+               "  KIND: orbit (default) | loop | lawnmower | figure-eight, or a TUM file\n";
 }
 
 /// One depth frame from any source.
@@ -94,7 +105,8 @@ struct Source {
   PinholeIntrinsics intrinsics;
   size_t size = 0;
   std::function<bool(Frame*)> next;
-  std::optional<AnalyticScene> ground_truth;  // set for analytic sources
+  std::optional<AnalyticScene> ground_truth;             // analytic sources
+  std::shared_ptr<const Mesh> ground_truth_mesh;          // simulated sources
 };
 
 Source openSource(const Options& options, const YAML::Node& root) {
@@ -120,30 +132,49 @@ Source openSource(const Options& options, const YAML::Node& root) {
     };
     return source;
   }
-  const std::string prefix = "7scenes:";
-  if (options.source.rfind(prefix, 0) == 0) {
-    std::string error;
-    auto reader = SevenScenesReader::open(options.source.substr(prefix.size()), &error);
-    if (!reader) throw std::runtime_error(error);
-    auto shared = std::make_shared<SevenScenesReader>(std::move(*reader));
-    source.intrinsics = shared->depthIntrinsics();
-    source.size = std::min<size_t>(shared->size(), options.frames.value_or(1 << 30));
-    auto index = std::make_shared<size_t>(0);
-    const size_t limit = source.size;
-    source.next = [shared, index, limit](Frame* frame) {
-      if (*index >= limit) return false;
-      SevenScenesFrame f;
-      std::string read_error;
-      if (!shared->read((*index)++, &f, &read_error)) throw std::runtime_error(read_error);
-      frame->T_G_C = f.T_G_C;
-      frame->depth = std::move(f.depth);
-      frame->color = std::move(f.color);
-      return true;
-    };
-    return source;
+  SourceOptions source_options;
+  source_options.trajectory = options.trajectory;
+  source_options.sim.noise = sensorNoisePreset(options.noise);
+  if (options.frames) {
+    if (*options.frames < 1) throw ConfigError("--frames must be >= 1");
+    source_options.max_frames = static_cast<size_t>(*options.frames);
   }
-  throw ConfigError("--source must be synthetic-room or 7scenes:<folder>, got '" + options.source +
-                    "'");
+  std::string error;
+  std::shared_ptr<FrameSource> frames = openFrameSource(options.source, source_options, &error);
+  if (frames == nullptr) throw ConfigError(error);
+  const SourceInfo& info = frames->info();
+  if (!info.depth_intrinsics) {
+    throw ConfigError("source " + info.name + " delivers no depth images (stereo only)");
+  }
+  for (const std::string& note : info.notes) std::printf("source note: %s\n", note.c_str());
+  source.intrinsics = *info.depth_intrinsics;
+  source.size = info.frame_count.value_or(0);
+  if (options.source.rfind("sim:", 0) == 0) {
+    source.ground_truth_mesh = loadSimSceneMesh(options.source, &error);
+  }
+  const Transformationd T_C_D = info.T_C_D;
+  source.next = [frames, T_C_D](Frame* frame) {
+    CaptureFrame capture;
+    std::string read_error;
+    while (true) {
+      const FrameSource::Status status = frames->next(&capture, &read_error);
+      if (status == FrameSource::Status::kEnd) return false;
+      if (status == FrameSource::Status::kError) {
+        std::fprintf(stderr, "cblox-integrate: frame skipped: %s\n", read_error.c_str());
+        continue;
+      }
+      if (!capture.T_G_C) {
+        std::fprintf(stderr, "cblox-integrate: frame %lld has no pose, skipped\n",
+                     static_cast<long long>(capture.frame_id));
+        continue;
+      }
+      frame->T_G_C = *capture.T_G_C * T_C_D;  // the depth camera's pose
+      frame->depth = std::move(capture.depth);
+      frame->color = std::move(capture.color);
+      return true;
+    }
+  };
+  return source;
 }
 
 double percentile(std::vector<double> values, double q) {
@@ -263,6 +294,30 @@ int run(const Options& options) {
         rmse * 1e3, percentile(errors, 0.5) * 1e3, percentile(errors, 0.9) * 1e3,
         percentile(errors, 1.0) * 1e3, 100.0 * within_voxel);
   }
+  if (source.ground_truth_mesh) {
+    const auto raycaster = TriangleMeshRaycaster::create(*source.ground_truth_mesh, &error);
+    if (raycaster == nullptr) throw std::runtime_error(error);
+    MeshAccuracyOptions accuracy_options;
+    accuracy_options.completeness_threshold_m = 2.0 * layer_config.voxel_size;
+    const auto accuracy = evaluateMeshAccuracy(*raycaster, mesh, accuracy_options, &error);
+    if (!accuracy) throw std::runtime_error(error);
+    const ErrorStatistics& a = accuracy->accuracy_m;
+    std::printf(
+        "accuracy vs ground truth: vertex RMSE %.2f mm, median %.2f mm, p90 %.2f mm, "
+        "max %.2f mm; completeness %.1f%% of the scene surface within %.0f mm\n",
+        a.rmse * 1e3, a.median * 1e3, a.p90 * 1e3, a.max * 1e3, 100.0 * accuracy->completeness,
+        accuracy_options.completeness_threshold_m * 1e3);
+    if (!options.ground_truth_output.empty()) {
+      if (!writePly(options.ground_truth_output, *source.ground_truth_mesh,
+                    PlyFormat::kBinaryLittleEndian, &error)) {
+        std::fprintf(stderr, "cblox-integrate: %s\n", error.c_str());
+        return 1;
+      }
+      std::printf("ground-truth mesh -> %s\n", options.ground_truth_output.c_str());
+    }
+  } else if (!options.ground_truth_output.empty()) {
+    throw ConfigError("--write-ground-truth needs a sim: source");
+  }
   if (skipped_points > 0)
     std::printf("skipped %zu invalid or out-of-range depth pixels\n", skipped_points);
   return mesh.numVertices() > 0 ? 0 : 1;
@@ -300,6 +355,12 @@ int main(int argc, char** argv) {
         std::cerr << "cblox-integrate: --frames needs an integer\n";
         return 2;
       }
+    } else if (arg == "--trajectory") {
+      options.trajectory = value();
+    } else if (arg == "--noise") {
+      options.noise = value();
+    } else if (arg == "--write-ground-truth") {
+      options.ground_truth_output = value();
     } else if (arg == "--ascii") {
       options.ascii = true;
     } else {

@@ -1,14 +1,18 @@
-# Runs cblox-integrate on 12 frames of the synthetic room (fast and projective) and checks
-# the PLY and the accuracy against the analytic room.
+# Runs cblox-integrate on 12 frames of the analytic synthetic room (fast and projective) and
+# of the Embree-simulated room, and checks the PLY and the accuracy against the ground truth.
 file(REMOVE ${OUT})
-foreach(integrator fast projective)
+foreach(case fast projective sim)
+  if(case STREQUAL "sim")
+    set(args --source sim:room --trajectory orbit --integrator fast)
+  else()
+    set(args --source synthetic-room --integrator ${case})
+  endif()
   execute_process(
-    COMMAND ${INTEGRATE} --config ${CONFIG} --source synthetic-room --frames 12
-            --integrator ${integrator} --output ${OUT}
+    COMMAND ${INTEGRATE} --config ${CONFIG} ${args} --frames 12 --output ${OUT}
     RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  message(STATUS "${integrator}:\n${out}${err}")
+  message(STATUS "${case}:\n${out}${err}")
   if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "cblox-integrate (${integrator}) exited with ${rc}")
+    message(FATAL_ERROR "cblox-integrate (${case}) exited with ${rc}")
   endif()
   if(NOT EXISTS ${OUT})
     message(FATAL_ERROR "no mesh written to ${OUT}")
@@ -17,11 +21,17 @@ foreach(integrator fast projective)
   if(NOT header MATCHES "^ply\nformat binary_little_endian 1.0\n")
     message(FATAL_ERROR "not a binary PLY: ${header}")
   endif()
-  # Vertex RMSE against the analytic room: well under one voxel (20 mm).
-  if(NOT out MATCHES "vertex RMSE ([0-9.]+) mm")
+  # Vertex RMSE against the exact surface: well under one voxel (20 mm).
+  if(NOT out MATCHES "vertex RMSE ([0-9.]+) mm, median ([0-9.]+) mm")
     message(FATAL_ERROR "no accuracy line in the output")
   endif()
   if(CMAKE_MATCH_1 GREATER 10.0)
     message(FATAL_ERROR "vertex RMSE ${CMAKE_MATCH_1} mm exceeds 10 mm")
+  endif()
+  if(CMAKE_MATCH_2 GREATER 2.0)
+    message(FATAL_ERROR "median vertex error ${CMAKE_MATCH_2} mm exceeds 2 mm")
+  endif()
+  if(case STREQUAL "sim" AND NOT out MATCHES "completeness [0-9.]+% of the scene surface")
+    message(FATAL_ERROR "no completeness line for the simulated room")
   endif()
 endforeach()

@@ -4,6 +4,7 @@
 //   cblox-capture --source sim:room --trajectory loop            # publish at 20 Hz
 //   cblox-capture --source euroc:../shared/data/euroc-v101-micro --rate max
 //   cblox-capture --source sim:town --frames 100 --render-to out/town_frames
+//   cblox-capture --source sim:hall --write-scene out/hall.ply
 //
 // Channels (configurable): CBLOX_STEREO (stereo_pair_t), CBLOX_DEPTH (depth_frame_t),
 // CBLOX_GT_POSE (pose_stamped_t, sources with ground truth), CBLOX_HEARTBEAT (1 Hz).
@@ -49,7 +50,7 @@ void printUsage() {
       "        7scenes:DIR\n"
       "  KIND (sim): loop | orbit | lawnmower | figure-eight, or a TUM trajectory file\n"
       "  --render-to DIR  writes images + lists + groundtruth.txt instead of publishing\n"
-      "  --write-scene    writes the simulator's ground-truth mesh (sim sources)\n";
+      "  --write-scene    writes the simulator's ground-truth mesh (sim sources) and exits\n";
 }
 
 struct Args {
@@ -180,15 +181,6 @@ int64_t wallUtime() {
 int run(const Args& args) {
   const CaptureConfig config = buildConfig(args);
   std::string error;
-  std::unique_ptr<FrameSource> source =
-      openFrameSource(config.source, config.source_options, &error);
-  if (source == nullptr) {
-    std::fprintf(stderr, "cblox-capture: %s\n", error.c_str());
-    return 2;
-  }
-  const SourceInfo& info = source->info();
-  if (!args.quiet) printInfo(info);
-
   if (args.write_scene) {
     std::shared_ptr<const Mesh> mesh = loadSimSceneMesh(config.source, &error);
     if (mesh == nullptr || !writePly(*args.write_scene, *mesh, PlyFormat::kBinaryLittleEndian, &error)) {
@@ -197,7 +189,16 @@ int run(const Args& args) {
     }
     std::printf("capture: wrote scene mesh %s (%zu triangles)\n", args.write_scene->c_str(),
                 mesh->numTriangles());
+    return 0;
   }
+  std::unique_ptr<FrameSource> source =
+      openFrameSource(config.source, config.source_options, &error);
+  if (source == nullptr) {
+    std::fprintf(stderr, "cblox-capture: %s\n", error.c_str());
+    return 2;
+  }
+  const SourceInfo& info = source->info();
+  if (!args.quiet) printInfo(info);
 
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);

@@ -239,11 +239,11 @@ BuiltinScene makeIndustrialHall() {
 BuiltinScene makeTown() {
   BuiltinScene scene;
   scene.name = "town";
-  scene.description = "small town 230 x 230 m: streets, house fronts, trees";
+  scene.description = "small town 266 x 266 m: street grid, house fronts on both sides, trees";
   Mesh& m = scene.mesh;
   const float spacing = 70.0f, street = 12.0f;
   const int lines = 4;  // street centre lines at 0, 70, 140, 210 in x and y
-  const float lo = -spacing * 0.15f, hi = spacing * (lines - 1) + spacing * 0.15f;
+  const float lo = -spacing * 0.4f, hi = spacing * (lines - 1) + spacing * 0.4f;
   appendQuad(&m, Vector3f(lo, lo, -0.02f), Vector3f(hi - lo, 0, 0), Vector3f(0, hi - lo, 0),
              Color{110, 130, 90}, 8, 8);
   for (int i = 0; i < lines; ++i) {
@@ -294,11 +294,15 @@ BuiltinScene makeTown() {
       }
     }
   };
-  for (int bx = 0; bx + 1 < lines; ++bx) {
-    for (int by = 0; by + 1 < lines; ++by) {
+  // Blocks -1 .. lines-1 in x and y: the outer ones get houses only along the border
+  // street they face, so every street has houses on both sides.
+  for (int bx = -1; bx < lines; ++bx) {
+    for (int by = -1; by < lines; ++by) {
       const float x0 = spacing * bx, y0 = spacing * by;
+      const bool inner_x = bx >= 0 && bx + 1 < lines, inner_y = by >= 0 && by + 1 < lines;
       // Along the streets y = y0 (houses to +y) and y = y0 + spacing (houses to -y).
-      for (int side = 0; side < 2; ++side) {
+      for (int side = 0; side < 2 && inner_x; ++side) {
+        if ((side == 0 && by < 0) || (side == 1 && by + 1 >= lines)) continue;
         const float street_c = side == 0 ? y0 : y0 + spacing;
         const float dir = side == 0 ? 1.0f : -1.0f;
         float u = x0 + street / 2 + 4.0f;
@@ -312,7 +316,8 @@ BuiltinScene makeTown() {
       }
       // Along the streets x = x0 (houses to +x) and x = x0 + spacing (to -x), shorter rows
       // that leave the corners to the x-street houses.
-      for (int side = 0; side < 2; ++side) {
+      for (int side = 0; side < 2 && inner_y; ++side) {
+        if ((side == 0 && bx < 0) || (side == 1 && bx + 1 >= lines)) continue;
         const float street_c = side == 0 ? x0 : x0 + spacing;
         const float dir = side == 0 ? 1.0f : -1.0f;
         float u = y0 + street / 2 + 18.0f;

@@ -51,8 +51,8 @@ BuiltinScene makeLivingRoom();
 /// (b) An industrial hall (40 x 20 x 10 m) with columns, pipe racks and elbows, tanks, crates
 /// and a mezzanine: the MAV flights of the paper.
 BuiltinScene makeIndustrialHall();
-/// (c) A small town (about 230 x 230 m): a street grid, house fronts with windows and roofs,
-/// trees; a car-like drive around two blocks that returns to its start.
+/// (c) A small town (about 266 x 266 m): a 4 x 4 street grid 70 m apart lined on both
+/// sides with house fronts with windows and roofs, trees; a car-like drive around two blocks that returns to its start.
 BuiltinScene makeTown();
 
 /// Trajectory kinds that every built-in scene provides.

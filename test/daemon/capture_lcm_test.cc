@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <map>
 #include <string>
 #include <vector>
@@ -19,7 +20,9 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
+#include "core/io/ply_io.h"
 #include "daemon/lcm/messages.h"
+#include "drivers/sim/builtin_scenes.h"
 #include "drivers/open_frame_source.h"
 
 extern char** environ;
@@ -123,6 +126,20 @@ TEST(CaptureLcmTest, PublishesSimulatorFramesThatMatchTheSourceExactly) {
     ASSERT_TRUE(pose.has_value()) << error;
     EXPECT_TRUE(pose->isApprox(*frame.T_G_C, 1e-12));
   }
+}
+
+TEST(CaptureLcmTest, WritesTheSceneMeshAndExits) {
+  const std::string path = "/tmp/cblox_capture_scene_" + std::to_string(::getpid()) + ".ply";
+  const pid_t pid = spawn({CBLOX_CAPTURE_EXE, "--source", "sim:hall", "--write-scene", path});
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  Mesh mesh;
+  std::string error;
+  ASSERT_TRUE(readPly(path, &mesh, &error)) << error;
+  EXPECT_EQ(mesh.numTriangles(), makeIndustrialHall().mesh.numTriangles());
+  std::remove(path.c_str());
 }
 
 TEST(CaptureLcmTest, BadSourceExitsWithStatusTwo) {

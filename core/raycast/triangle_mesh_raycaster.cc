@@ -33,12 +33,6 @@ void setError(std::string* error, std::string message) {
   if (error != nullptr) *error = std::move(message);
 }
 
-Eigen::Vector3f unitNormal(float x, float y, float z) {
-  const Eigen::Vector3f n(x, y, z);
-  const float norm = n.norm();
-  return norm > 0.0f ? Eigen::Vector3f(n / norm) : Eigen::Vector3f::Zero();
-}
-
 struct PointQueryState {
   const Mesh* mesh;
   Eigen::Vector3d p;
@@ -92,6 +86,14 @@ std::unique_ptr<TriangleMeshRaycaster> TriangleMeshRaycaster::create(const Mesh&
   raycaster->mesh_ = mesh;
   raycaster->bounds_.setEmpty();
   for (const Eigen::Vector3f& v : mesh.vertices) raycaster->bounds_.extend(v);
+  raycaster->triangle_normals_.reserve(mesh.triangles.size());
+  for (const Eigen::Vector3i& t : mesh.triangles) {
+    const Eigen::Vector3f& a = mesh.vertices[t[0]];
+    const Eigen::Vector3f n = (mesh.vertices[t[1]] - a).cross(mesh.vertices[t[2]] - a);
+    const float norm = n.norm();
+    raycaster->triangle_normals_.push_back(norm > 0.0f ? Eigen::Vector3f(n / norm)
+                                                       : Eigen::Vector3f::Zero());
+  }
   raycaster->embree_ = std::make_unique<EmbreeHandles>();
   EmbreeHandles& handles = *raycaster->embree_;
 
@@ -161,16 +163,61 @@ bool TriangleMeshRaycaster::intersect(const Ray& ray, RaycastHit* hit) const {
   hit->triangle = rayhit.hit.primID;
   hit->u = rayhit.hit.u;
   hit->v = rayhit.hit.v;
-  hit->normal = unitNormal(rayhit.hit.Ng_x, rayhit.hit.Ng_y, rayhit.hit.Ng_z);
+  hit->normal = triangle_normals_[rayhit.hit.primID];
   return true;
 }
+
+void TriangleMeshRaycaster::tracePacket(::RTCRayHit16* packet, const int* valid, size_t count,
+                                        RaycastHit* hits) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  rtcIntersect16(valid, embree_->scene, &context, packet);
+  for (size_t k = 0; k < count; ++k) {
+    RaycastHit& hit = hits[k];
+    const unsigned triangle = packet->hit.geomID[k] == RTC_INVALID_GEOMETRY_ID
+                                  ? RaycastHit::kNoHit
+                                  : packet->hit.primID[k];
+    hit.triangle = triangle;
+    if (triangle == RaycastHit::kNoHit) {
+      hit.t = std::numeric_limits<float>::infinity();
+      hit.u = hit.v = 0.0f;
+      hit.normal.setZero();
+      continue;
+    }
+    hit.t = packet->ray.tfar[k];
+    hit.u = packet->hit.u[k];
+    hit.v = packet->hit.v[k];
+    hit.normal = triangle_normals_[triangle];
+  }
+}
+
+namespace {
+
+/// Fills lane k of a packet; lanes past `count` repeat the last ray and are masked off.
+void setLane(RTCRayHit16* packet, int k, const Eigen::Vector3f& origin,
+             const Eigen::Vector3f& direction, float t_near, float t_far) {
+  packet->ray.org_x[k] = origin.x();
+  packet->ray.org_y[k] = origin.y();
+  packet->ray.org_z[k] = origin.z();
+  packet->ray.dir_x[k] = direction.x();
+  packet->ray.dir_y[k] = direction.y();
+  packet->ray.dir_z[k] = direction.z();
+  packet->ray.tnear[k] = t_near;
+  packet->ray.tfar[k] = t_far;
+  packet->ray.time[k] = 0.0f;
+  packet->ray.mask[k] = 0xFFFFFFFFu;
+  packet->ray.id[k] = static_cast<unsigned>(k);
+  packet->ray.flags[k] = 0;
+  packet->hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+  packet->hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+}
+
+}  // namespace
 
 void TriangleMeshRaycaster::intersect(std::span<const Ray> rays,
                                       std::span<RaycastHit> hits) const {
   constexpr size_t kPacket = 16;
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   alignas(64) RTCRayHit16 packet;
   alignas(64) int valid[kPacket];
   const size_t count = std::min(rays.size(), hits.size());
@@ -179,31 +226,46 @@ void TriangleMeshRaycaster::intersect(std::span<const Ray> rays,
     for (size_t k = 0; k < kPacket; ++k) {
       valid[k] = k < n ? -1 : 0;
       const Ray& ray = rays[start + std::min(k, n - 1)];
-      packet.ray.org_x[k] = ray.origin.x();
-      packet.ray.org_y[k] = ray.origin.y();
-      packet.ray.org_z[k] = ray.origin.z();
-      packet.ray.dir_x[k] = ray.direction.x();
-      packet.ray.dir_y[k] = ray.direction.y();
-      packet.ray.dir_z[k] = ray.direction.z();
-      packet.ray.tnear[k] = ray.t_near;
-      packet.ray.tfar[k] = ray.t_far;
-      packet.ray.time[k] = 0.0f;
-      packet.ray.mask[k] = 0xFFFFFFFFu;
-      packet.ray.id[k] = static_cast<unsigned>(k);
-      packet.ray.flags[k] = 0;
-      packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-      packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+      setLane(&packet, static_cast<int>(k), ray.origin, ray.direction, ray.t_near, ray.t_far);
     }
-    rtcIntersect16(valid, embree_->scene, &context, &packet);
-    for (size_t k = 0; k < n; ++k) {
-      RaycastHit& hit = hits[start + k];
-      hit = RaycastHit();
-      if (packet.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
-      hit.t = packet.ray.tfar[k];
-      hit.triangle = packet.hit.primID[k];
-      hit.u = packet.hit.u[k];
-      hit.v = packet.hit.v[k];
-      hit.normal = unitNormal(packet.hit.Ng_x[k], packet.hit.Ng_y[k], packet.hit.Ng_z[k]);
+    tracePacket(&packet, valid, n, hits.data() + start);
+  }
+}
+
+void TriangleMeshRaycaster::intersectPinholeRows(const Eigen::Matrix3f& R_G_C,
+                                                 const Eigen::Vector3f& origin_G,
+                                                 const PinholeIntrinsics& intrinsics,
+                                                 int row_begin, int row_end,
+                                                 std::span<RaycastHit> hits) const {
+  // 4 x 4 pixel tiles: more coherent packets than 16 pixels of one row.
+  constexpr int kTile = 4;
+  const int width = intrinsics.width;
+  const float fx = static_cast<float>(intrinsics.fx), fy = static_cast<float>(intrinsics.fy);
+  const float cx = static_cast<float>(intrinsics.cx), cy = static_cast<float>(intrinsics.cy);
+  const float inf = std::numeric_limits<float>::infinity();
+  alignas(64) RTCRayHit16 packet;
+  alignas(64) int valid[16];
+  RaycastHit tile_hits[16];
+  for (int v0 = row_begin; v0 < row_end; v0 += kTile) {
+    for (int u0 = 0; u0 < width; u0 += kTile) {
+      int count = 0;
+      for (int k = 0; k < 16; ++k) {
+        const int u = u0 + (k % kTile), v = v0 + (k / kTile);
+        const bool inside = u < width && v < row_end;
+        valid[k] = inside ? -1 : 0;
+        count = inside ? k + 1 : count;
+        const Eigen::Vector3f direction =
+            R_G_C * Eigen::Vector3f((static_cast<float>(std::min(u, width - 1)) - cx) / fx,
+                                    (static_cast<float>(std::min(v, row_end - 1)) - cy) / fy, 1.0f);
+        setLane(&packet, k, origin_G, direction, 0.0f, inf);
+      }
+      tracePacket(&packet, valid, static_cast<size_t>(count), tile_hits);
+      for (int k = 0; k < 16; ++k) {
+        const int u = u0 + (k % kTile), v = v0 + (k / kTile);
+        if (u < width && v < row_end) {
+          hits[static_cast<size_t>(v - row_begin) * width + u] = tile_hits[k];
+        }
+      }
     }
   }
 }

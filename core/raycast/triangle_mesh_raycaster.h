@@ -5,11 +5,15 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "core/geometry/pinhole_camera.h"
 #include "core/mesh/mesh.h"
+
+struct RTCRayHit16;  // Embree's 16-ray packet (embree3/rtcore_ray.h)
 
 namespace cblox {
 
@@ -32,7 +36,7 @@ struct RaycastHit {
   /// Barycentric coordinates of the hit: point = (1 - u - v) * v0 + u * v1 + v * v2.
   float u = 0.0f, v = 0.0f;
   /// Unit geometric normal (v1 - v0) x (v2 - v0) / |...| of the triangle hit (not flipped
-  /// towards the ray).
+  /// towards the ray; precomputed per triangle).
   Eigen::Vector3f normal = Eigen::Vector3f::Zero();
 
   bool hit() const { return triangle != kNoHit; }
@@ -74,6 +78,17 @@ class TriangleMeshRaycaster {
   /// when neighbouring rays are coherent (e.g. adjacent pixels). Thread-safe.
   void intersect(std::span<const Ray> rays, std::span<RaycastHit> hits) const;
 
+  /// First hits of the rays of a pinhole camera (pose R_G_C, origin_G) through the pixel
+  /// centres of rows [row_begin, row_end): direction R_G_C * ((u - cx) / fx, (v - cy) / fy, 1),
+  /// so t is the depth along the camera's z. hits (size >= (row_end - row_begin) * width) is
+  /// row-major from row_begin. Traced in 4 x 4 pixel packets. Thread-safe.
+  void intersectPinholeRows(const Eigen::Matrix3f& R_G_C, const Eigen::Vector3f& origin_G,
+                            const PinholeIntrinsics& intrinsics, int row_begin, int row_end,
+                            std::span<RaycastHit> hits) const;
+
+  /// Unit normal (v1 - v0) x (v2 - v0) / |...| of triangle i (zero for a degenerate one).
+  const Eigen::Vector3f& triangleNormal(uint32_t i) const { return triangle_normals_[i]; }
+
   /// True if anything lies on `ray` within [t_near, t_far] (shadow ray). Thread-safe.
   bool occluded(const Ray& ray) const;
 
@@ -93,8 +108,12 @@ class TriangleMeshRaycaster {
   struct EmbreeHandles;
 
   TriangleMeshRaycaster() = default;
+  /// Traces a prepared packet and converts its first `count` lanes to hits.
+  void tracePacket(::RTCRayHit16* packet, const int* valid, size_t count,
+                   RaycastHit* hits) const;
 
   Mesh mesh_;
+  std::vector<Eigen::Vector3f> triangle_normals_;
   Eigen::AlignedBox3f bounds_;
   std::unique_ptr<EmbreeHandles> embree_;
 };

@@ -60,9 +60,30 @@ class ProceduralTexture {
 
  private:
   static constexpr int kLatticeSize = 256;  // power of two: wraps with a mask
+  static constexpr int kLatticeStride = kLatticeSize + 4;  // row + its first 4 bytes again
+
+  float totalWeight() const;
+  /// Tri-planar coordinates, plane offset and wavelength/footprint ratio of 8 lanes from
+  /// samples[start, start + count) (the last sample repeated past count).
+  void prepareLanes(std::span<const TextureSample> samples, size_t start, size_t count,
+                    float* s, float* t, float* offset, float* ratio) const;
+  void brightnessPortable(std::span<const TextureSample> samples, std::span<float> out) const;
+  void brightnessAvx2(std::span<const TextureSample> samples, std::span<float> out) const;
+
+ public:
+  /// Which implementation brightness() uses: AVX2/FMA when the CPU has them (chosen at
+  /// construction), else portable vector code. For tests and benchmarks.
+  bool usesAvx2() const { return use_avx2_; }
+  /// Not thread-safe: call before the texture is shared.
+  void setUseAvx2(bool use) {
+    use_avx2_ = use && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  }
+
+ private:
 
   ProceduralTextureConfig config_;
-  std::vector<uint8_t> lattice_;  // kLatticeSize^2 values, 0..255 for [0, 1] (64 KiB)
+  std::vector<uint8_t> lattice_;  // kLatticeSize rows of kLatticeStride bytes, 0..255 = [0, 1]
+  bool use_avx2_ = false;
 };
 
 }  // namespace cblox

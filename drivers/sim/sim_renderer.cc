@@ -48,6 +48,21 @@ SimRenderer::SimRenderer(std::shared_ptr<const TriangleMeshRaycaster> scene,
     : scene_(std::move(scene)), config_(checked(config)), texture_(config_.texture) {
   if (scene_ == nullptr) throw std::invalid_argument("SimRenderer: scene is null");
   towards_light_G_ = config.lighting.towards_light_G.normalized().cast<float>();
+  ambient_ = static_cast<float>(config.lighting.ambient);
+  diffuse_ = static_cast<float>(config.lighting.diffuse);
+  // Vertex colours per triangle as floats; most primitives are one colour (flat).
+  const Mesh& mesh = scene_->mesh();
+  triangle_colors_.resize(mesh.triangles.size());
+  for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+    TriangleColor& c = triangle_colors_[i];
+    if (!mesh.hasColors()) continue;  // default grey
+    const Eigen::Vector3i& t = mesh.triangles[i];
+    auto to_float = [](const Color& k) { return Eigen::Vector3f(k.r, k.g, k.b); };
+    c.c0 = to_float(mesh.colors[t[0]]);
+    c.c1 = to_float(mesh.colors[t[1]]);
+    c.c2 = to_float(mesh.colors[t[2]]);
+    c.flat = mesh.colors[t[0]] == mesh.colors[t[1]] && mesh.colors[t[0]] == mesh.colors[t[2]];
+  }
 }
 
 void SimRenderer::render(const Transformationd& T_G_L, SimImages* images) const {
@@ -87,78 +102,59 @@ void SimRenderer::renderView(const Transformationd& T_G_C, const PinholeIntrinsi
   const float cx = static_cast<float>(intrinsics.cx), cy = static_cast<float>(intrinsics.cy);
   const float depth_min = static_cast<float>(config_.rig.depth_min_m);
   const float depth_max = static_cast<float>(config_.rig.depth_max_m);
-  const float ambient = static_cast<float>(config_.lighting.ambient);
-  const float diffuse = static_cast<float>(config_.lighting.diffuse);
   const uint8_t background = static_cast<uint8_t>(config_.lighting.background_gray);
-  const Mesh& mesh = scene_->mesh();
-  const bool has_colors = mesh.hasColors();
-  std::vector<Ray> rays(static_cast<size_t>(width));
-  std::vector<RaycastHit> hits(static_cast<size_t>(width));
+  const bool shade = gray != nullptr || color != nullptr;
+
+  std::vector<RaycastHit> hits(static_cast<size_t>(width) * kRowBand);
   // Shading in two passes per row: geometry of every hit, then the texture of all of them
   // in one SIMD batch.
-  std::vector<ProceduralTexture::TextureSample> samples;
-  std::vector<Eigen::Vector3f> lit_albedo;
-  std::vector<int> sample_column;
+  std::vector<ProceduralTexture::TextureSample> samples(static_cast<size_t>(width));
+  std::vector<Eigen::Vector3f> lit_albedo(static_cast<size_t>(width));
+  std::vector<int> sample_column(static_cast<size_t>(width));
   std::vector<float> texture(static_cast<size_t>(width));
-  samples.reserve(static_cast<size_t>(width));
-  lit_albedo.reserve(static_cast<size_t>(width));
-  sample_column.reserve(static_cast<size_t>(width));
+  // Normalised x of every column, and 1 / fx: no division per pixel.
+  std::vector<float> column_x(static_cast<size_t>(width));
+  for (int u = 0; u < width; ++u) column_x[static_cast<size_t>(u)] = (static_cast<float>(u) - cx) / fx;
+  const float inverse_fx = 1.0f / fx;
   for (int band = thread_id; band * kRowBand < height; band += num_threads) {
-    const int row_end = std::min(height, (band + 1) * kRowBand);
-    for (int v = band * kRowBand; v < row_end; ++v) {
+    const int row_begin = band * kRowBand;
+    const int row_end = std::min(height, row_begin + kRowBand);
+    scene_->intersectPinholeRows(R_G_C, origin_G, intrinsics, row_begin, row_end, hits);
+    for (int v = row_begin; v < row_end; ++v) {
+      const RaycastHit* row_hits = hits.data() + static_cast<size_t>(v - row_begin) * width;
       const float y = (static_cast<float>(v) - cy) / fy;
+      size_t num_samples = 0;
       for (int u = 0; u < width; ++u) {
-        Ray& ray = rays[static_cast<size_t>(u)];
-        ray.origin = origin_G;
-        // Scaled to z = 1 in the camera frame: the hit's t is its depth.
-        ray.direction = R_G_C * Eigen::Vector3f((static_cast<float>(u) - cx) / fx, y, 1.0f);
-        ray.t_near = 0.0f;
-        ray.t_far = std::numeric_limits<float>::infinity();
-      }
-      scene_->intersect(rays, hits);
-      samples.clear();
-      lit_albedo.clear();
-      sample_column.clear();
-      for (int u = 0; u < width; ++u) {
-        const RaycastHit& hit = hits[static_cast<size_t>(u)];
+        const RaycastHit& hit = row_hits[u];
         if (!hit.hit()) {
           if (gray != nullptr) (*gray)(u, v) = background;
           if (color != nullptr) (*color)(u, v) = Color{background, background, background};
           if (depth != nullptr) (*depth)(u, v) = 0.0f;
           continue;
         }
-        const Ray& ray = rays[static_cast<size_t>(u)];
         if (depth != nullptr) {
           (*depth)(u, v) = (hit.t >= depth_min && hit.t <= depth_max) ? hit.t : 0.0f;
         }
-        if (gray == nullptr && color == nullptr) continue;
-        const float ray_length = ray.direction.norm();
+        if (!shade) continue;
+        const Eigen::Vector3f direction =
+            R_G_C * Eigen::Vector3f(column_x[static_cast<size_t>(u)], y, 1.0f);
+        const float ray_length = direction.norm();
         Eigen::Vector3f normal = hit.normal;
-        float cos_incidence = -normal.dot(ray.direction) / ray_length;
+        float cos_incidence = -normal.dot(direction) * (1.0f / ray_length);
         if (cos_incidence < 0.0f) {  // back face: shade the side the camera sees
           normal = -normal;
           cos_incidence = -cos_incidence;
         }
         // One pixel's size on the surface: distance / focal length, stretched by obliquity.
-        const float footprint = hit.t * ray_length / fx / std::max(cos_incidence, 0.2f);
-        samples.push_back({ray.origin + hit.t * ray.direction, normal, footprint});
-        const float light = ambient + diffuse * (0.5f + 0.5f * normal.dot(towards_light_G_));
-        Eigen::Vector3f albedo(200.0f, 200.0f, 200.0f);
-        if (has_colors) {
-          const Eigen::Vector3i& tri = mesh.triangles[hit.triangle];
-          const float w0 = 1.0f - hit.u - hit.v;
-          const Color& c0 = mesh.colors[tri[0]];
-          const Color& c1 = mesh.colors[tri[1]];
-          const Color& c2 = mesh.colors[tri[2]];
-          albedo = w0 * Eigen::Vector3f(c0.r, c0.g, c0.b) +
-                   hit.u * Eigen::Vector3f(c1.r, c1.g, c1.b) +
-                   hit.v * Eigen::Vector3f(c2.r, c2.g, c2.b);
-        }
-        lit_albedo.push_back(albedo * light);
-        sample_column.push_back(u);
+        const float footprint =
+            hit.t * ray_length * inverse_fx / std::max(cos_incidence, 0.2f);
+        samples[num_samples] = {origin_G + hit.t * direction, normal, footprint};
+        lit_albedo[num_samples] = albedo(hit) * light(normal);
+        sample_column[num_samples] = u;
+        ++num_samples;
       }
-      texture_.brightness(samples, texture);
-      for (size_t k = 0; k < samples.size(); ++k) {
+      texture_.brightness(std::span(samples.data(), num_samples), texture);
+      for (size_t k = 0; k < num_samples; ++k) {
         const int u = sample_column[k];
         const Eigen::Vector3f rgb = lit_albedo[k] * texture[k];
         if (gray != nullptr) {
@@ -170,6 +166,17 @@ void SimRenderer::renderView(const Transformationd& T_G_C, const PinholeIntrinsi
       }
     }
   }
+}
+
+Eigen::Vector3f SimRenderer::albedo(const RaycastHit& hit) const {
+  const TriangleColor& c = triangle_colors_[hit.triangle];
+  if (c.flat) return c.c0;
+  const float w0 = 1.0f - hit.u - hit.v;
+  return w0 * c.c0 + hit.u * c.c1 + hit.v * c.c2;
+}
+
+float SimRenderer::light(const Eigen::Vector3f& normal) const {
+  return ambient_ + diffuse_ * (0.5f + 0.5f * normal.dot(towards_light_G_));
 }
 
 }  // namespace cblox

@@ -2,6 +2,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/geometry/image.h"
 #include "core/geometry/pinhole_camera.h"
@@ -58,10 +59,23 @@ class SimRenderer {
                   GrayImage* gray, ColorImage* color, DepthImage* depth, int thread_id,
                   int num_threads) const;
 
+  /// Vertex colour of the hit point (barycentric interpolation unless the triangle is flat).
+  Eigen::Vector3f albedo(const RaycastHit& hit) const;
+  /// Light falling on a surface with this (unit, camera-facing) normal.
+  float light(const Eigen::Vector3f& normal) const;
+
+  struct TriangleColor {
+    Eigen::Vector3f c0{200.0f, 200.0f, 200.0f}, c1{200.0f, 200.0f, 200.0f},
+        c2{200.0f, 200.0f, 200.0f};
+    bool flat = true;
+  };
+
   std::shared_ptr<const TriangleMeshRaycaster> scene_;
   SimRendererConfig config_;
   ProceduralTexture texture_;
   Eigen::Vector3f towards_light_G_;
+  float ambient_ = 0.0f, diffuse_ = 0.0f;
+  std::vector<TriangleColor> triangle_colors_;
 };
 
 }  // namespace cblox

@@ -76,6 +76,35 @@ TEST(TriangleMeshRaycasterTest, PacketsAgreeWithSingleRays) {
   EXPECT_LT(hit_count, static_cast<int>(rays.size()));
 }
 
+TEST(TriangleMeshRaycasterTest, PinholeRowsAgreeWithSingleRays) {
+  Mesh mesh = unitBoxAt({-1, -1, 3}, {1, 1, 5});
+  appendSphere(&mesh, Eigen::Vector3f(0.5f, 0.5f, 2.0f), 0.4f, 16, 32, kGrey);
+  const auto raycaster = makeRaycaster(mesh);
+  const PinholeIntrinsics K{40.0, 42.0, 18.5, 10.5, 37, 23};  // not multiples of 4
+  const Eigen::Matrix3f R =
+      Eigen::AngleAxisf(0.2f, Eigen::Vector3f(0.3f, 1.0f, 0.1f).normalized()).toRotationMatrix();
+  const Eigen::Vector3f origin(0.1f, -0.2f, 0.05f);
+  const int row_begin = 3, row_end = 21;
+  std::vector<RaycastHit> hits(static_cast<size_t>((row_end - row_begin) * K.width));
+  raycaster->intersectPinholeRows(R, origin, K, row_begin, row_end, hits);
+  int hit_count = 0;
+  for (int v = row_begin; v < row_end; ++v) {
+    for (int u = 0; u < K.width; ++u) {
+      const Ray ray{origin, R * Eigen::Vector3f((u - 18.5f) / 40.0f, (v - 10.5f) / 42.0f, 1.0f)};
+      RaycastHit single;
+      raycaster->intersect(ray, &single);
+      const RaycastHit& row_hit = hits[static_cast<size_t>(v - row_begin) * K.width + u];
+      ASSERT_EQ(single.hit(), row_hit.hit()) << u << ", " << v;
+      EXPECT_EQ(single.t, row_hit.t) << u << ", " << v;
+      if (single.hit()) {
+        EXPECT_TRUE(single.normal.isApprox(row_hit.normal, 1e-6f));
+      }
+      hit_count += single.hit();
+    }
+  }
+  EXPECT_GT(hit_count, 100);
+}
+
 TEST(TriangleMeshRaycasterTest, ClosestPointIsExactOnFacesEdgesAndCorners) {
   const auto raycaster = makeRaycaster(unitBoxAt({0, 0, 0}, {1, 1, 1}));
   // Face region.

@@ -363,7 +363,7 @@ BuiltinScene makeTown() {
   scene.motion.max_bank_rad = 0.0;
   scene.motion.accel_time_s = 3.0;
   scene.depth_max_m = 25.0;
-  scene.texture_wavelength_m = 1.0;
+  scene.texture_wavelength_m = 0.5;
   return scene;
 }
 

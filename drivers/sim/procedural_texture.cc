@@ -15,6 +15,9 @@ std::string ProceduralTextureConfig::validate() const {
     return "base_wavelength_m must be > 0, got " + std::to_string(base_wavelength_m);
   }
   if (octaves < 1 || octaves > 8) return "octaves must be in [1, 8], got " + std::to_string(octaves);
+  if (!(persistence > 0.0 && persistence <= 2.0)) {
+    return "persistence must be in (0, 2], got " + std::to_string(persistence);
+  }
   if (!(contrast >= 0.0 && contrast <= 1.0)) {
     return "contrast must be in [0, 1], got " + std::to_string(contrast);
   }
@@ -67,8 +70,9 @@ void ProceduralTexture::brightness(std::span<const TextureSample> samples,
 }
 
 float ProceduralTexture::totalWeight() const {
+  const float persistence = static_cast<float>(config_.persistence);
   float total = 0.0f, amplitude = 0.5f;
-  for (int k = 0; k < config_.octaves; ++k, amplitude *= 0.85f) total += amplitude;
+  for (int k = 0; k < config_.octaves; ++k, amplitude *= persistence) total += amplitude;
   return total;
 }
 
@@ -99,6 +103,7 @@ void ProceduralTexture::brightnessPortable(std::span<const TextureSample> sample
                                            std::span<float> out) const {
   const float base_wavelength = static_cast<float>(config_.base_wavelength_m);
   const float total_weight = totalWeight();
+  const float persistence = static_cast<float>(config_.persistence);
   const float share = static_cast<float>(config_.hard_edge_share);
   const float contrast = static_cast<float>(config_.contrast);
   const size_t n = std::min(samples.size(), out.size());
@@ -119,7 +124,7 @@ void ProceduralTexture::brightnessPortable(std::span<const TextureSample> sample
       bool any_visible = false;
       for (int l = 0; l < kLanes; ++l) any_visible |= ratio[l] > 2.0f;
       if (!any_visible) {  // this and every finer octave are at their mean everywhere
-        for (int k = octave; k < config_.octaves; ++k, amplitude *= 0.85f) sum += 0.5f * amplitude;
+        for (int k = octave; k < config_.octaves; ++k, amplitude *= persistence) sum += 0.5f * amplitude;
         break;
       }
       const Float8 x = s * inverse_wavelength + offset + 37.0f * static_cast<float>(octave);
@@ -167,7 +172,7 @@ void ProceduralTexture::brightnessPortable(std::span<const TextureSample> sample
       }
       inverse_wavelength *= 2.0f;
       ratio *= 0.5f;
-      amplitude *= 0.85f;
+      amplitude *= persistence;
     }
     // Value noise concentrates around 0.5: stretch it to use the whole range.
     Float8 stretched = (sum / total_weight - 0.5f) * 2.2f + 0.5f;
@@ -186,6 +191,7 @@ void ProceduralTexture::brightnessPortable(std::span<const TextureSample> sample
     std::span<const TextureSample> samples, std::span<float> out) const {
   const float base_wavelength = static_cast<float>(config_.base_wavelength_m);
   const float total_weight = totalWeight();
+  const float persistence = static_cast<float>(config_.persistence);
   const float share = static_cast<float>(config_.hard_edge_share);
   const float contrast = static_cast<float>(config_.contrast);
   const size_t n = std::min(samples.size(), out.size());
@@ -213,7 +219,7 @@ void ProceduralTexture::brightnessPortable(std::span<const TextureSample> sample
     for (int octave = 0; octave < config_.octaves; ++octave) {
       if (_mm256_movemask_ps(_mm256_cmp_ps(ratio, two, _CMP_GT_OQ)) == 0) {
         // This and every finer octave are at their mean everywhere.
-        for (int k = octave; k < config_.octaves; ++k, amplitude *= 0.85f) {
+        for (int k = octave; k < config_.octaves; ++k, amplitude *= persistence) {
           sum = _mm256_add_ps(sum, _mm256_set1_ps(0.5f * amplitude));
         }
         break;
@@ -252,7 +258,7 @@ void ProceduralTexture::brightnessPortable(std::span<const TextureSample> sample
       }
       inverse_wavelength *= 2.0f;
       ratio = _mm256_mul_ps(ratio, half);
-      amplitude *= 0.85f;
+      amplitude *= persistence;
     }
     // Value noise concentrates around 0.5: stretch it to use the whole range.
     const __m256 smooth = _mm256_div_ps(sum, _mm256_set1_ps(total_weight));

@@ -15,6 +15,9 @@ struct ProceduralTextureConfig {
   double base_wavelength_m = 0.4;
   /// Number of octaves (1..8).
   int octaves = 5;
+  /// Amplitude ratio of each octave to the previous, in (0, 2]: 1 gives every scale the
+  /// same contrast (fine grain as strong as the blobs), smaller values smoother surfaces.
+  double persistence = 0.85;
   /// Brightness spread: the factor ranges over [1 - contrast, 1]. In [0, 1].
   double contrast = 0.75;
   /// Share of hard-edged blobs (the thresholded third octave) mixed into the smooth noise; hard edges

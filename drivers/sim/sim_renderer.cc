@@ -145,9 +145,11 @@ void SimRenderer::renderView(const Transformationd& T_G_C, const PinholeIntrinsi
           normal = -normal;
           cos_incidence = -cos_incidence;
         }
-        // One pixel's size on the surface: distance / focal length, stretched by obliquity.
+        // One pixel's size on the surface: distance / focal length, stretched by obliquity
+        // along one axis only; the texture filter uses the geometric mean of the two axes
+        // (like anisotropic filtering, it keeps detail on surfaces seen at grazing angles).
         const float footprint =
-            hit.t * ray_length * inverse_fx / std::max(cos_incidence, 0.2f);
+            hit.t * ray_length * inverse_fx / std::sqrt(std::max(cos_incidence, 0.05f));
         samples[num_samples] = {origin_G + hit.t * direction, normal, footprint};
         lit_albedo[num_samples] = albedo(hit) * light(normal);
         sample_column[num_samples] = u;

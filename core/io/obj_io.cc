@@ -2,17 +2,16 @@
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
-#include <fstream>
 #include <initializer_list>
 #include <iterator>
 #include <limits>
 #include <string_view>
 #include <vector>
+
+#include "core/io/io_detail.h"
 
 namespace cblox {
 namespace {
@@ -327,25 +326,11 @@ void ObjParser::finish(Mesh* mesh, ObjReadStats* stats) {
   *mesh = std::move(out);
 }
 
-void appendFloatText(std::string* out, float value) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof(buf), value);  // shortest round-trip form
-  out->append(buf, r.ptr);
-}
-
-void appendIntText(std::string* out, long long value) {
-  char buf[24];
-  const auto r = std::to_chars(buf, buf + sizeof(buf), value);
-  out->append(buf, r.ptr);
-}
-
 }  // namespace
 
 bool readObj(const std::string& path, Mesh* mesh, std::string* error, ObjReadStats* stats) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) return setError(error, path + ": cannot open for reading: " + std::strerror(errno));
-  std::string data((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-  if (file.bad()) return setError(error, path + ": read failed: " + std::strerror(errno));
+  std::string data;
+  if (!io_detail::readWholeFile(path, &data, error)) return false;
 
   ObjParser parser(path);
   if (!parser.parse(data)) return setError(error, parser.error());
@@ -358,54 +343,43 @@ bool writeObj(const std::string& path, const Mesh& mesh, std::string* error) {
   if (!invalid.empty()) return setError(error, path + ": cannot write OBJ: " + invalid);
   const bool colors = mesh.hasColors();
 
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file) {
-    return setError(error, path + ": cannot open for writing: " + std::strerror(errno));
-  }
-  std::string out;
+  io_detail::BufferedFileWriter writer;
+  if (!writer.open(path, error)) return false;
+  std::string& out = writer.buffer();
   out += "# written by cblox: ";
   out += std::to_string(mesh.numVertices());
   out += colors ? " vertices (with r g b colours in [0, 1]), " : " vertices, ";
   out += std::to_string(mesh.numTriangles());
   out += " triangles\n";
 
-  constexpr size_t kFlushBytes = size_t{1} << 20;
-  const auto flush = [&]() {
-    file.write(out.data(), static_cast<std::streamsize>(out.size()));
-    out.clear();
-    return static_cast<bool>(file);
-  };
   for (size_t i = 0; i < mesh.numVertices(); ++i) {
     const Eigen::Vector3f& p = mesh.vertices[i];
     out += 'v';
     for (int k = 0; k < 3; ++k) {
       out += ' ';
-      appendFloatText(&out, p[k]);
+      io_detail::appendFloatText(&out, p[k]);
     }
     if (colors) {
       const Color& c = mesh.colors[i];
       for (const uint8_t channel : {c.r, c.g, c.b}) {
         out += ' ';
-        appendFloatText(&out, static_cast<float>(channel) / 255.0f);
+        io_detail::appendFloatText(&out, static_cast<float>(channel) / 255.0f);
       }
     }
     out += '\n';
-    if (out.size() >= kFlushBytes && !flush()) break;
+    if (!writer.flushIfFull()) break;
   }
-  for (size_t i = 0; i < mesh.numTriangles() && file; ++i) {
+  for (size_t i = 0; i < mesh.numTriangles() && writer.good(); ++i) {
     const Eigen::Vector3i& t = mesh.triangles[i];
     out += 'f';
     for (int k = 0; k < 3; ++k) {
       out += ' ';
-      appendIntText(&out, static_cast<long long>(t[k]) + 1);
+      io_detail::appendIntText(&out, static_cast<long long>(t[k]) + 1);
     }
     out += '\n';
-    if (out.size() >= kFlushBytes && !flush()) break;
+    if (!writer.flushIfFull()) break;
   }
-  if (file) flush();
-  file.close();
-  if (!file) return setError(error, path + ": write failed: " + std::strerror(errno));
-  return true;
+  return writer.close(error);
 }
 
 }  // namespace cblox

@@ -2,17 +2,17 @@
 
 #include <algorithm>
 #include <bit>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
 #include <iterator>
 #include <limits>
 #include <sstream>
 #include <string_view>
 #include <vector>
+
+#include "core/io/io_detail.h"
 
 namespace cblox {
 namespace {
@@ -630,18 +630,6 @@ void appendBinary(std::string* out, T value) {
   out->append(bytes, sizeof(T));
 }
 
-void appendFloatText(std::string* out, float value) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof(buf), value);  // shortest round-trip form
-  out->append(buf, r.ptr);
-}
-
-void appendIntText(std::string* out, long long value) {
-  char buf[24];
-  const auto r = std::to_chars(buf, buf + sizeof(buf), value);
-  out->append(buf, r.ptr);
-}
-
 }  // namespace
 
 bool writePly(const std::string& path, const Mesh& mesh, PlyFormat format, std::string* error) {
@@ -651,11 +639,9 @@ bool writePly(const std::string& path, const Mesh& mesh, PlyFormat format, std::
   const bool normals = mesh.hasNormals();
   const bool colors = mesh.hasColors();
 
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file) {
-    return setError(error, path + ": cannot open for writing: " + std::strerror(errno));
-  }
-  std::string out;
+  io_detail::BufferedFileWriter writer;
+  if (!writer.open(path, error)) return false;
+  std::string& out = writer.buffer();
   out += "ply\n";
   out += ascii ? "format ascii 1.0\n" : "format binary_little_endian 1.0\n";
   out += "comment written by cblox\n";
@@ -667,34 +653,28 @@ bool writePly(const std::string& path, const Mesh& mesh, PlyFormat format, std::
   out += "property list uchar int vertex_indices\n";
   out += "end_header\n";
 
-  constexpr size_t kFlushBytes = size_t{1} << 20;
-  const auto flush = [&]() {
-    file.write(out.data(), static_cast<std::streamsize>(out.size()));
-    out.clear();
-    return static_cast<bool>(file);
-  };
   for (size_t i = 0; i < mesh.numVertices(); ++i) {
     const Eigen::Vector3f& p = mesh.vertices[i];
     if (ascii) {
-      appendFloatText(&out, p.x());
+      io_detail::appendFloatText(&out, p.x());
       out += ' ';
-      appendFloatText(&out, p.y());
+      io_detail::appendFloatText(&out, p.y());
       out += ' ';
-      appendFloatText(&out, p.z());
+      io_detail::appendFloatText(&out, p.z());
       if (normals) {
         for (int k = 0; k < 3; ++k) {
           out += ' ';
-          appendFloatText(&out, mesh.normals[i][k]);
+          io_detail::appendFloatText(&out, mesh.normals[i][k]);
         }
       }
       if (colors) {
         const Color& c = mesh.colors[i];
         out += ' ';
-        appendIntText(&out, c.r);
+        io_detail::appendIntText(&out, c.r);
         out += ' ';
-        appendIntText(&out, c.g);
+        io_detail::appendIntText(&out, c.g);
         out += ' ';
-        appendIntText(&out, c.b);
+        io_detail::appendIntText(&out, c.b);
       }
       out += '\n';
     } else {
@@ -709,34 +689,29 @@ bool writePly(const std::string& path, const Mesh& mesh, PlyFormat format, std::
         out.push_back(static_cast<char>(c.b));
       }
     }
-    if (out.size() >= kFlushBytes && !flush()) break;
+    if (!writer.flushIfFull()) break;
   }
-  for (size_t i = 0; i < mesh.numTriangles() && file; ++i) {
+  for (size_t i = 0; i < mesh.numTriangles() && writer.good(); ++i) {
     const Eigen::Vector3i& t = mesh.triangles[i];
     if (ascii) {
       out += '3';
       for (int k = 0; k < 3; ++k) {
         out += ' ';
-        appendIntText(&out, t[k]);
+        io_detail::appendIntText(&out, t[k]);
       }
       out += '\n';
     } else {
       out.push_back(static_cast<char>(3));
       for (int k = 0; k < 3; ++k) appendBinary(&out, static_cast<int32_t>(t[k]));
     }
-    if (out.size() >= kFlushBytes && !flush()) break;
+    if (!writer.flushIfFull()) break;
   }
-  if (file) flush();
-  file.close();
-  if (!file) return setError(error, path + ": write failed: " + std::strerror(errno));
-  return true;
+  return writer.close(error);
 }
 
 bool readPly(const std::string& path, Mesh* mesh, std::string* error) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) return setError(error, path + ": cannot open for reading: " + std::strerror(errno));
-  std::string data((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-  if (file.bad()) return setError(error, path + ": read failed: " + std::strerror(errno));
+  std::string data;
+  if (!io_detail::readWholeFile(path, &data, error)) return false;
 
   Header header;
   if (!parseHeader(path, data, &header, error)) return false;

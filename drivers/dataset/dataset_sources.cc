@@ -2,31 +2,72 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace cblox {
 namespace {
 
-size_t limit(size_t available, size_t max_frames) {
-  return max_frames > 0 ? std::min(available, max_frames) : available;
+std::vector<std::string> joined(std::vector<std::string> a, const std::vector<std::string>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+SourceInfo eurocInfo(const EurocReader& reader) {
+  SourceInfo info;
+  info.name = "euroc:" + reader.folder();
+  info.rate_hz = reader.rateHz();
+  info.stereo = reader.calibration();
+  info.has_ground_truth = reader.hasGroundTruth();
+  info.notes = joined(reader.notes(), reader.skipped());
+  return info;
+}
+
+SourceInfo tumInfo(const TumRgbdReader& reader) {
+  SourceInfo info;
+  info.name = "tum:" + reader.folder();
+  if (reader.size() > 1) {
+    info.rate_hz = static_cast<double>(reader.size() - 1) /
+                   (reader.timestamp(reader.size() - 1) - reader.timestamp(0));
+  }
+  info.depth_intrinsics = reader.intrinsics();
+  info.depth_max_m = 65535.0 * reader.depthScale();
+  info.has_ground_truth = reader.hasGroundTruth();
+  info.notes = joined(reader.notes(), reader.skipped());
+  return info;
+}
+
+SourceInfo sevenScenesInfo(const SevenScenesReader& reader) {
+  SourceInfo info;
+  info.name = "7scenes:" + reader.folder();
+  info.rate_hz = SevenScenesSource::kRateHz;
+  info.depth_intrinsics = reader.depthIntrinsics();
+  info.depth_max_m = 65.534;
+  info.has_ground_truth = true;
+  info.notes = {"7-Scenes has no time stamps: frame i is stamped i / 30 s",
+                "7-Scenes colour is not registered to depth"};
+  return info;
 }
 
 }  // namespace
 
-EurocSource::EurocSource(EurocReader reader, size_t max_frames) : reader_(std::move(reader)) {
-  count_ = limit(reader_.size(), max_frames);
-  info_.name = "euroc:" + reader_.folder();
-  info_.rate_hz = reader_.rateHz();
-  info_.stereo = reader_.calibration();
+IndexedFrameSource::IndexedFrameSource(SourceInfo info, size_t available, size_t max_frames)
+    : info_(std::move(info)),
+      count_(max_frames > 0 ? std::min(available, max_frames) : available) {
   info_.frame_count = count_;
-  info_.has_ground_truth = reader_.hasGroundTruth();
-  info_.notes = reader_.notes();
-  info_.notes.insert(info_.notes.end(), reader_.skipped().begin(), reader_.skipped().end());
 }
 
-FrameSource::Status EurocSource::next(CaptureFrame* frame, std::string* error) {
+FrameSource::Status IndexedFrameSource::next(CaptureFrame* frame, std::string* error) {
   if (next_ >= count_) return Status::kEnd;
   const size_t i = next_++;
-  if (!reader_.read(i, &scratch_, error)) return Status::kError;
+  return readFrame(i, frame, error) ? Status::kFrame : Status::kError;
+}
+
+EurocSource::EurocSource(EurocReader reader, size_t max_frames)
+    : IndexedFrameSource(eurocInfo(reader), reader.size(), max_frames),
+      reader_(std::move(reader)) {}
+
+bool EurocSource::readFrame(size_t i, CaptureFrame* frame, std::string* error) {
+  if (!reader_.read(i, &scratch_, error)) return false;
   frame->frame_id = static_cast<int64_t>(i);
   frame->timestamp_ns = scratch_.timestamp_ns;
   std::swap(frame->left, scratch_.left);
@@ -34,30 +75,15 @@ FrameSource::Status EurocSource::next(CaptureFrame* frame, std::string* error) {
   frame->depth = DepthImage();
   frame->color = ColorImage();
   frame->T_G_C = scratch_.T_G_L;
-  return Status::kFrame;
+  return true;
 }
 
 TumRgbdSource::TumRgbdSource(TumRgbdReader reader, size_t max_frames)
-    : reader_(std::move(reader)) {
-  count_ = limit(reader_.size(), max_frames);
-  info_.name = "tum:" + reader_.folder();
-  if (reader_.size() > 1) {
-    info_.rate_hz = static_cast<double>(reader_.size() - 1) /
-                    (reader_.timestamp(reader_.size() - 1) - reader_.timestamp(0));
-  }
-  info_.depth_intrinsics = reader_.intrinsics();
-  info_.depth_min_m = 0.0;
-  info_.depth_max_m = 65535.0 * reader_.depthScale();
-  info_.frame_count = count_;
-  info_.has_ground_truth = reader_.hasGroundTruth();
-  info_.notes = reader_.notes();
-  info_.notes.insert(info_.notes.end(), reader_.skipped().begin(), reader_.skipped().end());
-}
+    : IndexedFrameSource(tumInfo(reader), reader.size(), max_frames),
+      reader_(std::move(reader)) {}
 
-FrameSource::Status TumRgbdSource::next(CaptureFrame* frame, std::string* error) {
-  if (next_ >= count_) return Status::kEnd;
-  const size_t i = next_++;
-  if (!reader_.read(i, &scratch_, error)) return Status::kError;
+bool TumRgbdSource::readFrame(size_t i, CaptureFrame* frame, std::string* error) {
+  if (!reader_.read(i, &scratch_, error)) return false;
   frame->frame_id = static_cast<int64_t>(i);
   frame->timestamp_ns = std::llround(scratch_.timestamp_s * 1e9);
   frame->left = GrayImage();
@@ -65,27 +91,15 @@ FrameSource::Status TumRgbdSource::next(CaptureFrame* frame, std::string* error)
   std::swap(frame->depth, scratch_.depth);
   std::swap(frame->color, scratch_.color);
   frame->T_G_C = scratch_.T_G_C;
-  return Status::kFrame;
+  return true;
 }
 
 SevenScenesSource::SevenScenesSource(SevenScenesReader reader, size_t max_frames)
-    : reader_(std::move(reader)) {
-  count_ = limit(reader_.size(), max_frames);
-  info_.name = "7scenes:" + reader_.folder();
-  info_.rate_hz = kRateHz;
-  info_.depth_intrinsics = reader_.depthIntrinsics();
-  info_.depth_min_m = 0.0;
-  info_.depth_max_m = 65.534;
-  info_.frame_count = count_;
-  info_.has_ground_truth = true;
-  info_.notes.push_back("7-Scenes has no time stamps: frame i is stamped i / 30 s");
-  info_.notes.push_back("7-Scenes colour is not registered to depth");
-}
+    : IndexedFrameSource(sevenScenesInfo(reader), reader.size(), max_frames),
+      reader_(std::move(reader)) {}
 
-FrameSource::Status SevenScenesSource::next(CaptureFrame* frame, std::string* error) {
-  if (next_ >= count_) return Status::kEnd;
-  const size_t i = next_++;
-  if (!reader_.read(i, &scratch_, error)) return Status::kError;
+bool SevenScenesSource::readFrame(size_t i, CaptureFrame* frame, std::string* error) {
+  if (!reader_.read(i, &scratch_, error)) return false;
   frame->frame_id = static_cast<int64_t>(i);
   frame->timestamp_ns = std::llround(static_cast<double>(i) * 1e9 / kRateHz);
   frame->left = GrayImage();
@@ -93,7 +107,7 @@ FrameSource::Status SevenScenesSource::next(CaptureFrame* frame, std::string* er
   std::swap(frame->depth, scratch_.depth);
   std::swap(frame->color, scratch_.color);
   frame->T_G_C = scratch_.T_G_C;
-  return Status::kFrame;
+  return true;
 }
 
 }  // namespace cblox

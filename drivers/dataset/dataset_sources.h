@@ -10,57 +10,68 @@
 
 namespace cblox {
 
-/// EuRoC/ASL stereo folder as a FrameSource: rectified left/right grey images, the
-/// dataset's nanosecond time stamps, ground truth of the rectified left camera when the
-/// folder has it. A frame whose image cannot be read is reported (kError) and skipped.
+/// A recorded dataset played in order: frames 0 .. count - 1 read by index. A frame that
+/// cannot be read is reported (kError) and skipped; the next call goes on with the next one.
 /// Thread-safety: not thread-safe.
-class EurocSource : public FrameSource {
+class IndexedFrameSource : public FrameSource {
+ public:
+  const SourceInfo& info() const override { return info_; }
+  Status next(CaptureFrame* frame, std::string* error) final;
+
+ protected:
+  /// Plays min(available, max_frames) frames (all when max_frames is 0); sets
+  /// info.frame_count accordingly.
+  IndexedFrameSource(SourceInfo info, size_t available, size_t max_frames);
+
+  /// Reads frame i (< the frame count) into *frame, or returns false with a message.
+  virtual bool readFrame(size_t i, CaptureFrame* frame, std::string* error) = 0;
+
+ private:
+  SourceInfo info_;
+  size_t count_ = 0;
+  size_t next_ = 0;
+};
+
+/// EuRoC/ASL stereo folder: rectified left/right grey images, the dataset's nanosecond time
+/// stamps, ground truth of the rectified left camera when the folder has it.
+class EurocSource : public IndexedFrameSource {
  public:
   /// max_frames = 0 plays all frames.
   EurocSource(EurocReader reader, size_t max_frames);
-  const SourceInfo& info() const override { return info_; }
-  Status next(CaptureFrame* frame, std::string* error) override;
 
  private:
+  bool readFrame(size_t i, CaptureFrame* frame, std::string* error) override;
+
   EurocReader reader_;
-  SourceInfo info_;
-  size_t count_ = 0;
-  size_t next_ = 0;
   EurocStereoFrame scratch_;
 };
 
-/// TUM RGB-D folder as a FrameSource: depth (metres) with the associated colour image, the
-/// dataset's time stamps, interpolated ground truth. Thread-safety: not thread-safe.
-class TumRgbdSource : public FrameSource {
+/// TUM RGB-D folder: depth (metres) with the associated colour image, the dataset's time
+/// stamps, interpolated ground truth.
+class TumRgbdSource : public IndexedFrameSource {
  public:
   TumRgbdSource(TumRgbdReader reader, size_t max_frames);
-  const SourceInfo& info() const override { return info_; }
-  Status next(CaptureFrame* frame, std::string* error) override;
 
  private:
+  bool readFrame(size_t i, CaptureFrame* frame, std::string* error) override;
+
   TumRgbdReader reader_;
-  SourceInfo info_;
-  size_t count_ = 0;
-  size_t next_ = 0;
   TumRgbdFrame scratch_;
 };
 
-/// 7-Scenes frame folder as a FrameSource. The layout has no time stamps: frame i is stamped
-/// i / 30 s (the Kinect's rate) and this is said in info().notes, as is the fact that the
-/// colour camera is not registered to the depth camera. Thread-safety: not thread-safe.
-class SevenScenesSource : public FrameSource {
+/// 7-Scenes frame folder. The layout has no time stamps: frame i is stamped i / 30 s (the
+/// Kinect's rate) and this is said in info().notes, as is the fact that the colour camera
+/// is not registered to the depth camera.
+class SevenScenesSource : public IndexedFrameSource {
  public:
   static constexpr double kRateHz = 30.0;
 
   SevenScenesSource(SevenScenesReader reader, size_t max_frames);
-  const SourceInfo& info() const override { return info_; }
-  Status next(CaptureFrame* frame, std::string* error) override;
 
  private:
+  bool readFrame(size_t i, CaptureFrame* frame, std::string* error) override;
+
   SevenScenesReader reader_;
-  SourceInfo info_;
-  size_t count_ = 0;
-  size_t next_ = 0;
   SevenScenesFrame scratch_;
 };
 

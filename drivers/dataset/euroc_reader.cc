@@ -4,10 +4,8 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <system_error>
 #include <tuple>
 #include <utility>
 
@@ -18,6 +16,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/io/tum_trajectory.h"
+#include "drivers/dataset/image_files.h"
+#include "drivers/dataset/reader_support.h"
+#include "drivers/dataset/text_matrix.h"
 
 namespace cblox {
 
@@ -28,8 +29,6 @@ struct EurocReader::RectificationMaps {
 
 namespace {
 
-namespace fs = std::filesystem;
-
 constexpr const char* kMav0 = "mav0";
 constexpr const char* kSensorFile = "sensor.yaml";
 constexpr const char* kImageList = "data.csv";
@@ -37,31 +36,14 @@ constexpr const char* kImageFolder = "data";
 constexpr const char* kGroundTruth = "state_groundtruth_estimate0/data.csv";
 constexpr const char* kRadTan = "radial-tangential";
 constexpr const char* kEquidistant = "equidistant";
-constexpr double kOrthonormalityTolerance = 1e-3;
-constexpr double kLastRowTolerance = 1e-6;
 constexpr double kQuaternionNormTolerance = 1e-3;
 constexpr double kNanosecondsToSeconds = 1e-9;
 
-bool setError(std::string* error, const std::string& message) {
-  if (error != nullptr) *error = message;
-  return false;
-}
-
-bool isFile(const std::string& path) {
-  std::error_code ec;
-  return fs::is_regular_file(path, ec);
-}
-
-bool isDirectory(const std::string& path) {
-  std::error_code ec;
-  return fs::is_directory(path, ec);
-}
-
-std::string join(const std::string& a, const std::string& b) { return (fs::path(a) / b).string(); }
-
-std::string at(const std::string& path, size_t line) {
-  return path + ":" + std::to_string(line) + ": ";
-}
+using dataset_detail::at;
+using dataset_detail::isDirectory;
+using dataset_detail::isFile;
+using dataset_detail::join;
+using dataset_detail::setError;
 
 std::string trim(const std::string& s) {
   const size_t first = s.find_first_not_of(" \t\r\n");
@@ -93,19 +75,6 @@ bool parseDouble(const std::string& text, double* value) {
   char* end = nullptr;
   *value = std::strtod(text.c_str(), &end);
   return end == text.c_str() + text.size() && std::isfinite(*value);
-}
-
-std::string describeType(const cv::Mat& image) {
-  const int depth = image.depth();
-  const int bits = depth == CV_8U || depth == CV_8S     ? 8
-                   : depth == CV_16U || depth == CV_16S ? 16
-                   : depth == CV_64F                    ? 64
-                                                        : 32;
-  return std::to_string(bits) + "-bit with " + std::to_string(image.channels()) + " channel(s)";
-}
-
-std::string describeSize(int width, int height) {
-  return std::to_string(width) + "x" + std::to_string(height);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -218,22 +187,8 @@ bool readTransform(const SensorYaml& yaml, Transformationd* T_B_S, std::string* 
   for (int r = 0; r < 4; ++r) {
     for (int c = 0; c < 4; ++c) M(r, c) = values[static_cast<size_t>(r * 4 + c)];
   }
-  if ((M.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > kLastRowTolerance) {
-    std::ostringstream os;
-    os << yaml.where(data) << "T_BS: last row must be 0 0 0 1, got " << M.row(3);
-    return setError(error, os.str());
-  }
-  const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
-  const double deviation = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (deviation > kOrthonormalityTolerance) {
-    std::ostringstream os;
-    os << yaml.where(data) << "T_BS: rotation is not orthonormal (max |R^T R - I| = " << deviation
-       << ", tolerance " << kOrthonormalityTolerance << ")";
-    return setError(error, os.str());
-  }
-  if (R.determinant() < 0) {
-    return setError(error, yaml.where(data) + "T_BS: rotation is a reflection (det < 0)");
-  }
+  const std::string invalid = validateRigidTransform(M);
+  if (!invalid.empty()) return setError(error, yaml.where(data) + "T_BS: " + invalid);
   *T_B_S = Transformationd::fromMatrix(M);
   return true;
 }
@@ -644,13 +599,11 @@ bool EurocReader::read(size_t i, EurocStereoFrame* frame, std::string* error) co
     const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
     if (raw.empty()) return setError(error, path + ": cannot read image");
     if (raw.type() != CV_8UC1) {
-      return setError(
-          error, path + ": image must be 8-bit single-channel (grey), got " + describeType(raw));
+      return setError(error, path + ": image must be 8-bit single-channel (grey), got " +
+                                 describeImageType(raw));
     }
-    if (raw.cols != width || raw.rows != height) {
-      return setError(error, path + ": size " + describeSize(raw.cols, raw.rows) +
-                                 " does not match sensor.yaml's resolution " +
-                                 describeSize(width, height));
+    if (!checkImageSize(path, raw, width, height, "sensor.yaml's resolution", error)) {
+      return false;
     }
     *image = GrayImage(width, height);
     cv::Mat rectified(height, width, CV_8UC1, image->data.data());

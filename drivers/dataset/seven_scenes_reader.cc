@@ -5,12 +5,12 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
-#include <sstream>
 #include <system_error>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
+#include "drivers/dataset/image_files.h"
+#include "drivers/dataset/reader_support.h"
 #include "drivers/dataset/text_matrix.h"
 
 namespace cblox {
@@ -23,14 +23,11 @@ constexpr const char* kFramePrefix = "frame-";
 constexpr const char* kColorSuffix = ".color.png";
 constexpr const char* kDepthSuffix = ".depth.png";
 constexpr const char* kPoseSuffix = ".pose.txt";
-constexpr double kOrthonormalityTolerance = 1e-3;
-constexpr double kLastRowTolerance = 1e-6;
 constexpr uint16_t kInvalidDepthMm = 65535;
+constexpr double kMetresPerMm = 1e-3;  // as a float, d * 1e-3 equals d / 1000.0 for all uint16 d
 
-bool setError(std::string* error, const std::string& message) {
-  if (error != nullptr) *error = message;
-  return false;
-}
+using dataset_detail::isFile;
+using dataset_detail::setError;
 
 bool endsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() &&
@@ -58,62 +55,21 @@ bool parseFrameName(const std::string& name, std::string* digits, int* kind) {
   return false;
 }
 
-std::string describeType(const cv::Mat& image) {
-  std::ostringstream os;
-  const int depth = image.depth();
-  const int bits = depth == CV_8U || depth == CV_8S     ? 8
-                   : depth == CV_16U || depth == CV_16S ? 16
-                   : depth == CV_64F                    ? 64
-                                                        : 32;
-  os << bits << "-bit with " << image.channels() << " channel(s)";
-  return os.str();
-}
-
-// True if path names an existing regular file; never throws.
-bool isFile(const std::string& path) {
-  std::error_code ec;
-  return fs::is_regular_file(path, ec);
-}
-
-std::string describeSize(int width, int height) {
-  return std::to_string(width) + "x" + std::to_string(height);
-}
-
-// Reads and validates a pose file: 16 numbers, last row 0 0 0 1, orthonormal right-handed
-// rotation within kOrthonormalityTolerance.
+// Reads and validates a pose file: 16 numbers forming a rigid transform (see
+// validateRigidTransform).
 bool readPose(const std::string& path, Transformationd* T, std::string* error) {
   const std::optional<Eigen::MatrixXd> m = readTextMatrix(path, 4, 4, error);
   if (!m) return false;
   const Eigen::Matrix4d M = *m;
-  if ((M.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > kLastRowTolerance) {
-    std::ostringstream os;
-    os << path << ": last row must be 0 0 0 1, got " << M.row(3);
-    return setError(error, os.str());
-  }
-  const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
-  const double deviation = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (deviation > kOrthonormalityTolerance) {
-    std::ostringstream os;
-    os << path << ": rotation is not orthonormal (max |R^T R - I| = " << deviation << ", tolerance "
-       << kOrthonormalityTolerance << ")";
-    return setError(error, os.str());
-  }
-  if (R.determinant() < 0) return setError(error, path + ": rotation is a reflection (det < 0)");
+  const std::string invalid = validateRigidTransform(M);
+  if (!invalid.empty()) return setError(error, path + ": " + invalid);
   *T = Transformationd::fromMatrix(M);
   return true;
 }
 
 // Loads a 16-bit single-channel depth PNG without decoding its values.
 bool loadDepthMm(const std::string& path, cv::Mat* mm, std::string* error) {
-  if (!isFile(path)) return setError(error, path + ": depth image is missing");
-  *mm = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
-  if (mm->empty()) return setError(error, path + ": cannot read depth image");
-  if (mm->type() != CV_16UC1) {
-    return setError(error, path +
-                               ": depth image must be 16-bit single-channel (millimetres), got " +
-                               describeType(*mm));
-  }
-  return true;
+  return readDepthUnits(path, "16-bit single-channel (millimetres)", mm, error);
 }
 
 }  // namespace
@@ -217,35 +173,15 @@ bool SevenScenesReader::read(size_t i, SevenScenesFrame* frame, std::string* err
   const std::string depth_path = files.stem + kDepthSuffix;
   cv::Mat mm;
   if (!loadDepthMm(depth_path, &mm, error)) return false;
-  if (mm.cols != intrinsics_.width || mm.rows != intrinsics_.height) {
-    return setError(error, depth_path + ": size " + describeSize(mm.cols, mm.rows) +
-                               " does not match the intrinsics' " +
-                               describeSize(intrinsics_.width, intrinsics_.height));
+  if (!checkImageSize(depth_path, mm, intrinsics_.width, intrinsics_.height, "the intrinsics'",
+                      error)) {
+    return false;
   }
-  out.depth = DepthImage(mm.cols, mm.rows, 0.0f);
-  for (int v = 0; v < mm.rows; ++v) {
-    const uint16_t* row = mm.ptr<uint16_t>(v);
-    for (int u = 0; u < mm.cols; ++u) {
-      const uint16_t d = row[u];
-      out.depth(u, v) = (d == 0 || d == kInvalidDepthMm) ? 0.0f : static_cast<float>(d / 1000.0);
-    }
-  }
+  out.depth = depthFromUnits(mm, kMetresPerMm, kInvalidDepthMm);
 
-  const std::string color_path = files.stem + kColorSuffix;
-  if (!isFile(color_path)) return setError(error, color_path + ": colour image is missing");
-  const cv::Mat bgr = cv::imread(color_path, cv::IMREAD_COLOR);
-  if (bgr.empty() || bgr.type() != CV_8UC3) {
-    return setError(error, color_path + ": cannot read colour image");
-  }
-  if (bgr.cols != mm.cols || bgr.rows != mm.rows) {
-    return setError(error, color_path + ": size " + describeSize(bgr.cols, bgr.rows) +
-                               " does not match the depth image's " +
-                               describeSize(mm.cols, mm.rows));
-  }
-  out.color = ColorImage(bgr.cols, bgr.rows);
-  for (int v = 0; v < bgr.rows; ++v) {
-    const cv::Vec3b* row = bgr.ptr<cv::Vec3b>(v);
-    for (int u = 0; u < bgr.cols; ++u) out.color(u, v) = Color{row[u][2], row[u][1], row[u][0]};
+  if (!readColorImage(files.stem + kColorSuffix, mm.cols, mm.rows, "the depth image's", &out.color,
+                      error)) {
+    return false;
   }
 
   *frame = std::move(out);

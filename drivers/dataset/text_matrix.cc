@@ -4,10 +4,16 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <sstream>
 #include <vector>
+
+#include <Eigen/LU>
 
 namespace cblox {
 namespace {
+
+constexpr double kOrthonormalityTolerance = 1e-3;
+constexpr double kLastRowTolerance = 1e-6;
 
 std::optional<Eigen::MatrixXd> fail(std::string* error, const std::string& message) {
   if (error != nullptr) *error = message;
@@ -47,6 +53,24 @@ std::optional<Eigen::MatrixXd> readTextMatrix(const std::string& path, int rows,
     for (int c = 0; c < cols; ++c) m(r, c) = values[static_cast<size_t>(r * cols + c)];
   }
   return m;
+}
+
+std::string validateRigidTransform(const Eigen::Matrix4d& M) {
+  if ((M.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > kLastRowTolerance) {
+    std::ostringstream os;
+    os << "last row must be 0 0 0 1, got " << M.row(3);
+    return os.str();
+  }
+  const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
+  const double deviation = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (deviation > kOrthonormalityTolerance) {
+    std::ostringstream os;
+    os << "rotation is not orthonormal (max |R^T R - I| = " << deviation << ", tolerance "
+       << kOrthonormalityTolerance << ")";
+    return os.str();
+  }
+  if (R.determinant() < 0) return "rotation is a reflection (det < 0)";
+  return {};
 }
 
 }  // namespace cblox

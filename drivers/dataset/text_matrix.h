@@ -15,4 +15,10 @@ namespace cblox {
 std::optional<Eigen::MatrixXd> readTextMatrix(const std::string& path, int rows, int cols,
                                               std::string* error);
 
+/// Checks that M is a rigid transform: last row 0 0 0 1 (within 1e-6) and an orthonormal
+/// (max |R^T R - I| <= 1e-3), right-handed rotation. Returns an empty string if so, else what is
+/// wrong, e.g. "rotation is a reflection (det < 0)", for the caller to prefix with the file.
+/// Thread-safe (no shared state).
+std::string validateRigidTransform(const Eigen::Matrix4d& M);
+
 }  // namespace cblox

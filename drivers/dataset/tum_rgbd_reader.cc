@@ -12,9 +12,10 @@
 #include <utility>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "core/io/tum_trajectory.h"
+#include "drivers/dataset/image_files.h"
+#include "drivers/dataset/reader_support.h"
 #include "drivers/dataset/text_matrix.h"
 
 namespace cblox {
@@ -31,21 +32,10 @@ constexpr double kDefaultFocal = 525.0;
 constexpr double kDefaultCx = 319.5;
 constexpr double kDefaultCy = 239.5;
 
-bool setError(std::string* error, const std::string& message) {
-  if (error != nullptr) *error = message;
-  return false;
-}
-
-bool isFile(const std::string& path) {
-  std::error_code ec;
-  return fs::is_regular_file(path, ec);
-}
-
-std::string join(const std::string& a, const std::string& b) { return (fs::path(a) / b).string(); }
-
-std::string at(const std::string& path, size_t line) {
-  return path + ":" + std::to_string(line) + ": ";
-}
+using dataset_detail::at;
+using dataset_detail::isFile;
+using dataset_detail::join;
+using dataset_detail::setError;
 
 std::string formatSeconds(double t) {
   char buffer[64];
@@ -58,19 +48,6 @@ std::string formatNumber(double value) {
   std::ostringstream os;
   os << value;
   return os.str();
-}
-
-std::string describeType(const cv::Mat& image) {
-  const int depth = image.depth();
-  const int bits = depth == CV_8U || depth == CV_8S     ? 8
-                   : depth == CV_16U || depth == CV_16S ? 16
-                   : depth == CV_64F                    ? 64
-                                                        : 32;
-  return std::to_string(bits) + "-bit with " + std::to_string(image.channels()) + " channel(s)";
-}
-
-std::string describeSize(int width, int height) {
-  return std::to_string(width) + "x" + std::to_string(height);
 }
 
 struct ListEntry {
@@ -120,14 +97,7 @@ bool readImageList(const std::string& path, std::vector<ListEntry>* entries, std
 
 // Loads a 16-bit single-channel depth image without decoding its values.
 bool loadDepthUnits(const std::string& path, cv::Mat* units, std::string* error) {
-  if (!isFile(path)) return setError(error, path + ": depth image is missing");
-  *units = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
-  if (units->empty()) return setError(error, path + ": cannot read depth image");
-  if (units->type() != CV_16UC1) {
-    return setError(error, path + ": depth image must be a 16-bit single-channel PNG, got " +
-                               describeType(*units));
-  }
-  return true;
+  return readDepthUnits(path, "a 16-bit single-channel PNG", units, error);
 }
 
 }  // namespace
@@ -332,37 +302,15 @@ bool TumRgbdReader::read(size_t i, TumRgbdFrame* frame, std::string* error) cons
 
   cv::Mat units;
   if (!loadDepthUnits(files.depth_path, &units, error)) return false;
-  if (units.cols != intrinsics_.width || units.rows != intrinsics_.height) {
-    return setError(error, files.depth_path + ": size " + describeSize(units.cols, units.rows) +
-                               " does not match the intrinsics' " +
-                               describeSize(intrinsics_.width, intrinsics_.height));
+  if (!checkImageSize(files.depth_path, units, intrinsics_.width, intrinsics_.height,
+                      "the intrinsics'", error)) {
+    return false;
   }
-  out.depth = DepthImage(units.cols, units.rows, 0.0f);
-  for (int v = 0; v < units.rows; ++v) {
-    const uint16_t* row = units.ptr<uint16_t>(v);
-    for (int u = 0; u < units.cols; ++u) {
-      const uint16_t d = row[u];
-      out.depth(u, v) = d == 0 ? 0.0f : static_cast<float>(d * depth_scale_);
-    }
-  }
+  out.depth = depthFromUnits(units, depth_scale_);
 
-  if (!files.color_path.empty()) {
-    const std::string& path = files.color_path;
-    if (!isFile(path)) return setError(error, path + ": colour image is missing");
-    const cv::Mat bgr = cv::imread(path, cv::IMREAD_COLOR);
-    if (bgr.empty() || bgr.type() != CV_8UC3) {
-      return setError(error, path + ": cannot read colour image");
-    }
-    if (bgr.cols != units.cols || bgr.rows != units.rows) {
-      return setError(error, path + ": size " + describeSize(bgr.cols, bgr.rows) +
-                                 " does not match the depth image's " +
-                                 describeSize(units.cols, units.rows));
-    }
-    out.color = ColorImage(bgr.cols, bgr.rows);
-    for (int v = 0; v < bgr.rows; ++v) {
-      const cv::Vec3b* row = bgr.ptr<cv::Vec3b>(v);
-      for (int u = 0; u < bgr.cols; ++u) out.color(u, v) = Color{row[u][2], row[u][1], row[u][0]};
-    }
+  if (!files.color_path.empty() && !readColorImage(files.color_path, units.cols, units.rows,
+                                                   "the depth image's", &out.color, error)) {
+    return false;
   }
 
   *frame = std::move(out);

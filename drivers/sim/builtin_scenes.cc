@@ -1,6 +1,7 @@
 #include "drivers/sim/builtin_scenes.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -30,6 +31,23 @@ Color shade(const Color& c, float factor) {
     return static_cast<uint8_t>(std::clamp(v * factor, 0.0f, 255.0f));
   };
   return Color{f(c.r), f(c.g), f(c.b)};
+}
+
+/// Floor, ceiling and four walls of the box [0, W] x [0, L] x [0, H] as separate quads facing
+/// inwards (each its own surface and colour: floor, ceiling, wall y = 0, y = L, x = 0,
+/// x = W), split into cells of about cell_size metres.
+void appendInteriorShell(Mesh* mesh, float W, float L, float H, const std::array<Color, 6>& colors,
+                         float cell_size) {
+  auto cells = [cell_size](float length) {
+    return std::max(1, static_cast<int>(std::lround(length / cell_size)));
+  };
+  const Vector3f x(W, 0, 0), y(0, L, 0), z(0, 0, H), o = Vector3f::Zero();
+  appendQuad(mesh, o, x, y, colors[0], cells(W), cells(L));
+  appendQuad(mesh, z, y, x, colors[1], cells(L), cells(W));
+  appendQuad(mesh, o, z, x, colors[2], cells(H), cells(W));
+  appendQuad(mesh, y, x, z, colors[3], cells(W), cells(H));
+  appendQuad(mesh, o, y, z, colors[4], cells(L), cells(H));
+  appendQuad(mesh, x, z, y, colors[5], cells(H), cells(L));
 }
 
 /// Four legs under a table top of footprint (sx, sy) centred at (x, y), leg height h.
@@ -68,12 +86,10 @@ BuiltinScene makeLivingRoom() {
   Mesh& m = scene.mesh;
   const float W = 5.0f, L = 6.5f, H = 2.7f;
   // Shell: floor, ceiling and walls as inward-facing quads (each a separate surface).
-  appendQuad(&m, Vector3f(0, 0, 0), Vector3f(W, 0, 0), Vector3f(0, L, 0), Color{150, 110, 75}, 5, 6);
-  appendQuad(&m, Vector3f(0, 0, H), Vector3f(0, L, 0), Vector3f(W, 0, 0), Color{235, 235, 230}, 5, 6);
-  appendQuad(&m, Vector3f(0, 0, 0), Vector3f(0, 0, H), Vector3f(W, 0, 0), Color{200, 190, 160}, 3, 5);
-  appendQuad(&m, Vector3f(0, L, 0), Vector3f(W, 0, 0), Vector3f(0, 0, H), Color{170, 195, 200}, 5, 3);
-  appendQuad(&m, Vector3f(0, 0, 0), Vector3f(0, L, 0), Vector3f(0, 0, H), Color{205, 180, 170}, 6, 3);
-  appendQuad(&m, Vector3f(W, 0, 0), Vector3f(0, 0, H), Vector3f(0, L, 0), Color{190, 200, 170}, 3, 6);
+  appendInteriorShell(&m, W, L, H,
+                      {Color{150, 110, 75}, Color{235, 235, 230}, Color{200, 190, 160},
+                       Color{170, 195, 200}, Color{205, 180, 170}, Color{190, 200, 170}},
+                      1.0f);
 
   // Sofa against the far wall (y = L).
   const Color sofa{120, 60, 55};
@@ -157,12 +173,10 @@ BuiltinScene makeIndustrialHall() {
   scene.description = "industrial hall 40 x 20 x 10 m with pipes, tanks and crates";
   Mesh& m = scene.mesh;
   const float W = 40.0f, D = 20.0f, H = 10.0f;
-  appendQuad(&m, Vector3f(0, 0, 0), Vector3f(W, 0, 0), Vector3f(0, D, 0), Color{120, 120, 115}, 20, 10);
-  appendQuad(&m, Vector3f(0, 0, H), Vector3f(0, D, 0), Vector3f(W, 0, 0), Color{170, 170, 175}, 10, 20);
-  appendQuad(&m, Vector3f(0, 0, 0), Vector3f(0, 0, H), Vector3f(W, 0, 0), Color{160, 150, 130}, 5, 20);
-  appendQuad(&m, Vector3f(0, D, 0), Vector3f(W, 0, 0), Vector3f(0, 0, H), Color{150, 160, 165}, 20, 5);
-  appendQuad(&m, Vector3f(0, 0, 0), Vector3f(0, D, 0), Vector3f(0, 0, H), Color{165, 140, 125}, 10, 5);
-  appendQuad(&m, Vector3f(W, 0, 0), Vector3f(0, 0, H), Vector3f(0, D, 0), Color{140, 150, 130}, 5, 10);
+  appendInteriorShell(&m, W, D, H,
+                      {Color{120, 120, 115}, Color{170, 170, 175}, Color{160, 150, 130},
+                       Color{150, 160, 165}, Color{165, 140, 125}, Color{140, 150, 130}},
+                      2.0f);
   // Columns along both long walls and roof beams across.
   const Color steel{90, 100, 120};
   for (float x = 4.0f; x < W; x += 8.0f) {

@@ -1,12 +1,9 @@
 #include "drivers/dataset/euroc_reader.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -15,6 +12,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "test/test_support/contains.h"
+#include "test/test_support/temp_dir.h"
+
 namespace cblox {
 namespace {
 
@@ -22,21 +22,8 @@ namespace fs = std::filesystem;
 
 const std::string kEurocDir = std::string(CBLOX_SHARED_DATA_DIR) + "/euroc-v101-micro";
 
-testing::AssertionResult contains(const std::string& haystack, const std::string& needle) {
-  if (haystack.find(needle) != std::string::npos) return testing::AssertionSuccess();
-  return testing::AssertionFailure() << "'" << haystack << "' does not contain '" << needle << "'";
-}
-
-testing::AssertionResult containsLine(const std::vector<std::string>& lines,
-                                      const std::string& needle) {
-  for (const std::string& line : lines) {
-    if (line.find(needle) != std::string::npos) return testing::AssertionSuccess();
-  }
-  testing::AssertionResult failure = testing::AssertionFailure();
-  failure << "no line contains '" << needle << "'; lines:";
-  for (const std::string& line : lines) failure << "\n  " << line;
-  return failure;
-}
+using test::contains;
+using test::containsLine;
 
 cv::Mat toMat(const GrayImage& image) {
   return cv::Mat(image.height, image.width, CV_8UC1, const_cast<uint8_t*>(image.data.data()))
@@ -247,10 +234,6 @@ SensorFields cam1Fields() { return {kCam1TBS, kCam1Intrinsics, kCam1RadTan}; }
 class EurocSyntheticTest : public testing::Test {
  protected:
   void SetUp() override {
-    std::string pattern = (fs::temp_directory_path() / "cblox_euroc_XXXXXX").string();
-    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-    root_ = pattern;
-    mav0_ = root_ / "mav0";
     for (const char* camera : {"cam0", "cam1"}) fs::create_directories(mav0_ / camera / "data");
     writeSensor("cam0", cam0Fields());
     writeSensor("cam1", cam1Fields());
@@ -264,26 +247,20 @@ class EurocSyntheticTest : public testing::Test {
       writeText(std::string(camera) + "/data.csv", csv);
     }
   }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(root_, ec);
-  }
-
   // Path of a file under mav0/.
   std::string path(const std::string& relative) const { return (mav0_ / relative).string(); }
   std::string image(const std::string& camera, int64_t t) const {
     return path(camera + "/data/" + std::to_string(t) + ".png");
   }
   void writeText(const std::string& relative, const std::string& text) const {
-    fs::create_directories(fs::path(path(relative)).parent_path());
-    std::ofstream(path(relative)) << text;
+    root_.write("mav0/" + relative, text);
   }
   void writeSensor(const std::string& camera, const SensorFields& fields) const {
     writeText(camera + "/sensor.yaml", sensorYaml(fields));
   }
   std::optional<EurocReader> open(std::string* error,
                                   const EurocReader::Options& options = {}) const {
-    return EurocReader::open(root_.string(), options, error);
+    return EurocReader::open(root_.path().string(), options, error);
   }
   // Expects open() to fail with a message containing every needle.
   void expectOpenFails(const std::vector<std::string>& needles) const {
@@ -295,8 +272,8 @@ class EurocSyntheticTest : public testing::Test {
   static constexpr int kWidth = 752;
   static constexpr int kHeight = 480;
   static constexpr int64_t kTimestamps[3] = {1000000000, 1050000000, 1100000000};
-  fs::path root_;
-  fs::path mav0_;
+  test::TempDir root_{"cblox_euroc"};
+  fs::path mav0_ = root_.path() / "mav0";
 };
 
 TEST_F(EurocSyntheticTest, ValidFolderRectifiesWithoutBlackBorders) {
@@ -539,7 +516,7 @@ TEST_F(EurocSyntheticTest, InterpolatesGroundTruth) {
 
 TEST_F(EurocSyntheticTest, RejectsBadFoldersAndOptions) {
   std::string error;
-  EXPECT_FALSE(EurocReader::open((root_ / "nope").string(), {}, &error).has_value());
+  EXPECT_FALSE(EurocReader::open(root_.file("nope"), {}, &error).has_value());
   EXPECT_TRUE(contains(error, "nope"));
   EXPECT_FALSE(EurocReader::open((mav0_ / "cam0").string(), {}, &error).has_value());
   EXPECT_TRUE(contains(error, "not a EuRoC folder"));

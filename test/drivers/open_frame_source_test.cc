@@ -1,9 +1,6 @@
 #include "drivers/open_frame_source.h"
 
-#include <unistd.h>
-
 #include <filesystem>
-#include <fstream>
 
 #include <gtest/gtest.h>
 
@@ -11,6 +8,7 @@
 #include "core/mesh/primitive_meshes.h"
 #include "drivers/dataset/tum_rgbd_reader.h"
 #include "drivers/frame_folder_writer.h"
+#include "test/test_support/temp_dir.h"
 
 namespace cblox {
 namespace {
@@ -21,12 +19,7 @@ const std::string kData = CBLOX_SHARED_DATA_DIR;
 
 class OpenFrameSourceTest : public testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("cblox_sources_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  test::TempDir dir_{"cblox_sources"};
 };
 
 SourceOptions smallSim(size_t frames) {
@@ -59,7 +52,7 @@ TEST_F(OpenFrameSourceTest, MeshFileWithOrbitOrTumTrajectory) {
   Mesh mesh;
   appendBox(&mesh, Eigen::AlignedBox3f(Eigen::Vector3f(-1, -1, 0), Eigen::Vector3f(1, 1, 1)),
             Color{200, 100, 50});
-  const std::string ply = (dir_ / "box.ply").string();
+  const std::string ply = dir_.file("box.ply");
   std::string error;
   ASSERT_TRUE(writePly(ply, mesh, PlyFormat::kBinaryLittleEndian, &error)) << error;
   SourceOptions options = smallSim(3);
@@ -71,9 +64,9 @@ TEST_F(OpenFrameSourceTest, MeshFileWithOrbitOrTumTrajectory) {
   EXPECT_GT(frame.depth(80, 60), 0.0f);  // looks at the box
 
   // A TUM trajectory file: two poses 1 s apart looking at the box from -y.
-  const std::string tum = (dir_ / "path.txt").string();
-  std::ofstream(tum) << "0 0 -5 0.5 -0.7071067811865476 0 0 0.7071067811865476\n"
-                        "1 0.5 -5 0.5 -0.7071067811865476 0 0 0.7071067811865476\n";
+  const std::string tum = dir_.write("path.txt",
+                                     "0 0 -5 0.5 -0.7071067811865476 0 0 0.7071067811865476\n"
+                                     "1 0.5 -5 0.5 -0.7071067811865476 0 0 0.7071067811865476\n");
   options.trajectory = tum;
   options.sim.rate_hz = 10.0;
   options.max_frames = 0;
@@ -94,7 +87,7 @@ TEST_F(OpenFrameSourceTest, RenderedFolderReadsBackAsTumRgbd) {
   auto source = openFrameSource("sim:room", smallSim(4), &error);
   ASSERT_NE(source, nullptr) << error;
   FrameFolderWriter writer;
-  const std::string folder = (dir_ / "render").string();
+  const std::string folder = dir_.file("render");
   ASSERT_TRUE(writer.open(folder, source->info(), &error)) << error;
   std::vector<CaptureFrame> frames;
   CaptureFrame frame;

@@ -1,7 +1,5 @@
 #include "drivers/dataset/seven_scenes_reader.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
@@ -12,6 +10,9 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "test/test_support/contains.h"
+#include "test/test_support/temp_dir.h"
+
 namespace cblox {
 namespace {
 
@@ -19,10 +20,7 @@ namespace fs = std::filesystem;
 
 const std::string kSevenScenesDir = std::string(CBLOX_SHARED_DATA_DIR) + "/7scenes-rgbd-50";
 
-testing::AssertionResult contains(const std::string& haystack, const std::string& needle) {
-  if (haystack.find(needle) != std::string::npos) return testing::AssertionSuccess();
-  return testing::AssertionFailure() << "'" << haystack << "' does not contain '" << needle << "'";
-}
+using test::contains;
 
 TEST(SevenScenesReaderTest, ParsesRealData) {
   if (!fs::is_directory(kSevenScenesDir)) {
@@ -109,48 +107,36 @@ TEST(SevenScenesReaderTest, ParsesRealData) {
 class SevenScenesMalformedTest : public testing::Test {
  protected:
   void SetUp() override {
-    std::string pattern = (fs::temp_directory_path() / "cblox_7scenes_XXXXXX").string();
-    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
     writeIntrinsics();
     for (const int n : {3, 10, 7}) writeFrame(n);
   }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
   static std::string frameName(int n, const std::string& suffix) {
     char buf[64];
     std::snprintf(buf, sizeof(buf), "frame-%06d%s", n, suffix.c_str());
     return buf;
   }
 
-  void writeText(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name)) << text;
-  }
-  void writeIntrinsics() const { writeText("camera-intrinsics.txt", "10 0 4\n0 10 3\n0 0 1\n"); }
+  void writeIntrinsics() const { dir_.write("camera-intrinsics.txt", "10 0 4\n0 10 3\n0 0 1\n"); }
   void writeFrame(int n) const {
     cv::Mat depth(kHeight, kWidth, CV_16UC1, cv::Scalar(1500));
     depth.at<uint16_t>(0, 0) = 0;
     depth.at<uint16_t>(0, 1) = 65535;
     depth.at<uint16_t>(1, 2) = static_cast<uint16_t>(n);
-    ASSERT_TRUE(cv::imwrite(path(frameName(n, ".depth.png")), depth));
+    ASSERT_TRUE(cv::imwrite(dir_.file(frameName(n, ".depth.png")), depth));
     cv::Mat color(kHeight, kWidth, CV_8UC3, cv::Scalar(10, 20, 30));  // B, G, R
-    ASSERT_TRUE(cv::imwrite(path(frameName(n, ".color.png")), color));
-    writeText(frameName(n, ".pose.txt"),
-              "0 -1 0 1\n1 0 0 2\n0 0 1 " + std::to_string(n) + "\n0 0 0 1\n");
+    ASSERT_TRUE(cv::imwrite(dir_.file(frameName(n, ".color.png")), color));
+    dir_.write(frameName(n, ".pose.txt"),
+               "0 -1 0 1\n1 0 0 2\n0 0 1 " + std::to_string(n) + "\n0 0 0 1\n");
   }
 
   static constexpr int kWidth = 8;
   static constexpr int kHeight = 6;
-  fs::path dir_;
+  test::TempDir dir_{"cblox_7scenes"};
 };
 
 TEST_F(SevenScenesMalformedTest, ValidFolderReadsWithGapsSorted) {
   std::string error;
-  const auto reader = SevenScenesReader::open(dir_.string(), &error);
+  const auto reader = SevenScenesReader::open(dir_.path().string(), &error);
   ASSERT_TRUE(reader.has_value()) << error;
   ASSERT_EQ(reader->size(), 3u);
   EXPECT_EQ(reader->frameIndex(0), 3);
@@ -184,14 +170,14 @@ TEST_F(SevenScenesMalformedTest, RejectsBadPoseFiles) {
       {"", "expected 16 numbers"},
   };
   for (const auto& [text, reason] : cases) {
-    writeText(name, text);
+    dir_.write(name, text);
     std::string error;
-    const auto reader = SevenScenesReader::open(dir_.string(), &error);
+    const auto reader = SevenScenesReader::open(dir_.path().string(), &error);
     ASSERT_TRUE(reader.has_value()) << error;
     SevenScenesFrame frame;
     frame.index = -42;
     EXPECT_FALSE(reader->read(1, &frame, &error)) << text;
-    EXPECT_TRUE(contains(error, path(name))) << text;
+    EXPECT_TRUE(contains(error, dir_.file(name))) << text;
     EXPECT_TRUE(contains(error, reason)) << text;
     EXPECT_EQ(frame.index, -42);                            // untouched
     EXPECT_TRUE(reader->read(0, &frame, &error)) << error;  // other frames still fine
@@ -199,83 +185,83 @@ TEST_F(SevenScenesMalformedTest, RejectsBadPoseFiles) {
 }
 
 TEST_F(SevenScenesMalformedTest, RejectsMissingOrBadIntrinsics) {
-  fs::remove(path("camera-intrinsics.txt"));
+  fs::remove(dir_.file("camera-intrinsics.txt"));
   std::string error;
-  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
-  EXPECT_TRUE(contains(error, path("camera-intrinsics.txt")));
+  EXPECT_FALSE(SevenScenesReader::open(dir_.path().string(), &error).has_value());
+  EXPECT_TRUE(contains(error, dir_.file("camera-intrinsics.txt")));
 
-  writeText("camera-intrinsics.txt", "10 0 4\n0 10 3\n");
-  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
-  EXPECT_TRUE(contains(error, path("camera-intrinsics.txt")));
+  dir_.write("camera-intrinsics.txt", "10 0 4\n0 10 3\n");
+  EXPECT_FALSE(SevenScenesReader::open(dir_.path().string(), &error).has_value());
+  EXPECT_TRUE(contains(error, dir_.file("camera-intrinsics.txt")));
 
-  writeText("camera-intrinsics.txt", "10 0 4\n0 10 3\n1 0 1\n");
-  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
-  EXPECT_TRUE(contains(error, path("camera-intrinsics.txt")));
+  dir_.write("camera-intrinsics.txt", "10 0 4\n0 10 3\n1 0 1\n");
+  EXPECT_FALSE(SevenScenesReader::open(dir_.path().string(), &error).has_value());
+  EXPECT_TRUE(contains(error, dir_.file("camera-intrinsics.txt")));
 
-  writeText("camera-intrinsics.txt", "-10 0 4\n0 10 3\n0 0 1\n");
-  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
-  EXPECT_TRUE(contains(error, path("camera-intrinsics.txt")));
+  dir_.write("camera-intrinsics.txt", "-10 0 4\n0 10 3\n0 0 1\n");
+  EXPECT_FALSE(SevenScenesReader::open(dir_.path().string(), &error).has_value());
+  EXPECT_TRUE(contains(error, dir_.file("camera-intrinsics.txt")));
   EXPECT_TRUE(contains(error, "fx"));
 }
 
 TEST_F(SevenScenesMalformedTest, RejectsEightBitDepth) {
   const cv::Mat eight_bit(kHeight, kWidth, CV_8UC1, cv::Scalar(100));
-  ASSERT_TRUE(cv::imwrite(path(frameName(10, ".depth.png")), eight_bit));
+  ASSERT_TRUE(cv::imwrite(dir_.file(frameName(10, ".depth.png")), eight_bit));
   std::string error;
-  const auto reader = SevenScenesReader::open(dir_.string(), &error);
+  const auto reader = SevenScenesReader::open(dir_.path().string(), &error);
   ASSERT_TRUE(reader.has_value()) << error;
   SevenScenesFrame frame;
   EXPECT_FALSE(reader->read(2, &frame, &error));
-  EXPECT_TRUE(contains(error, path(frameName(10, ".depth.png"))));
+  EXPECT_TRUE(contains(error, dir_.file(frameName(10, ".depth.png"))));
   EXPECT_TRUE(contains(error, "16-bit single-channel"));
   EXPECT_TRUE(contains(error, "8-bit"));
 
   // The first frame's depth is read by open(): rejected there.
-  ASSERT_TRUE(cv::imwrite(path(frameName(3, ".depth.png")), eight_bit));
-  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
-  EXPECT_TRUE(contains(error, path(frameName(3, ".depth.png"))));
+  ASSERT_TRUE(cv::imwrite(dir_.file(frameName(3, ".depth.png")), eight_bit));
+  EXPECT_FALSE(SevenScenesReader::open(dir_.path().string(), &error).has_value());
+  EXPECT_TRUE(contains(error, dir_.file(frameName(3, ".depth.png"))));
 
   // A 16-bit three-channel image is rejected too.
   const cv::Mat rgb16(kHeight, kWidth, CV_16UC3, cv::Scalar(1000, 1000, 1000));
-  ASSERT_TRUE(cv::imwrite(path(frameName(3, ".depth.png")), rgb16));
-  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
+  ASSERT_TRUE(cv::imwrite(dir_.file(frameName(3, ".depth.png")), rgb16));
+  EXPECT_FALSE(SevenScenesReader::open(dir_.path().string(), &error).has_value());
   EXPECT_TRUE(contains(error, "3 channel"));
 }
 
 TEST_F(SevenScenesMalformedTest, RejectsMismatchedSizes) {
   const cv::Mat big_color(kHeight + 2, kWidth, CV_8UC3, cv::Scalar(0, 0, 0));
-  ASSERT_TRUE(cv::imwrite(path(frameName(7, ".color.png")), big_color));
+  ASSERT_TRUE(cv::imwrite(dir_.file(frameName(7, ".color.png")), big_color));
   const cv::Mat big_depth(kHeight, kWidth + 1, CV_16UC1, cv::Scalar(1000));
-  ASSERT_TRUE(cv::imwrite(path(frameName(10, ".depth.png")), big_depth));
+  ASSERT_TRUE(cv::imwrite(dir_.file(frameName(10, ".depth.png")), big_depth));
   std::string error;
-  const auto reader = SevenScenesReader::open(dir_.string(), &error);
+  const auto reader = SevenScenesReader::open(dir_.path().string(), &error);
   ASSERT_TRUE(reader.has_value()) << error;
   SevenScenesFrame frame;
   EXPECT_FALSE(reader->read(1, &frame, &error));
-  EXPECT_TRUE(contains(error, path(frameName(7, ".color.png"))));
+  EXPECT_TRUE(contains(error, dir_.file(frameName(7, ".color.png"))));
   EXPECT_TRUE(contains(error, "8x8"));
   EXPECT_FALSE(reader->read(2, &frame, &error));
-  EXPECT_TRUE(contains(error, path(frameName(10, ".depth.png"))));
+  EXPECT_TRUE(contains(error, dir_.file(frameName(10, ".depth.png"))));
   EXPECT_TRUE(contains(error, "9x6"));
 }
 
 TEST_F(SevenScenesMalformedTest, RejectsIncompleteOrEmptyFolders) {
-  fs::remove(path(frameName(7, ".pose.txt")));
+  fs::remove(dir_.file(frameName(7, ".pose.txt")));
   std::string error;
-  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
-  EXPECT_TRUE(contains(error, path(frameName(7, ".pose.txt"))));
+  EXPECT_FALSE(SevenScenesReader::open(dir_.path().string(), &error).has_value());
+  EXPECT_TRUE(contains(error, dir_.file(frameName(7, ".pose.txt"))));
 
   for (const int n : {3, 7, 10}) {
     for (const char* suffix : {".depth.png", ".color.png", ".pose.txt"}) {
-      fs::remove(path(frameName(n, suffix)));
+      fs::remove(dir_.file(frameName(n, suffix)));
     }
   }
-  EXPECT_FALSE(SevenScenesReader::open(dir_.string(), &error).has_value());
+  EXPECT_FALSE(SevenScenesReader::open(dir_.path().string(), &error).has_value());
   EXPECT_TRUE(contains(error, "no frame"));
 
-  EXPECT_FALSE(SevenScenesReader::open(path("does-not-exist"), &error).has_value());
+  EXPECT_FALSE(SevenScenesReader::open(dir_.file("does-not-exist"), &error).has_value());
   EXPECT_TRUE(contains(error, "does-not-exist"));
-  EXPECT_FALSE(SevenScenesReader::open(path("does-not-exist"), nullptr).has_value());
+  EXPECT_FALSE(SevenScenesReader::open(dir_.file("does-not-exist"), nullptr).has_value());
 }
 
 }  // namespace

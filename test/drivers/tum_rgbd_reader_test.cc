@@ -1,12 +1,9 @@
 #include "drivers/dataset/tum_rgbd_reader.h"
 
-#include <unistd.h>
-
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -14,26 +11,16 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "test/test_support/contains.h"
+#include "test/test_support/temp_dir.h"
+
 namespace cblox {
 namespace {
 
 namespace fs = std::filesystem;
 
-testing::AssertionResult contains(const std::string& haystack, const std::string& needle) {
-  if (haystack.find(needle) != std::string::npos) return testing::AssertionSuccess();
-  return testing::AssertionFailure() << "'" << haystack << "' does not contain '" << needle << "'";
-}
-
-testing::AssertionResult containsLine(const std::vector<std::string>& lines,
-                                      const std::string& needle) {
-  for (const std::string& line : lines) {
-    if (line.find(needle) != std::string::npos) return testing::AssertionSuccess();
-  }
-  testing::AssertionResult failure = testing::AssertionFailure();
-  failure << "no line contains '" << needle << "'; lines:";
-  for (const std::string& line : lines) failure << "\n  " << line;
-  return failure;
-}
+using test::contains;
+using test::containsLine;
 
 std::string stamp(double t) {
   char buffer[32];
@@ -54,11 +41,8 @@ const std::vector<int> kExpectedRgb = {1, 2, 3, -1, 4, 5};
 class TumRgbdReaderTest : public testing::Test {
  protected:
   void SetUp() override {
-    std::string pattern = (fs::temp_directory_path() / "cblox_tum_XXXXXX").string();
-    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-    fs::create_directories(dir_ / "rgb");
-    fs::create_directories(dir_ / "depth");
+    fs::create_directories(dir_.path() / "rgb");
+    fs::create_directories(dir_.path() / "depth");
     std::string depth_list = "# depth maps\n# file: 'synthetic.bag'\n# timestamp filename\n";
     for (size_t i = 0; i < kDepthTimes.size(); ++i) {
       const std::string name = "depth/" + stamp(kDepthTimes[i]) + ".png";
@@ -71,17 +55,8 @@ class TumRgbdReaderTest : public testing::Test {
       rgb_list += stamp(kRgbTimes[k]) + " " + name + "\n";
       writeColor(name, static_cast<int>(k));
     }
-    writeText("depth.txt", depth_list);
-    writeText("rgb.txt", rgb_list);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  void writeText(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name)) << text;
+    dir_.write("depth.txt", depth_list);
+    dir_.write("rgb.txt", rgb_list);
   }
   // Depth in TUM units (5000 per metre): 5000 at (0,0), 0 at (1,0), 12345 at (2,0),
   // 65535 at (3,0), 1000 + frame at (4,4), 7500 elsewhere.
@@ -92,17 +67,17 @@ class TumRgbdReaderTest : public testing::Test {
     depth.at<uint16_t>(0, 2) = 12345;
     depth.at<uint16_t>(0, 3) = 65535;
     depth.at<uint16_t>(4, 4) = static_cast<uint16_t>(1000 + frame);
-    ASSERT_TRUE(cv::imwrite(path(name), depth));
+    ASSERT_TRUE(cv::imwrite(dir_.file(name), depth));
   }
   // Colour (RGB) (50, 100, 20 * k) everywhere except pure red at (u, v) = (2, 1).
   void writeColor(const std::string& name, int k) const {
     cv::Mat bgr(kHeight, kWidth, CV_8UC3, cv::Scalar(20 * k, 100, 50));  // B, G, R
     bgr.at<cv::Vec3b>(1, 2) = cv::Vec3b(0, 0, 255);
-    ASSERT_TRUE(cv::imwrite(path(name), bgr));
+    ASSERT_TRUE(cv::imwrite(dir_.file(name), bgr));
   }
   std::optional<TumRgbdReader> open(std::string* error,
                                     const TumRgbdReader::Options& options = {}) const {
-    return TumRgbdReader::open(dir_.string(), options, error);
+    return TumRgbdReader::open(dir_.path().string(), options, error);
   }
   // Expects open() to fail with a message containing every needle.
   void expectOpenFails(const std::vector<std::string>& needles,
@@ -114,7 +89,7 @@ class TumRgbdReaderTest : public testing::Test {
 
   static constexpr int kWidth = 8;
   static constexpr int kHeight = 6;
-  fs::path dir_;
+  test::TempDir dir_{"cblox_tum"};
 };
 
 TEST_F(TumRgbdReaderTest, ReadsDepthInMetresAndColourAsRgb) {
@@ -122,7 +97,7 @@ TEST_F(TumRgbdReaderTest, ReadsDepthInMetresAndColourAsRgb) {
   const std::optional<TumRgbdReader> reader = open(&error);
   ASSERT_TRUE(reader.has_value()) << error;
   ASSERT_EQ(reader->size(), kDepthTimes.size());
-  EXPECT_EQ(reader->folder(), dir_.string());
+  EXPECT_EQ(reader->folder(), dir_.path().string());
   EXPECT_FALSE(reader->hasGroundTruth());
   EXPECT_TRUE(containsLine(reader->notes(), "no ground truth: groundtruth.txt absent"));
 
@@ -201,13 +176,13 @@ TEST_F(TumRgbdReaderTest, InterpolatesGroundTruth) {
   // (1.90 .. 2.05): frames 1.000, 1.033, 1.066 have poses; 1.200 is outside; 2.000, 2.010 are
   // in the gap.
   const double half = 0.1;
-  writeText("groundtruth.txt",
-            "# ground truth trajectory\n# timestamp tx ty tz qx qy qz qw\n"
-            "0.96 0 0 0 0 0 0 1\n"
-            "1.04 1 0 0 0 0 " +
-                std::to_string(std::sin(half)) + " " + std::to_string(std::cos(half)) +
-                "\n1.10 2 0 0 0 0 0 1\n1.90 3 0 0 0 0 0 1\n"
-                "2.05 4 0 0 0 0 0 1\n");
+  dir_.write("groundtruth.txt",
+             "# ground truth trajectory\n# timestamp tx ty tz qx qy qz qw\n"
+             "0.96 0 0 0 0 0 0 1\n"
+             "1.04 1 0 0 0 0 " +
+                 std::to_string(std::sin(half)) + " " + std::to_string(std::cos(half)) +
+                 "\n1.10 2 0 0 0 0 0 1\n1.90 3 0 0 0 0 0 1\n"
+                 "2.05 4 0 0 0 0 0 1\n");
   std::string error;
   const std::optional<TumRgbdReader> reader = open(&error);
   ASSERT_TRUE(reader.has_value()) << error;
@@ -243,8 +218,8 @@ TEST_F(TumRgbdReaderTest, InterpolatesGroundTruth) {
   EXPECT_TRUE(containsLine(wide->notes(), "1 of 6 frames have no ground truth"));
 
   // Malformed ground truth: readTumTrajectory's file:line message.
-  writeText("groundtruth.txt", "0.96 0 0 0 0 0 0 1\n1.04 1 0 0 0 0 0\n");
-  expectOpenFails({path("groundtruth.txt") + ":2:", "expected 8 numbers"});
+  dir_.write("groundtruth.txt", "0.96 0 0 0 0 0 0 1\n1.04 1 0 0 0 0 0\n");
+  expectOpenFails({dir_.file("groundtruth.txt") + ":2:", "expected 8 numbers"});
 }
 
 TEST_F(TumRgbdReaderTest, IntrinsicsFromOptionsFileOrDefault) {
@@ -260,7 +235,7 @@ TEST_F(TumRgbdReaderTest, IntrinsicsFromOptionsFileOrDefault) {
   EXPECT_EQ(in.height, kHeight);
   EXPECT_TRUE(containsLine(reader->notes(), "using TUM's default fx = fy = 525"));
 
-  writeText("camera-intrinsics.txt", "500 0 4\n0 510 3\n0 0 1\n");
+  dir_.write("camera-intrinsics.txt", "500 0 4\n0 510 3\n0 0 1\n");
   reader = open(&error);
   ASSERT_TRUE(reader.has_value()) << error;
   in = reader->intrinsics();
@@ -288,47 +263,47 @@ TEST_F(TumRgbdReaderTest, IntrinsicsFromOptionsFileOrDefault) {
   ASSERT_TRUE(reader.has_value()) << error;
   TumRgbdFrame frame;
   EXPECT_FALSE(reader->read(0, &frame, &error));
-  EXPECT_TRUE(contains(error, path("depth/1.000000.png")));
+  EXPECT_TRUE(contains(error, dir_.file("depth/1.000000.png")));
   EXPECT_TRUE(contains(error, "size 8x6 does not match the intrinsics' 640x480"));
 
   options.intrinsics = PinholeIntrinsics{-400, 401, 3.5, 2.5, 0, 0};
   expectOpenFails({"TumRgbdReader::Options: intrinsics: fx must be > 0"}, options);
 
-  writeText("camera-intrinsics.txt", "500 0 4\n0 510 3\n");
-  expectOpenFails({path("camera-intrinsics.txt"), "expected 9 numbers"});
-  writeText("camera-intrinsics.txt", "500 0 4\n0 510 3\n1 0 1\n");
-  expectOpenFails({path("camera-intrinsics.txt")});
-  writeText("camera-intrinsics.txt", "0 0 4\n0 510 3\n0 0 1\n");
-  expectOpenFails({path("camera-intrinsics.txt"), "fx must be > 0"});
+  dir_.write("camera-intrinsics.txt", "500 0 4\n0 510 3\n");
+  expectOpenFails({dir_.file("camera-intrinsics.txt"), "expected 9 numbers"});
+  dir_.write("camera-intrinsics.txt", "500 0 4\n0 510 3\n1 0 1\n");
+  expectOpenFails({dir_.file("camera-intrinsics.txt")});
+  dir_.write("camera-intrinsics.txt", "0 0 4\n0 510 3\n0 0 1\n");
+  expectOpenFails({dir_.file("camera-intrinsics.txt"), "fx must be > 0"});
 }
 
 TEST_F(TumRgbdReaderTest, RejectsMalformedLists) {
   const std::string header = "# color images\n";
-  writeText("rgb.txt", header + "1.0 rgb/a.png\n1.1 rgb/b.png extra\n");
-  expectOpenFails({path("rgb.txt") + ":3:", "expected 'timestamp filename'"});
+  dir_.write("rgb.txt", header + "1.0 rgb/a.png\n1.1 rgb/b.png extra\n");
+  expectOpenFails({dir_.file("rgb.txt") + ":3:", "expected 'timestamp filename'"});
 
-  writeText("rgb.txt", header + "1.0 rgb/a.png\n\n1.1x rgb/b.png\n");
-  expectOpenFails({path("rgb.txt") + ":4:", "'1.1x' is not a finite number"});
+  dir_.write("rgb.txt", header + "1.0 rgb/a.png\n\n1.1x rgb/b.png\n");
+  expectOpenFails({dir_.file("rgb.txt") + ":4:", "'1.1x' is not a finite number"});
 
-  writeText("rgb.txt", header + "nan rgb/a.png\n");
-  expectOpenFails({path("rgb.txt") + ":2:", "not a finite number"});
+  dir_.write("rgb.txt", header + "nan rgb/a.png\n");
+  expectOpenFails({dir_.file("rgb.txt") + ":2:", "not a finite number"});
 
-  writeText("rgb.txt", header);
-  writeText("depth.txt", "1.0 depth/1.000000.png\r\n1.0 depth/1.033000.png\r\n");
-  expectOpenFails({path("depth.txt") + ":2:", "does not increase"});
+  dir_.write("rgb.txt", header);
+  dir_.write("depth.txt", "1.0 depth/1.000000.png\r\n1.0 depth/1.033000.png\r\n");
+  expectOpenFails({dir_.file("depth.txt") + ":2:", "does not increase"});
 
-  writeText("depth.txt", "1.0\n");
-  expectOpenFails({path("depth.txt") + ":1:", "expected 'timestamp filename', got '1.0'"});
+  dir_.write("depth.txt", "1.0\n");
+  expectOpenFails({dir_.file("depth.txt") + ":1:", "expected 'timestamp filename', got '1.0'"});
 
-  fs::remove(path("depth.txt"));
-  expectOpenFails({path("depth.txt"), "missing"});
-  fs::remove(path("rgb.txt"));
+  fs::remove(dir_.file("depth.txt"));
+  expectOpenFails({dir_.file("depth.txt"), "missing"});
+  fs::remove(dir_.file("rgb.txt"));
   expectOpenFails({"missing"});
 }
 
 TEST_F(TumRgbdReaderTest, SkipsMissingImages) {
-  fs::remove(path("depth/1.033000.png"));
-  fs::remove(path("rgb/1.005000.png"));
+  fs::remove(dir_.file("depth/1.033000.png"));
+  fs::remove(dir_.file("rgb/1.005000.png"));
   std::string error;
   const std::optional<TumRgbdReader> reader = open(&error);
   ASSERT_TRUE(reader.has_value()) << error;
@@ -345,46 +320,46 @@ TEST_F(TumRgbdReaderTest, SkipsMissingImages) {
   ASSERT_TRUE(frame.color_timestamp_s.has_value());
   EXPECT_DOUBLE_EQ(*frame.color_timestamp_s, 0.990);
 
-  for (const double t : kDepthTimes) fs::remove(path("depth/" + stamp(t) + ".png"));
-  expectOpenFails({path("depth.txt"), "no depth image (6 listed, none found on disk)"});
+  for (const double t : kDepthTimes) fs::remove(dir_.file("depth/" + stamp(t) + ".png"));
+  expectOpenFails({dir_.file("depth.txt"), "no depth image (6 listed, none found on disk)"});
 }
 
 TEST_F(TumRgbdReaderTest, RejectsBadImages) {
   // 8-bit depth: rejected by read(), and by open() for the first frame (it sets the size).
-  ASSERT_TRUE(
-      cv::imwrite(path("depth/1.066000.png"), cv::Mat(kHeight, kWidth, CV_8UC1, cv::Scalar(100))));
+  ASSERT_TRUE(cv::imwrite(dir_.file("depth/1.066000.png"),
+                          cv::Mat(kHeight, kWidth, CV_8UC1, cv::Scalar(100))));
   std::string error;
   const std::optional<TumRgbdReader> reader = open(&error);
   ASSERT_TRUE(reader.has_value()) << error;
   TumRgbdFrame frame;
   frame.timestamp_s = -1.0;
   EXPECT_FALSE(reader->read(2, &frame, &error));
-  EXPECT_TRUE(contains(error, path("depth/1.066000.png")));
+  EXPECT_TRUE(contains(error, dir_.file("depth/1.066000.png")));
   EXPECT_TRUE(contains(error, "16-bit single-channel PNG, got 8-bit with 1 channel(s)"));
   EXPECT_EQ(frame.timestamp_s, -1.0);  // untouched
 
   // Depth of another size.
-  ASSERT_TRUE(cv::imwrite(path("depth/2.000000.png"),
+  ASSERT_TRUE(cv::imwrite(dir_.file("depth/2.000000.png"),
                           cv::Mat(kHeight, kWidth + 1, CV_16UC1, cv::Scalar(100))));
   EXPECT_FALSE(reader->read(4, &frame, &error));
-  EXPECT_TRUE(contains(error, path("depth/2.000000.png")));
+  EXPECT_TRUE(contains(error, dir_.file("depth/2.000000.png")));
   EXPECT_TRUE(contains(error, "9x6"));
 
   // Colour of another size; colour deleted after open().
-  ASSERT_TRUE(cv::imwrite(path("rgb/2.008000.png"),
+  ASSERT_TRUE(cv::imwrite(dir_.file("rgb/2.008000.png"),
                           cv::Mat(kHeight + 1, kWidth, CV_8UC3, cv::Scalar(1, 2, 3))));
   EXPECT_FALSE(reader->read(5, &frame, &error));
-  EXPECT_TRUE(contains(error, path("rgb/2.008000.png")));
+  EXPECT_TRUE(contains(error, dir_.file("rgb/2.008000.png")));
   EXPECT_TRUE(contains(error, "size 8x7 does not match the depth image's 8x6"));
-  fs::remove(path("rgb/1.005000.png"));
+  fs::remove(dir_.file("rgb/1.005000.png"));
   EXPECT_FALSE(reader->read(0, &frame, &error));
-  EXPECT_TRUE(contains(error, path("rgb/1.005000.png")));
+  EXPECT_TRUE(contains(error, dir_.file("rgb/1.005000.png")));
   EXPECT_TRUE(contains(error, "missing"));
   ASSERT_TRUE(reader->read(1, &frame, &error)) << error;  // others still fine
 
-  ASSERT_TRUE(cv::imwrite(path("depth/1.000000.png"),
+  ASSERT_TRUE(cv::imwrite(dir_.file("depth/1.000000.png"),
                           cv::Mat(kHeight, kWidth, CV_16UC3, cv::Scalar(1, 2, 3))));
-  expectOpenFails({path("depth/1.000000.png"), "16-bit single-channel", "3 channel"});
+  expectOpenFails({dir_.file("depth/1.000000.png"), "16-bit single-channel", "3 channel"});
 }
 
 TEST_F(TumRgbdReaderTest, RejectsBadOptionsAndFolders) {
@@ -398,9 +373,9 @@ TEST_F(TumRgbdReaderTest, RejectsBadOptionsAndFolders) {
   options.groundtruth_max_gap_s = std::nan("");
   expectOpenFails({"groundtruth_max_gap_s must be > 0"}, options);
   std::string error;
-  EXPECT_FALSE(TumRgbdReader::open(path("nope"), {}, &error).has_value());
-  EXPECT_TRUE(contains(error, path("nope")));
-  EXPECT_FALSE(TumRgbdReader::open(path("nope"), {}, nullptr).has_value());
+  EXPECT_FALSE(TumRgbdReader::open(dir_.file("nope"), {}, &error).has_value());
+  EXPECT_TRUE(contains(error, dir_.file("nope")));
+  EXPECT_FALSE(TumRgbdReader::open(dir_.file("nope"), {}, nullptr).has_value());
 }
 
 }  // namespace

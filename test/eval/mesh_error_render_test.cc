@@ -1,9 +1,6 @@
 #include "core/eval/mesh_error_render.h"
 
-#include <unistd.h>
-
 #include <cmath>
-#include <filesystem>
 #include <limits>
 #include <string>
 #include <vector>
@@ -14,11 +11,10 @@
 
 #include "core/eval/colormap.h"
 #include "core/mesh/primitive_meshes.h"
+#include "test/test_support/temp_dir.h"
 
 namespace cblox {
 namespace {
-
-namespace fs = std::filesystem;
 
 const Color kGrey{128, 128, 128};
 
@@ -53,9 +49,8 @@ bool near(const Color& a, const Color& b, int tolerance) {
 }
 
 TEST(MeshErrorRenderTest, WritesPngOfRequestedSizeWithColourBar) {
-  const fs::path dir = fs::temp_directory_path() / ("cblox_err_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  const std::string path = (dir / "error.png").string();
+  const test::TempDir dir("cblox_err");
+  const std::string path = dir.file("error.png");
   const Mesh mesh = sphere();
   MeshErrorRenderOptions options;
   options.width = 400;
@@ -67,7 +62,6 @@ TEST(MeshErrorRenderTest, WritesPngOfRequestedSizeWithColourBar) {
   ASSERT_FALSE(bgr.empty());
   EXPECT_EQ(bgr.cols, 400);
   EXPECT_EQ(bgr.rows, 300);
-  fs::remove_all(dir);
 
   const std::optional<ColorImage> image =
       renderMeshError(mesh, heightErrors(mesh), options, &error);

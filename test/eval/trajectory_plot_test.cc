@@ -1,7 +1,5 @@
 #include "core/eval/trajectory_plot.h"
 
-#include <unistd.h>
-
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -9,6 +7,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+
+#include "test/test_support/temp_dir.h"
 
 namespace cblox {
 namespace {
@@ -42,14 +42,8 @@ int countColor(const cv::Mat& bgr, const Color& color) {
 
 class TrajectoryPlotTest : public testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("cblox_plot_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-    makeTrajectories(&truth_, &estimate_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  fs::path dir_;
+  void SetUp() override { makeTrajectories(&truth_, &estimate_); }
+  test::TempDir dir_{"cblox_plot"};
   StampedTrajectory truth_;
   StampedTrajectory estimate_;
 };
@@ -57,7 +51,7 @@ class TrajectoryPlotTest : public testing::Test {
 TEST_F(TrajectoryPlotTest, WritesPngWithBothTrajectories) {
   TrajectoryPlotOptions options;
   options.title = "ATE RMSE 0.034 m";
-  const std::string path = (dir_ / "plot.png").string();
+  const std::string path = dir_.file("plot.png");
   std::string error;
   ASSERT_TRUE(writeTrajectoryPlotPng(path, truth_, estimate_, options, &error)) << error;
   const cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
@@ -114,7 +108,7 @@ TEST_F(TrajectoryPlotTest, EstimateMayBeEmptyAndSizeIsConfigurable) {
   TrajectoryPlotOptions options;
   options.width = 640;
   options.height = 480;
-  const std::string path = (dir_ / "gt_only.png").string();
+  const std::string path = dir_.file("gt_only.png");
   std::string error;
   ASSERT_TRUE(writeTrajectoryPlotPng(path, truth_, {}, options, &error)) << error;
   const cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
@@ -131,12 +125,12 @@ TEST_F(TrajectoryPlotTest, EstimateMayBeEmptyAndSizeIsConfigurable) {
 TEST_F(TrajectoryPlotTest, FailsWithAMessage) {
   TrajectoryPlotOptions options;
   std::string error;
-  const std::string unwritable = (dir_ / "no_such_dir" / "plot.png").string();
+  const std::string unwritable = dir_.file("no_such_dir/plot.png");
   EXPECT_FALSE(writeTrajectoryPlotPng(unwritable, truth_, estimate_, options, &error));
   EXPECT_NE(error.find(unwritable + ": cannot open for writing"), std::string::npos) << error;
   EXPECT_FALSE(fs::exists(unwritable));
 
-  EXPECT_FALSE(writeTrajectoryPlotPng((dir_ / "a.png").string(), {}, estimate_, options, &error));
+  EXPECT_FALSE(writeTrajectoryPlotPng(dir_.file("a.png"), {}, estimate_, options, &error));
   EXPECT_NE(error.find("the ground truth is empty"), std::string::npos) << error;
 
   StampedTrajectory bad = estimate_;
@@ -152,7 +146,7 @@ TEST_F(TrajectoryPlotTest, FailsWithAMessage) {
   options.line_thickness = 0;
   EXPECT_NE(options.validate().find("line_thickness"), std::string::npos);
 
-  EXPECT_FALSE(writeColorImagePng((dir_ / "empty.png").string(), ColorImage{}, &error));
+  EXPECT_FALSE(writeColorImagePng(dir_.file("empty.png"), ColorImage{}, &error));
   EXPECT_NE(error.find("empty or malformed image"), std::string::npos) << error;
 }
 

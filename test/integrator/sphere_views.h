@@ -1,5 +1,8 @@
 #pragma once
 
+#include <algorithm>
+#include <vector>
+
 // Shared analytic set-up for the integrator tests: a sphere of radius 0.5 m at the
 // origin seen by a small pinhole camera from views around it.
 
@@ -63,6 +66,7 @@ struct DistanceErrors {
   size_t count = 0;
   double max_abs = 0.0;
   double rms = 0.0;
+  double p99_abs = 0.0;  ///< 99th percentile of |error| (surfaceErrors only)
 };
 
 template <typename TrueDistance>
@@ -92,6 +96,7 @@ inline DistanceErrors surfaceErrors(const TsdfLayer& layer) {
   const TsdfInterpolator interpolator(layer);
   DistanceErrors errors;
   double sum_sq = 0.0;
+  std::vector<double> abs_errors;
   for (int lat = -30; lat <= 45; lat += 5) {
     for (int lon = 0; lon < 360; lon += 3) {
       const double phi = lat * M_PI / 180.0, theta = lon * M_PI / 180.0;
@@ -102,11 +107,16 @@ inline DistanceErrors surfaceErrors(const TsdfLayer& layer) {
       float distance = 0.0f;
       if (!interpolator.getInterpolatedDistance(p, &distance)) continue;
       errors.max_abs = std::max(errors.max_abs, static_cast<double>(std::abs(distance)));
+      abs_errors.push_back(std::abs(distance));
       sum_sq += static_cast<double>(distance) * distance;
       ++errors.count;
     }
   }
   errors.rms = errors.count ? std::sqrt(sum_sq / static_cast<double>(errors.count)) : 0.0;
+  if (!abs_errors.empty()) {
+    std::sort(abs_errors.begin(), abs_errors.end());
+    errors.p99_abs = abs_errors[static_cast<size_t>(0.99 * static_cast<double>(abs_errors.size() - 1))];
+  }
   return errors;
 }
 

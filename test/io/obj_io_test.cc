@@ -3,45 +3,20 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <limits>
 #include <random>
-#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "test/test_support/awkward_mesh.h"
+#include "test/test_support/temp_dir.h"
+
 namespace cblox {
 namespace {
 
-namespace fs = std::filesystem;
-
 class ObjIo : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path(::testing::TempDir()) / (std::string("cblox_obj_") + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-  std::string writeText(const std::string& name, const std::string& content) const {
-    const std::string p = path(name);
-    std::ofstream(p, std::ios::binary) << content;
-    return p;
-  }
-
-  static std::string readAll(const std::string& p) {
-    std::ifstream f(p, std::ios::binary);
-    std::ostringstream s;
-    s << f.rdbuf();
-    return s.str();
-  }
-
   // Expects readObj to fail with a message that starts with "<path>:<line>: " and contains
   // every fragment, and to leave the mesh untouched.
   void expectReadError(const std::string& p, int line,
@@ -57,56 +32,25 @@ class ObjIo : public ::testing::Test {
     std::printf("  rejected: %s\n", error.c_str());
   }
 
-  fs::path dir_;
+  test::TempDir dir_{"cblox_obj"};
 };
 
-// Awkward floats on purpose: tiny, huge, negative zero, values with no short decimal form.
+// Awkward floats on purpose (see awkwardMesh), the same on every run.
 Mesh testMesh(bool colors, size_t num_vertices = 200) {
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<float> uniform(-10.0f, 10.0f);
-  std::uniform_int_distribution<int> byte(0, 255);
-  Mesh m;
-  for (size_t i = 0; i < num_vertices; ++i) {
-    m.vertices.emplace_back(uniform(rng), uniform(rng) * 1e-6f, uniform(rng) * 1e6f);
-    if (colors) {
-      m.colors.push_back(Color{static_cast<uint8_t>(byte(rng)), static_cast<uint8_t>(byte(rng)),
-                               static_cast<uint8_t>(byte(rng))});
-    }
-  }
-  m.vertices[0] = Eigen::Vector3f(0.1f, -0.0f, std::numeric_limits<float>::denorm_min());
-  m.vertices[1] = Eigen::Vector3f(std::numeric_limits<float>::max(),
-                                  std::numeric_limits<float>::lowest(), 1.0f / 3.0f);
-  std::uniform_int_distribution<int> index(0, static_cast<int>(num_vertices) - 1);
-  for (size_t i = 0; i < num_vertices / 2; ++i) {
-    m.triangles.emplace_back(index(rng), index(rng), index(rng));
-  }
-  return m;
-}
-
-void expectSame(const Mesh& a, const Mesh& b) {
-  ASSERT_EQ(a.numVertices(), b.numVertices());
-  ASSERT_EQ(a.numTriangles(), b.numTriangles());
-  for (size_t i = 0; i < a.numVertices(); ++i) {
-    // Bitwise, so -0.0 and denormals count.
-    ASSERT_EQ(std::memcmp(a.vertices[i].data(), b.vertices[i].data(), sizeof(float) * 3), 0)
-        << "vertex " << i << ": " << a.vertices[i].transpose() << " vs "
-        << b.vertices[i].transpose();
-  }
-  EXPECT_TRUE(a.colors == b.colors);
-  EXPECT_TRUE(a.triangles == b.triangles);
+  return test::awkwardMesh(11, colors, /*normals=*/false, num_vertices);
 }
 
 TEST_F(ObjIo, RoundTripIsExact) {
   for (const bool colors : {false, true}) {
     SCOPED_TRACE(colors ? "colours" : "no colours");
     const Mesh mesh = testMesh(colors);
-    const std::string p = path("mesh.obj");
+    const std::string p = dir_.file("mesh.obj");
     std::string error;
     ASSERT_TRUE(writeObj(p, mesh, &error)) << error;
     Mesh back;
     ObjReadStats stats;
     ASSERT_TRUE(readObj(p, &back, &error, &stats)) << error;
-    expectSame(mesh, back);
+    test::expectSameMesh(mesh, back);
     EXPECT_EQ(stats.vertices, mesh.numVertices());
     EXPECT_EQ(stats.faces, mesh.numTriangles());
     EXPECT_EQ(stats.triangles, mesh.numTriangles());
@@ -129,12 +73,12 @@ TEST_F(ObjIo, RoundTripKeepsEveryColourValueIncludingOnlyZeroAndFull) {
   binary.colors = {Color{255, 0, 0}, Color{0, 255, 0}, Color{255, 255, 255}};
   binary.triangles = {{0, 1, 2}};
   for (const Mesh* mesh : {&all, &binary}) {
-    const std::string p = path("c.obj");
+    const std::string p = dir_.file("c.obj");
     std::string error;
     ASSERT_TRUE(writeObj(p, *mesh, &error)) << error;
     Mesh back;
     ASSERT_TRUE(readObj(p, &back, &error)) << error;
-    expectSame(*mesh, back);
+    test::expectSameMesh(*mesh, back);
   }
 }
 
@@ -142,15 +86,15 @@ TEST_F(ObjIo, WritesPlainObj) {
   Mesh m;
   m.vertices = {{0.5f, -1.0f, 2.0f}, {1.0f, 0.0f, 0.0f}, {0.0f, 0.25f, 0.0f}};
   m.triangles = {{0, 1, 2}, {2, 1, 0}};
-  const std::string p = path("plain.obj");
+  const std::string p = dir_.file("plain.obj");
   ASSERT_TRUE(writeObj(p, m, nullptr));
-  EXPECT_EQ(readAll(p),
+  EXPECT_EQ(test::readFile(p),
             "# written by cblox: 3 vertices, 2 triangles\n"
             "v 0.5 -1 2\nv 1 0 0\nv 0 0.25 0\nf 1 2 3\nf 3 2 1\n");
   m.colors = {Color{255, 0, 0}, Color{0, 255, 0}, Color{0, 0, 51}};
   m.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}};  // not written
   ASSERT_TRUE(writeObj(p, m, nullptr));
-  EXPECT_EQ(readAll(p),
+  EXPECT_EQ(test::readFile(p),
             "# written by cblox: 3 vertices (with r g b colours in [0, 1]), 2 triangles\n"
             "v 0.5 -1 2 1 0 0\nv 1 0 0 0 1 0\nv 0 0.25 0 0 0 0.2\nf 1 2 3\nf 3 2 1\n");
   // An empty mesh is a valid (empty) file.
@@ -161,35 +105,35 @@ TEST_F(ObjIo, WritesPlainObj) {
 }
 
 TEST_F(ObjIo, ReadsHandWrittenObjWithQuadsNegativeIndicesAndCornerForms) {
-  const std::string p = writeText("scene.obj",
-                                  "# a hand-written file\r\n"
-                                  "mtllib scene.mtl\r\n"
-                                  "o box\r\n"
-                                  "\r\n"
-                                  "v 0 0 0 1 0 0\r\n"
-                                  "v 1 0 0 0 1 0   # trailing comment\r\n"
-                                  "v\t1 1 0\t0 0 1\r\n"
-                                  "v 0 1 0 0.5 0.5 0.5\r\n"
-                                  "vt 0 0\r\n"
-                                  "vt 1 0 0\r\n"
-                                  "vt 1\r\n"
-                                  "vn 0 0 1\r\n"
-                                  "g side\r\n"
-                                  "usemtl red\r\n"
-                                  "s off\r\n"
-                                  "f 1 2 3 4\r\n"               // quad -> 2 triangles
-                                  "f -4/1 -3/2 -2/3\r\n"        // relative, i/t
-                                  "f 1//1 3//1 4//1\r\n"        // i//n
-                                  "f +1/1/1 2/2/1 \\\r\n"       // i/t/n, continued
-                                  "  3/3/1 4/1/1 -4/-3/-1\r\n"  // pentagon -> 3 triangles
-                                  "v 2 0 0 0 0 0\n"             // LF only is fine too
-                                  "f -1 -4 -5\n"                // relative to 5 vertices
-                                  "curv 0.0 1.0 1 2\n"          // unknown: skipped
-                                  "cstype bezier\n"             // unknown: skipped
-                                  "l 1 2\n"
-                                  "p 3\n"
-                                  "vp 0.5\n"
-                                  "f 5 1 2");  // no final newline
+  const std::string p = dir_.write("scene.obj",
+                                   "# a hand-written file\r\n"
+                                   "mtllib scene.mtl\r\n"
+                                   "o box\r\n"
+                                   "\r\n"
+                                   "v 0 0 0 1 0 0\r\n"
+                                   "v 1 0 0 0 1 0   # trailing comment\r\n"
+                                   "v\t1 1 0\t0 0 1\r\n"
+                                   "v 0 1 0 0.5 0.5 0.5\r\n"
+                                   "vt 0 0\r\n"
+                                   "vt 1 0 0\r\n"
+                                   "vt 1\r\n"
+                                   "vn 0 0 1\r\n"
+                                   "g side\r\n"
+                                   "usemtl red\r\n"
+                                   "s off\r\n"
+                                   "f 1 2 3 4\r\n"               // quad -> 2 triangles
+                                   "f -4/1 -3/2 -2/3\r\n"        // relative, i/t
+                                   "f 1//1 3//1 4//1\r\n"        // i//n
+                                   "f +1/1/1 2/2/1 \\\r\n"       // i/t/n, continued
+                                   "  3/3/1 4/1/1 -4/-3/-1\r\n"  // pentagon -> 3 triangles
+                                   "v 2 0 0 0 0 0\n"             // LF only is fine too
+                                   "f -1 -4 -5\n"                // relative to 5 vertices
+                                   "curv 0.0 1.0 1 2\n"          // unknown: skipped
+                                   "cstype bezier\n"             // unknown: skipped
+                                   "l 1 2\n"
+                                   "p 3\n"
+                                   "vp 0.5\n"
+                                   "f 5 1 2");  // no final newline
   Mesh m;
   std::string error;
   ObjReadStats stats;
@@ -223,11 +167,11 @@ TEST_F(ObjIo, ReadsHandWrittenObjWithQuadsNegativeIndicesAndCornerForms) {
 
 TEST_F(ObjIo, ColourScaleAndPartialColours) {
   // A value above 1 anywhere in the file makes every colour a 0-255 value.
-  const std::string p = writeText("c255.obj",
-                                  "v 0 0 0 1 0.5 0\n"
-                                  "v 1 0 0 255 128 300\n"
-                                  "v 0 1 0 -3 12.4 12.6\n"
-                                  "f 1 2 3\n");
+  const std::string p = dir_.write("c255.obj",
+                                   "v 0 0 0 1 0.5 0\n"
+                                   "v 1 0 0 255 128 300\n"
+                                   "v 0 1 0 -3 12.4 12.6\n"
+                                   "f 1 2 3\n");
   Mesh m;
   std::string error;
   ASSERT_TRUE(readObj(p, &m, &error)) << error;
@@ -237,11 +181,11 @@ TEST_F(ObjIo, ColourScaleAndPartialColours) {
   EXPECT_EQ(m.colors[2], (Color{0, 12, 13}));
 
   // Colours on some vertices only: dropped, and said so. `v x y z w` has no colour.
-  const std::string q = writeText("partial.obj",
-                                  "v 0 0 0 1 1 1\n"
-                                  "v 1 0 0 1.0\n"
-                                  "v 0 1 0\n"
-                                  "f 1 2 3\n");
+  const std::string q = dir_.write("partial.obj",
+                                   "v 0 0 0 1 1 1\n"
+                                   "v 1 0 0 1.0\n"
+                                   "v 0 1 0\n"
+                                   "f 1 2 3\n");
   ObjReadStats stats;
   ASSERT_TRUE(readObj(q, &m, &error, &stats)) << error;
   EXPECT_EQ(m.numVertices(), 3u);
@@ -250,7 +194,7 @@ TEST_F(ObjIo, ColourScaleAndPartialColours) {
   EXPECT_EQ(m.validate(), "");
 
   // Extreme but valid numbers: underflow becomes zero, nan/inf are passed on.
-  const std::string r = writeText("extreme.obj", "v 1e-60 -1e-50 1e-40\nv nan inf -inf\n");
+  const std::string r = dir_.write("extreme.obj", "v 1e-60 -1e-50 1e-40\nv nan inf -inf\n");
   ASSERT_TRUE(readObj(r, &m, &error)) << error;
   EXPECT_EQ(m.vertices[0].x(), 0.0f);
   EXPECT_EQ(m.vertices[0].y(), 0.0f);
@@ -262,76 +206,78 @@ TEST_F(ObjIo, ColourScaleAndPartialColours) {
 TEST_F(ObjIo, RejectsMalformedStatementsWithFileAndLine) {
   const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
   // Numbers.
-  expectReadError(writeText("a.obj", tri + "v 1 abc 3\n"), 4,
+  expectReadError(dir_.write("a.obj", tri + "v 1 abc 3\n"), 4,
                   {"'v': expected a number for y, found 'abc'"});
-  expectReadError(writeText("b.obj", "v 1 2 3e99\n"), 1, {"'v'", "z", "out of float range"});
-  expectReadError(writeText("c.obj", "v 1 2\n"), 1,
+  expectReadError(dir_.write("b.obj", "v 1 2 3e99\n"), 1, {"'v'", "z", "out of float range"});
+  expectReadError(dir_.write("c.obj", "v 1 2\n"), 1,
                   {"expected 'v x y z [w]' or 'v x y z r g b', found 2 values"});
-  expectReadError(writeText("d.obj", "v 1 2 3 4 5\n"), 1, {"found 5 values"});
-  expectReadError(writeText("e.obj", "\n\nv 1 2 3 0 0 x\n"), 3,
+  expectReadError(dir_.write("d.obj", "v 1 2 3 4 5\n"), 1, {"found 5 values"});
+  expectReadError(dir_.write("e.obj", "\n\nv 1 2 3 0 0 x\n"), 3,
                   {"expected a number for blue, found 'x'"});
-  expectReadError(writeText("f.obj", "v 1 2 3 0 nan 0\n"), 1, {"colour", "green", "not finite"});
-  expectReadError(writeText("g.obj", "v 1 2 3 1.5.1\n"), 1, {"for w, found '1.5.1'"});
-  expectReadError(writeText("h.obj", "vt 0 0 0 0\n"), 1, {"expected 'vt u [v [w]]'", "found 4"});
-  expectReadError(writeText("i.obj", "vn 0 0\n"), 1, {"expected 'vn x y z', found 2 values"});
-  expectReadError(writeText("j.obj", "vn 0 0 one\n"), 1, {"'vn'", "found 'one'"});
-  expectReadError(writeText("k.obj", "v 1 2 --3\n"), 1, {"found '--3'"});
-  expectReadError(writeText("l.obj", "v 1 2 ++3\n"), 1, {"found '++3'"});
+  expectReadError(dir_.write("f.obj", "v 1 2 3 0 nan 0\n"), 1, {"colour", "green", "not finite"});
+  expectReadError(dir_.write("g.obj", "v 1 2 3 1.5.1\n"), 1, {"for w, found '1.5.1'"});
+  expectReadError(dir_.write("h.obj", "vt 0 0 0 0\n"), 1, {"expected 'vt u [v [w]]'", "found 4"});
+  expectReadError(dir_.write("i.obj", "vn 0 0\n"), 1, {"expected 'vn x y z', found 2 values"});
+  expectReadError(dir_.write("j.obj", "vn 0 0 one\n"), 1, {"'vn'", "found 'one'"});
+  expectReadError(dir_.write("k.obj", "v 1 2 --3\n"), 1, {"found '--3'"});
+  expectReadError(dir_.write("l.obj", "v 1 2 ++3\n"), 1, {"found '++3'"});
   // Faces.
-  expectReadError(writeText("m.obj", tri + "f 1 2 0\n"), 4,
+  expectReadError(dir_.write("m.obj", tri + "f 1 2 0\n"), 4,
                   {"corner '0'", "vertex index 0 is invalid"});
-  expectReadError(writeText("n.obj", tri + "f 1 2 4\n"), 4,
+  expectReadError(dir_.write("n.obj", tri + "f 1 2 4\n"), 4,
                   {"corner '4'", "vertex index 4 is out of range: 3 vertices defined so far"});
-  expectReadError(writeText("o.obj", tri + "f -1 -2 -4\n"), 4, {"vertex index -4 is out of range"});
-  expectReadError(writeText("p.obj", "v 0 0 0\nf 1 2 3\n" + tri), 2,
+  expectReadError(dir_.write("o.obj", tri + "f -1 -2 -4\n"), 4,
+                  {"vertex index -4 is out of range"});
+  expectReadError(dir_.write("p.obj", "v 0 0 0\nf 1 2 3\n" + tri), 2,
                   {"vertex index 2 is out of range: 1 vertices"});  // no forward references
-  expectReadError(writeText("q.obj", tri + "f 1 99999999999999999999999 3\n"), 4, {"out of range"});
-  expectReadError(writeText("r.obj", tri + "f 1 2\n"), 4,
+  expectReadError(dir_.write("q.obj", tri + "f 1 99999999999999999999999 3\n"), 4,
+                  {"out of range"});
+  expectReadError(dir_.write("r.obj", tri + "f 1 2\n"), 4,
                   {"face has 2 corners, expected at least 3"});
-  expectReadError(writeText("s.obj", tri + "f\n"), 4, {"face has 0 corners"});
-  expectReadError(writeText("t.obj", tri + "f 1 2 x\n"), 4,
+  expectReadError(dir_.write("s.obj", tri + "f\n"), 4, {"face has 0 corners"});
+  expectReadError(dir_.write("t.obj", tri + "f 1 2 x\n"), 4,
                   {"corner 'x'", "expected an integer vertex index, found 'x'"});
-  expectReadError(writeText("u.obj", tri + "f 1 2 3.0\n"), 4, {"found '3.0'"});
-  expectReadError(writeText("v.obj", tri + "f 1/1/1/1 2 3\n"), 4,
+  expectReadError(dir_.write("u.obj", tri + "f 1 2 3.0\n"), 4, {"found '3.0'"});
+  expectReadError(dir_.write("v.obj", tri + "f 1/1/1/1 2 3\n"), 4,
                   {"corner '1/1/1/1'", "more than three"});
-  expectReadError(writeText("w.obj", tri + "f 1/x 2 3\n"), 4,
+  expectReadError(dir_.write("w.obj", tri + "f 1/x 2 3\n"), 4,
                   {"non-zero integer texture index, found 'x'"});
-  expectReadError(writeText("x.obj", tri + "f 1/ 2 3\n"), 4, {"texture index, found ''"});
-  expectReadError(writeText("y.obj", tri + "f 1//0 2 3\n"), 4, {"normal index, found '0'"});
-  expectReadError(writeText("z.obj", tri + "f 1/1/ 2 3\n"), 4, {"normal index, found ''"});
-  expectReadError(writeText("aa.obj", tri + "f /1 2 3\n"), 4, {"found ''"});
+  expectReadError(dir_.write("x.obj", tri + "f 1/ 2 3\n"), 4, {"texture index, found ''"});
+  expectReadError(dir_.write("y.obj", tri + "f 1//0 2 3\n"), 4, {"normal index, found '0'"});
+  expectReadError(dir_.write("z.obj", tri + "f 1/1/ 2 3\n"), 4, {"normal index, found ''"});
+  expectReadError(dir_.write("aa.obj", tri + "f /1 2 3\n"), 4, {"found ''"});
   // A continued statement is reported at the line where it starts.
-  expectReadError(writeText("ab.obj", tri + "\nf 1 \\\n 2 \\\n 7\nv 0 0 0\n"), 5,
+  expectReadError(dir_.write("ab.obj", tri + "\nf 1 \\\n 2 \\\n 7\nv 0 0 0\n"), 5,
                   {"vertex index 7"});
   // Binary data.
-  expectReadError(writeText("ac.obj", tri + std::string("v 0 0 \0 0\n", 10)), 4, {"NUL byte"});
+  expectReadError(dir_.write("ac.obj", tri + std::string("v 0 0 \0 0\n", 10)), 4, {"NUL byte"});
 }
 
 TEST_F(ObjIo, ReportsUnopenableFilesAndInvalidMeshes) {
   Mesh m;
   std::string error;
-  const std::string missing = path("missing.obj");
+  const std::string missing = dir_.file("missing.obj");
   EXPECT_FALSE(readObj(missing, &m, &error));
   EXPECT_EQ(error.rfind(missing + ": cannot open for reading", 0), 0u) << error;
-  EXPECT_FALSE(writeObj(path("no/such/dir/x.obj"), testMesh(false, 3), &error));
+  EXPECT_FALSE(writeObj(dir_.file("no/such/dir/x.obj"), testMesh(false, 3), &error));
   EXPECT_NE(error.find("cannot open for writing"), std::string::npos) << error;
   Mesh bad = testMesh(true, 6);
   bad.colors.pop_back();
-  EXPECT_FALSE(writeObj(path("bad.obj"), bad, &error));
+  EXPECT_FALSE(writeObj(dir_.file("bad.obj"), bad, &error));
   EXPECT_NE(error.find("cannot write OBJ"), std::string::npos) << error;
   EXPECT_NE(error.find("colours"), std::string::npos) << error;
   bad = testMesh(false, 6);
   bad.triangles.emplace_back(0, 1, 6);
-  EXPECT_FALSE(writeObj(path("bad.obj"), bad, &error));
+  EXPECT_FALSE(writeObj(dir_.file("bad.obj"), bad, &error));
   EXPECT_NE(error.find("outside"), std::string::npos) << error;
 }
 
 // Random corruption must never crash (run under the sanitizers in CI).
 TEST_F(ObjIo, SurvivesRandomCorruption) {
-  const std::string p = path("c.obj");
+  const std::string p = dir_.file("c.obj");
   std::mt19937 rng(5);
   ASSERT_TRUE(writeObj(p, testMesh(true, 30), nullptr));
-  const std::string full = readAll(p);
+  const std::string full = test::readFile(p);
   const char alphabet[] = "v f/-+#\\\n 0123456789.e";
   for (int trial = 0; trial < 1000; ++trial) {
     std::string corrupt = full;
@@ -341,7 +287,7 @@ TEST_F(ObjIo, SurvivesRandomCorruption) {
           trial % 2 == 0 ? static_cast<char>(rng()) : alphabet[rng() % (sizeof(alphabet) - 1)];
     }
     if (trial % 3 == 0) corrupt.resize(pos(rng));
-    writeText("c.obj", corrupt);
+    dir_.write("c.obj", corrupt);
     Mesh m;
     std::string error;
     if (readObj(p, &m, &error)) {

@@ -1,35 +1,19 @@
 #include "core/io/tum_trajectory.h"
 
-#include <unistd.h>
-
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <limits>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "test/test_support/temp_dir.h"
+
 namespace cblox {
 namespace {
 
-namespace fs = std::filesystem;
-
 class TumTrajectoryTest : public testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("cblox_tum_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string write(const std::string& name, const std::string& text) {
-    const std::string path = (dir_ / name).string();
-    std::ofstream(path) << text;
-    return path;
-  }
-
-  fs::path dir_;
+  test::TempDir dir_{"cblox_tum"};
 };
 
 TEST_F(TumTrajectoryTest, RoundTripsPoses) {
@@ -40,7 +24,7 @@ TEST_F(TumTrajectoryTest, RoundTripsPoses) {
     trajectory.push_back({1305031102.175304 + 0.05 * i, Transformationd::exp(xi)});
   }
   std::string error;
-  const std::string path = (dir_ / "t.txt").string();
+  const std::string path = dir_.file("t.txt");
   ASSERT_TRUE(writeTumTrajectory(path, trajectory, &error)) << error;
   const auto read = readTumTrajectory(path, &error);
   ASSERT_TRUE(read.has_value()) << error;
@@ -52,12 +36,12 @@ TEST_F(TumTrajectoryTest, RoundTripsPoses) {
 }
 
 TEST_F(TumTrajectoryTest, ParsesTumFileWithCommentsAndScalarLastQuaternion) {
-  const std::string path = write("gt.txt",
-                                 "# ground truth trajectory\n"
-                                 "# timestamp tx ty tz qx qy qz qw\n"
-                                 "\n"
-                                 "1.5 1 2 3 0 0 0.7071067811865476 0.7071067811865476\n"
-                                 "2.0,4,5,6,0,0,0,1\r\n");
+  const std::string path = dir_.write("gt.txt",
+                                      "# ground truth trajectory\n"
+                                      "# timestamp tx ty tz qx qy qz qw\n"
+                                      "\n"
+                                      "1.5 1 2 3 0 0 0.7071067811865476 0.7071067811865476\n"
+                                      "2.0,4,5,6,0,0,0,1\r\n");
   std::string error;
   const auto read = readTumTrajectory(path, &error);
   ASSERT_TRUE(read.has_value()) << error;
@@ -84,13 +68,13 @@ TEST_F(TumTrajectoryTest, RejectsBadFilesNamingFileAndLine) {
       {"# only a comment\n", ": no pose"},
   };
   for (const Case& c : cases) {
-    const std::string path = write("bad.txt", c.text);
+    const std::string path = dir_.write("bad.txt", c.text);
     std::string error;
     EXPECT_FALSE(readTumTrajectory(path, &error).has_value()) << c.text;
     EXPECT_NE(error.find(path + c.message), std::string::npos) << error;
   }
   std::string error;
-  EXPECT_FALSE(readTumTrajectory((dir_ / "missing.txt").string(), &error).has_value());
+  EXPECT_FALSE(readTumTrajectory(dir_.file("missing.txt"), &error).has_value());
   EXPECT_NE(error.find("cannot open"), std::string::npos) << error;
 }
 

@@ -2,8 +2,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <limits>
 #include <string>
 
@@ -12,32 +10,15 @@
 #include "core/io/obj_io.h"
 #include "core/io/ply_io.h"
 #include "core/mesh/primitive_meshes.h"
+#include "test/test_support/temp_dir.h"
 
 namespace cblox {
 namespace {
 
-namespace fs = std::filesystem;
-
 class SceneMeshLoader : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path(::testing::TempDir()) / (std::string("cblox_scene_mesh_") + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-  std::string writeText(const std::string& name, const std::string& content) const {
-    const std::string p = path(name);
-    std::ofstream(p, std::ios::binary) << content;
-    return p;
-  }
-
   std::string writeMeshObj(const std::string& name, const Mesh& mesh) const {
-    const std::string p = path(name);
+    const std::string p = dir_.file(name);
     std::string error;
     EXPECT_TRUE(writeObj(p, mesh, &error)) << error;
     return p;
@@ -45,7 +26,7 @@ class SceneMeshLoader : public ::testing::Test {
 
   std::string writeMeshPly(const std::string& name, const Mesh& mesh,
                            PlyFormat format = PlyFormat::kBinaryLittleEndian) const {
-    const std::string p = path(name);
+    const std::string p = dir_.file(name);
     std::string error;
     EXPECT_TRUE(writePly(p, mesh, format, &error)) << error;
     return p;
@@ -65,7 +46,7 @@ class SceneMeshLoader : public ::testing::Test {
     std::printf("  rejected: %s\n", error.c_str());
   }
 
-  fs::path dir_;
+  test::TempDir dir_{"cblox_scene_mesh"};
 };
 
 // A closed, coloured scene: a box and a sphere (both closed 2-manifolds).
@@ -131,7 +112,7 @@ TEST_F(SceneMeshLoader, ColourlessMeshGetsUniformLightGrey) {
   }
   SceneMeshCheck options;
   options.default_color = Color{10, 20, 30};
-  const std::optional<Mesh> loaded = loadSceneMesh(path("grey.obj"), options, nullptr);
+  const std::optional<Mesh> loaded = loadSceneMesh(dir_.file("grey.obj"), options, nullptr);
   ASSERT_TRUE(loaded.has_value());
   EXPECT_EQ(loaded->colors.back(), (Color{10, 20, 30}));
 }
@@ -177,17 +158,17 @@ TEST_F(SceneMeshLoader, RejectsNonManifoldMeshNamingTheTriangle) {
   shifted.triangles.insert(shifted.triangles.begin() + 5, Eigen::Vector3i(1, 1, 2));
   expectRejected(writeMeshPly("fins.ply", shifted), {"first is on triangle 13"});
   // Polygons count after triangulation: a quad before the fins is two triangles.
-  expectRejected(writeText("quad_fins.obj",
-                           "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
-                           "v 5 0 0\nv 5 0 1\nv 6 0 0.5\nv 5 1 0.5\nv 4 -1 0.5\n"
-                           "f 1 2 3 4\nf 5 6 7\nf 5 6 8\nf 5 6 9\n"),
+  expectRejected(dir_.write("quad_fins.obj",
+                            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                            "v 5 0 0\nv 5 0 1\nv 6 0 0.5\nv 5 1 0.5\nv 4 -1 0.5\n"
+                            "f 1 2 3 4\nf 5 6 7\nf 5 6 8\nf 5 6 9\n"),
                  {"first is on triangle 2"});
 
   SceneMeshCheck options;
   options.allow_non_manifold = true;
   std::string error;
   SceneMeshReport report;
-  const std::optional<Mesh> loaded = loadSceneMesh(path("fins.obj"), options, &error, &report);
+  const std::optional<Mesh> loaded = loadSceneMesh(dir_.file("fins.obj"), options, &error, &report);
   ASSERT_TRUE(loaded.has_value()) << error;
   EXPECT_EQ(report.non_manifold_edges, 1u);
   EXPECT_EQ(report.boundary_edges, 6u);  // two free edges per blade
@@ -195,9 +176,10 @@ TEST_F(SceneMeshLoader, RejectsNonManifoldMeshNamingTheTriangle) {
 }
 
 TEST_F(SceneMeshLoader, RejectsEmptyFilesAndPointClouds) {
-  expectRejected(writeText("empty.obj", ""), {"no vertices and no triangles"});
-  expectRejected(writeText("comments.obj", "# nothing here\n\n"), {"no vertices and no triangles"});
-  expectRejected(writeText("empty.ply", ""), {"empty"});
+  expectRejected(dir_.write("empty.obj", ""), {"no vertices and no triangles"});
+  expectRejected(dir_.write("comments.obj", "# nothing here\n\n"),
+                 {"no vertices and no triangles"});
+  expectRejected(dir_.write("empty.ply", ""), {"empty"});
   Mesh cloud = sceneMesh();
   cloud.triangles.clear();
   const std::string n = std::to_string(cloud.numVertices());
@@ -217,16 +199,16 @@ TEST_F(SceneMeshLoader, RejectsNonFiniteVertices) {
 }
 
 TEST_F(SceneMeshLoader, RejectsUnknownExtensionsMissingAndMalformedFiles) {
-  const std::string stl = writeText("scene.stl", "solid x\nendsolid x\n");
+  const std::string stl = dir_.write("scene.stl", "solid x\nendsolid x\n");
   expectRejected(stl, {"extension '.stl'", "expected .ply or .obj"});
-  expectRejected(writeText("scene", "v 0 0 0\n"), {"no extension", "expected .ply or .obj"});
-  expectRejected(writeText("scene.obj.gz", ""), {"extension '.gz'"});
-  expectRejected(path("missing.obj"), {"cannot open for reading"});
-  expectRejected(path("missing.ply"), {"cannot open for reading"});
+  expectRejected(dir_.write("scene", "v 0 0 0\n"), {"no extension", "expected .ply or .obj"});
+  expectRejected(dir_.write("scene.obj.gz", ""), {"extension '.gz'"});
+  expectRejected(dir_.file("missing.obj"), {"cannot open for reading"});
+  expectRejected(dir_.file("missing.ply"), {"cannot open for reading"});
   // The reader's message, with its line, is passed on.
-  const std::string bad = writeText("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+  const std::string bad = dir_.write("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
   expectRejected(bad, {(bad + ":4: ").c_str(), "vertex index 9 is out of range"});
-  expectRejected(writeText("bad.ply", "ply\nformat ascii 1.0\nend_header\n"),
+  expectRejected(dir_.write("bad.ply", "ply\nformat ascii 1.0\nend_header\n"),
                  {"no 'vertex' element"});
 }
 

@@ -1,0 +1,158 @@
+#include "core/submap/submap_collection.h"
+
+#include <stdexcept>
+
+namespace cblox {
+
+std::string SubmapCollectionConfig::validate() const {
+  const std::string error = layer.validate();
+  return error.empty() ? error : "layer." + error;
+}
+
+SubmapCollection::SubmapCollection(const SubmapCollectionConfig& config) : config_(config) {
+  const std::string error = config_.validate();
+  if (!error.empty()) throw std::invalid_argument("SubmapCollectionConfig: " + error);
+}
+
+void SubmapCollection::finishOutsideLock(const std::shared_ptr<Submap>& previous) {
+  if (previous) previous->finish();
+}
+
+std::shared_ptr<Submap> SubmapCollection::createSubmap(const Transformationd& T_G_M,
+                                                       KeyframeId anchor_keyframe,
+                                                       int64_t creation_time_ns) {
+  if (!isFinitePose(T_G_M)) {
+    throw std::invalid_argument("SubmapCollection::createSubmap: T_G_M is not finite");
+  }
+  std::shared_ptr<Submap> previous;
+  std::shared_ptr<Submap> submap;
+  {
+    std::lock_guard lock(mutex_);
+    submap =
+        std::make_shared<Submap>(next_id_, config_.layer, T_G_M, anchor_keyframe, creation_time_ns);
+    ++next_id_;
+    submaps_.emplace(submap->id(), submap);
+    anchored_[anchor_keyframe].push_back(submap->id());
+    previous = std::move(active_);
+    active_ = submap;
+  }
+  finishOutsideLock(previous);
+  return submap;
+}
+
+std::shared_ptr<Submap> SubmapCollection::getSubmap(SubmapId id) const {
+  std::lock_guard lock(mutex_);
+  const auto it = submaps_.find(id);
+  return it == submaps_.end() ? nullptr : it->second;
+}
+
+std::shared_ptr<Submap> SubmapCollection::activeSubmap() const {
+  std::lock_guard lock(mutex_);
+  return active_;
+}
+
+void SubmapCollection::finishActiveSubmap() {
+  std::shared_ptr<Submap> previous;
+  {
+    std::lock_guard lock(mutex_);
+    previous = std::move(active_);
+    active_.reset();
+  }
+  finishOutsideLock(previous);
+}
+
+bool SubmapCollection::removeSubmap(SubmapId id) {
+  std::shared_ptr<Submap> removed;
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = submaps_.find(id);
+    if (it == submaps_.end()) return false;
+    removed = std::move(it->second);
+    submaps_.erase(it);
+    const auto anchor_it = anchored_.find(removed->anchorKeyframe());
+    if (anchor_it != anchored_.end()) {
+      std::erase(anchor_it->second, id);
+      if (anchor_it->second.empty()) anchored_.erase(anchor_it);
+    }
+    if (active_ == removed) active_.reset();
+  }
+  // Finishing a removed active submap stops its integrator; a no-op for finished ones.
+  finishOutsideLock(removed);
+  return true;
+}
+
+std::vector<SubmapId> SubmapCollection::submapIds() const {
+  std::lock_guard lock(mutex_);
+  std::vector<SubmapId> ids;
+  ids.reserve(submaps_.size());
+  for (const auto& [id, submap] : submaps_) ids.push_back(id);
+  return ids;
+}
+
+std::vector<std::shared_ptr<Submap>> SubmapCollection::submaps() const {
+  std::lock_guard lock(mutex_);
+  std::vector<std::shared_ptr<Submap>> result;
+  result.reserve(submaps_.size());
+  for (const auto& [id, submap] : submaps_) result.push_back(submap);
+  return result;
+}
+
+size_t SubmapCollection::size() const {
+  std::lock_guard lock(mutex_);
+  return submaps_.size();
+}
+
+KeyframePoseUpdateResult SubmapCollection::updateKeyframePoses(
+    const std::vector<std::pair<KeyframeId, Transformationd>>& T_G_K) {
+  KeyframePoseUpdateResult result;
+  std::lock_guard lock(mutex_);
+  for (const auto& [keyframe, pose] : T_G_K) {
+    if (!isFinitePose(pose)) {
+      ++result.poses_invalid;
+      continue;
+    }
+    const auto anchor_it = anchored_.find(keyframe);
+    bool known = anchor_it != anchored_.end();
+    if (known) {
+      for (const SubmapId id : anchor_it->second) {
+        submaps_.at(id)->setT_G_M(pose);
+        ++result.submaps_moved;
+      }
+    } else {
+      for (const auto& [id, submap] : submaps_) {
+        if (submap->hasKeyframe(keyframe)) {
+          known = true;
+          break;
+        }
+      }
+    }
+    ++(known ? result.keyframes_known : result.keyframes_unknown);
+  }
+  return result;
+}
+
+size_t SubmapCollection::numBlocks() const {
+  std::lock_guard lock(mutex_);
+  size_t blocks = 0;
+  for (const auto& [id, submap] : submaps_) blocks += submap->numBlocks();
+  return blocks;
+}
+
+size_t SubmapCollection::memoryBytes() const {
+  std::lock_guard lock(mutex_);
+  size_t bytes = 0;
+  for (const auto& [id, submap] : submaps_) bytes += submap->memoryBytes();
+  return bytes;
+}
+
+std::vector<SubmapPose> SubmapCollection::poseSnapshot() const {
+  std::lock_guard lock(mutex_);
+  std::vector<SubmapPose> poses;
+  poses.reserve(submaps_.size());
+  for (const auto& [id, submap] : submaps_) {
+    poses.push_back(SubmapPose{id, submap->anchorKeyframe(), submap->T_G_M(), submap == active_});
+  }
+  return poses;
+}
+
+}  // namespace cblox

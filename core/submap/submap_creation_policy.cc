@@ -1,0 +1,47 @@
+#include "core/submap/submap_creation_policy.h"
+
+#include <sstream>
+#include <stdexcept>
+
+namespace cblox {
+
+std::string SubmapCreationPolicyConfig::validate() const {
+  std::ostringstream error;
+  if (max_keyframes_per_subvolume < 1) {
+    error << "max_keyframes_per_subvolume must be >= 1, got " << max_keyframes_per_subvolume;
+  }
+  return error.str();
+}
+
+SubmapCreationPolicy::SubmapCreationPolicy(const SubmapCreationPolicyConfig& config)
+    : config_(config) {
+  const std::string error = config_.validate();
+  if (!error.empty()) throw std::invalid_argument("SubmapCreationPolicyConfig: " + error);
+}
+
+bool SubmapCreationPolicy::needsNewSubmap(const Submap& active, bool tracking_jump) const {
+  return tracking_jump || active.isFinished() ||
+         active.numKeyframes() >= static_cast<size_t>(config_.max_keyframes_per_subvolume);
+}
+
+SubmapCreationPolicy::FrameAction SubmapCreationPolicy::onFramePose(const Submap* active,
+                                                                    bool tracking_jump) {
+  if (tracking_jump) {
+    pending_ = Pending::kTrackingJump;
+  } else if (active == nullptr || active->isFinished()) {
+    if (pending_ != Pending::kTrackingJump) pending_ = Pending::kNoActiveSubmap;
+  } else if (pending_ == Pending::kNone && needsNewSubmap(*active, false)) {
+    pending_ = Pending::kKeyframeLimit;
+  }
+  const bool integrate = pending_ == Pending::kNone || pending_ == Pending::kKeyframeLimit;
+  return integrate ? FrameAction::kIntegrate : FrameAction::kWaitForAnchor;
+}
+
+bool SubmapCreationPolicy::onKeyframe(const Submap* active) {
+  const bool create = pending_ != Pending::kNone || active == nullptr ||
+                      needsNewSubmap(*active, /*tracking_jump=*/false);
+  if (create) pending_ = Pending::kNone;
+  return create;
+}
+
+}  // namespace cblox

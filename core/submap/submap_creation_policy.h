@@ -1,0 +1,90 @@
+#pragma once
+
+#include <string>
+
+#include "core/submap/submap.h"
+
+namespace cblox {
+
+/// Settings of the subvolume creation rule.
+struct SubmapCreationPolicyConfig {
+  /// A submap collects at most this many keyframes (its anchor included); the next keyframe
+  /// anchors a new submap. >= 1. Default 10: a few metres of travel per subvolume at usual
+  /// keyframe rates; tune per platform.
+  int max_keyframes_per_subvolume = 10;
+
+  /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
+  std::string validate() const;
+};
+
+/// The paper's subvolume creation rule, plus the little state the mapper needs to apply it.
+///
+/// Rule: a new submap is needed when the active one has max_keyframes_per_subvolume
+/// keyframes, or when a frame pose arrives flagged as a tracking jump (relocalisation, loop
+/// closure, map reset: frame_pose_t::tracking_jump). The new submap's frame is the pose of
+/// the first keyframe after that decision, so the decision and the creation are two steps:
+///
+///     per frame pose (T_G_C, jump):
+///       if (policy.onFramePose(collection.activeSubmap().get(), jump) ==
+///           FrameAction::kIntegrate) integrate into the active submap with T_M_C;
+///       else count the frame as waiting for an anchor (not integrated)
+///     per new keyframe (id, T_G_K, time):
+///       if (policy.onKeyframe(collection.activeSubmap().get()))
+///         collection.createSubmap(T_G_K, id, time);       // anchor; previous finished
+///       else collection.activeSubmap()->addKeyframe(id);
+///
+/// Frames after a keyframe-count decision still go into the active submap until the next
+/// keyframe (the pose is continuous); frames after a tracking jump, and frames before the
+/// first submap exists, wait (are not integrated) until the next keyframe anchors a new
+/// submap, so no frame is fused across a discontinuity.
+///
+/// Thread safety: needsNewSubmap() is pure and thread-safe; the state (onFramePose,
+/// onKeyframe, pending(), reset) is not: one thread drives an instance.
+class SubmapCreationPolicy {
+ public:
+  /// Why the next keyframe will anchor a new submap.
+  enum class Pending {
+    kNone,            ///< no new submap pending (while an active submap exists)
+    kNoActiveSubmap,  ///< there is no active submap yet (or it was finished)
+    kKeyframeLimit,   ///< the active submap has max_keyframes_per_subvolume keyframes
+    kTrackingJump,    ///< a frame pose was flagged as a tracking jump
+  };
+  /// What the mapper does with a frame whose pose it has.
+  enum class FrameAction {
+    kIntegrate,      ///< integrate into the active submap
+    kWaitForAnchor,  ///< do not integrate: a new submap starts at the next keyframe
+  };
+
+  /// Throws std::invalid_argument with SubmapCreationPolicyConfig::validate()'s message.
+  explicit SubmapCreationPolicy(const SubmapCreationPolicyConfig& config);
+
+  /// The rule: true when tracking_jump, when `active` already has
+  /// >= max_keyframes_per_subvolume keyframes, or when it is finished. Thread-safe (pure).
+  bool needsNewSubmap(const Submap& active, bool tracking_jump) const;
+
+  /// Applies the rule to a frame pose (`active`: the collection's active submap, or null).
+  /// A tracking jump, or a missing/finished active submap, makes the next keyframe anchor a
+  /// new submap and returns kWaitForAnchor until then; reaching the keyframe limit makes the
+  /// next keyframe anchor a new submap but frames keep being integrated. A jump overrides a
+  /// pending keyframe-limit decision. Not thread-safe.
+  FrameAction onFramePose(const Submap* active, bool tracking_jump);
+
+  /// Applies the rule to a new keyframe: true when it must anchor a new submap (something
+  /// was pending, there is no active submap, or the active one is full); the pending state
+  /// is then cleared and the caller creates the submap with T_G_M = T_G_K. False: the
+  /// caller adds the keyframe to `active`. Not thread-safe.
+  bool onKeyframe(const Submap* active);
+
+  /// The pending decision. Not thread-safe.
+  Pending pending() const { return pending_; }
+  /// Forgets the pending decision (e.g. after the mapper cleared its map). Not thread-safe.
+  void reset() { pending_ = Pending::kNone; }
+
+  const SubmapCreationPolicyConfig& config() const { return config_; }
+
+ private:
+  SubmapCreationPolicyConfig config_;
+  Pending pending_ = Pending::kNone;
+};
+
+}  // namespace cblox

@@ -1,0 +1,312 @@
+#include "core/submap/submap_fusion.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <absl/container/flat_hash_set.h>
+
+#include "core/integrator/thread_team.h"
+#include "core/tsdf/block_index.h"
+
+namespace cblox {
+
+std::string SubmapFusionConfig::validate() const {
+  std::ostringstream error;
+  if (!std::isfinite(min_weight) || min_weight <= 0.0f) {
+    error << "min_weight must be finite and > 0, got " << min_weight;
+  } else if (!std::isfinite(max_weight) || max_weight < min_weight) {
+    error << "max_weight must be finite and >= min_weight (" << min_weight << "), got "
+          << max_weight;
+  } else if (num_threads < 1 || num_threads > 64) {
+    error << "num_threads must be in [1, 64], got " << num_threads;
+  }
+  return error.str();
+}
+
+namespace {
+
+// Trilinear sampling of the source layer at continuous voxel coordinates q (voxel i has its
+// centre at q = i), as documented at fuseLayers. One instance per thread.
+class SourceSampler {
+ public:
+  SourceSampler(const TsdfLayer& layer, float min_weight)
+      : layer_(layer),
+        min_weight_(min_weight),
+        log2_(layer.voxelsPerSideLog2()),
+        mask_(layer.voxelsPerSide() - 1) {}
+
+  bool sample(const Eigen::Vector3f& q, float* distance, float* weight, Eigen::Vector3f* color) {
+    GlobalVoxelIndex base(fastFloor(q.x()), fastFloor(q.y()), fastFloor(q.z()));
+    Eigen::Vector3f f = q - base.cast<float>();
+    // q just below an integer can round to f == 1: the same point as base + 1 with f == 0.
+    for (int axis = 0; axis < 3; ++axis) {
+      if (f[axis] >= 1.0f) {
+        base[axis] += 1;
+        f[axis] = 0.0f;
+      }
+    }
+    const BlockIndex block_index(base.x() >> log2_, base.y() >> log2_, base.z() >> log2_);
+    const GridIndex local(base.x() & mask_, base.y() & mask_, base.z() & mask_);
+    const Block* base_block = block(block_index);
+    if (base_block == nullptr) return false;  // the base corner (c > 0) is always needed
+    const bool one_block = local.x() < mask_ && local.y() < mask_ && local.z() < mask_;
+
+    float sum_distance = 0.0f, sum_weight = 0.0f;
+    Eigen::Vector3f sum_color = Eigen::Vector3f::Zero();
+    for (int corner = 0; corner < 8; ++corner) {
+      const int ox = corner & 1, oy = (corner >> 1) & 1, oz = (corner >> 2) & 1;
+      const float cx = ox ? f.x() : 1.0f - f.x();
+      const float cy = oy ? f.y() : 1.0f - f.y();
+      const float cz = oz ? f.z() : 1.0f - f.z();
+      if (cx == 0.0f || cy == 0.0f || cz == 0.0f) continue;  // not needed, not read
+      const TsdfVoxel* voxel;
+      if (one_block) {
+        voxel = &base_block->voxel(GridIndex(local.x() + ox, local.y() + oy, local.z() + oz));
+      } else {
+        const GlobalVoxelIndex g(base.x() + ox, base.y() + oy, base.z() + oz);
+        const Block* b = block(BlockIndex(g.x() >> log2_, g.y() >> log2_, g.z() >> log2_));
+        if (b == nullptr) return false;
+        voxel = &b->voxel(GridIndex(g.x() & mask_, g.y() & mask_, g.z() & mask_));
+      }
+      if (!(voxel->weight >= min_weight_)) return false;
+      const float c = cx * cy * cz;
+      sum_distance += c * voxel->distance;
+      sum_weight += c * voxel->weight;
+      sum_color += c * Eigen::Vector3f(voxel->color.r, voxel->color.g, voxel->color.b);
+    }
+    *distance = sum_distance;
+    *weight = sum_weight;
+    *color = sum_color;
+    return true;
+  }
+
+ private:
+  // Block lookup with a one-entry cache (consecutive target voxels mostly sample one block).
+  const Block* block(const BlockIndex& index) {
+    if (!cache_valid_ || index != cached_index_) {
+      cached_block_ = layer_.getBlock(index);
+      cached_index_ = index;
+      cache_valid_ = true;
+    }
+    return cached_block_;
+  }
+
+  const TsdfLayer& layer_;
+  float min_weight_;
+  int log2_;
+  int mask_;
+  bool cache_valid_ = false;
+  BlockIndex cached_index_ = BlockIndex::Zero();
+  const Block* cached_block_ = nullptr;
+};
+
+uint8_t roundChannel(float value) {
+  return static_cast<uint8_t>(std::lround(std::clamp(value, 0.0f, 255.0f)));
+}
+
+bool hasObservedVoxel(const Block& block, float min_weight) {
+  for (int i = 0; i < block.numVoxels(); ++i) {
+    if (block.voxel(i).weight >= min_weight) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T_S,
+                             const SubmapFusionConfig& config, TsdfLayer* target) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::string error = config.validate();
+  if (!error.empty()) throw std::invalid_argument("SubmapFusionConfig: " + error);
+  if (target == nullptr) throw std::invalid_argument("fuseLayers: target is null");
+  if (target == &source) throw std::invalid_argument("fuseLayers: source and target are one layer");
+  if (!isFinitePose(T_T_S)) throw std::invalid_argument("fuseLayers: T_T_S is not finite");
+
+  SubmapFusionStats stats;
+  const double s = source.voxelSize();
+  const double t = target->voxelSize();
+  const int n_t_log2 = target->voxelsPerSideLog2();
+  const int n_s = source.voxelsPerSide();
+
+  // Target global voxel g -> source continuous voxel coordinates q = A g + c.
+  const Transformationd T_S_T = T_T_S.inverse();
+  const Eigen::Matrix3d A = T_S_T.rotationMatrix() * (t / s);
+  const Eigen::Vector3d c =
+      (T_S_T.rotationMatrix() * Eigen::Vector3d::Constant(0.5 * t) + T_S_T.translation()) / s -
+      Eigen::Vector3d::Constant(0.5);
+  const Eigen::Matrix3f A_f = A.cast<float>();
+
+  // Target blocks covering the sampleable region of every observed source block.
+  absl::flat_hash_set<uint64_t> target_keys;
+  constexpr double kEpsilonVoxels = 1e-4;
+  for (const auto& [key, block] : source.blocks()) {
+    if (!hasObservedVoxel(*block, config.min_weight)) continue;
+    ++stats.source_blocks;
+    const Eigen::Vector3d q_lo = (block->index() * n_s).cast<double>();
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+    Eigen::Vector3d hi = -lo;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Eigen::Vector3d offset(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+      const Eigen::Vector3d p_S = (q_lo + offset * n_s + Eigen::Vector3d::Constant(0.5)) * s;
+      const Eigen::Vector3d p_T = T_T_S * p_S;
+      lo = lo.cwiseMin(p_T);
+      hi = hi.cwiseMax(p_T);
+    }
+    // Target voxels whose centre (g + 1/2) t lies in [lo, hi].
+    GlobalVoxelIndex g_lo, g_hi;
+    for (int axis = 0; axis < 3; ++axis) {
+      g_lo[axis] = static_cast<int>(std::ceil(lo[axis] / t - 0.5 - kEpsilonVoxels));
+      g_hi[axis] = static_cast<int>(std::floor(hi[axis] / t - 0.5 + kEpsilonVoxels));
+    }
+    if ((g_lo.array() > g_hi.array()).any()) continue;
+    const BlockIndex b_lo(g_lo.x() >> n_t_log2, g_lo.y() >> n_t_log2, g_lo.z() >> n_t_log2);
+    const BlockIndex b_hi(g_hi.x() >> n_t_log2, g_hi.y() >> n_t_log2, g_hi.z() >> n_t_log2);
+    for (int z = b_lo.z(); z <= b_hi.z(); ++z) {
+      for (int y = b_lo.y(); y <= b_hi.y(); ++y) {
+        for (int x = b_lo.x(); x <= b_hi.x(); ++x) {
+          const BlockIndex index(x, y, z);
+          if (!gridIndexInRange(index)) continue;  // no source data can map there
+          target_keys.insert(packGridIndex(index));
+        }
+      }
+    }
+  }
+
+  // Allocation is single-threaded; the parallel pass only writes voxels of existing blocks.
+  std::vector<Block*> blocks;
+  std::vector<uint8_t> newly_allocated;
+  blocks.reserve(target_keys.size());
+  newly_allocated.reserve(target_keys.size());
+  for (const uint64_t key : target_keys) {
+    bool fresh = false;
+    blocks.push_back(target->allocateBlock(unpackGridIndex(key), &fresh));
+    newly_allocated.push_back(fresh ? 1 : 0);
+  }
+  stats.target_blocks_visited = blocks.size();
+
+  std::vector<uint8_t> block_used(blocks.size(), 0);
+  std::vector<size_t> fused_per_thread(static_cast<size_t>(config.num_threads), 0);
+  std::atomic<size_t> next_block{0};
+  const int n_t = target->voxelsPerSide();
+  runThreadTeam(config.num_threads, [&](int thread_id) {
+    SourceSampler sampler(source, config.min_weight);
+    size_t fused = 0;
+    for (;;) {
+      const size_t b = next_block.fetch_add(1, std::memory_order_relaxed);
+      if (b >= blocks.size()) break;
+      Block& block = *blocks[b];
+      const Eigen::Vector3f q0 = (A * (block.index() * n_t).cast<double>() + c).cast<float>();
+      size_t fused_here = 0;
+      int linear = 0;
+      for (int z = 0; z < n_t; ++z) {
+        for (int y = 0; y < n_t; ++y) {
+          const Eigen::Vector3f q_row =
+              q0 + A_f.col(2) * static_cast<float>(z) + A_f.col(1) * static_cast<float>(y);
+          for (int x = 0; x < n_t; ++x, ++linear) {
+            const Eigen::Vector3f q = q_row + A_f.col(0) * static_cast<float>(x);
+            float d_s = 0.0f, w_s = 0.0f;
+            Eigen::Vector3f color_s;
+            if (!sampler.sample(q, &d_s, &w_s, &color_s)) continue;
+            TsdfVoxel& voxel = block.voxel(linear);
+            if (voxel.weight <= 0.0f) {
+              voxel.distance = d_s;
+              voxel.weight = std::min(w_s, config.max_weight);
+              if (config.use_color) {
+                voxel.color = Color{roundChannel(color_s.x()), roundChannel(color_s.y()),
+                                    roundChannel(color_s.z())};
+              }
+            } else {
+              const float w_t = voxel.weight;
+              const float w = w_t + w_s;
+              voxel.distance = (voxel.distance * w_t + d_s * w_s) / w;
+              if (config.use_color) {
+                const Eigen::Vector3f color_t(voxel.color.r, voxel.color.g, voxel.color.b);
+                const Eigen::Vector3f mixed = (color_t * w_t + color_s * w_s) / w;
+                voxel.color = Color{roundChannel(mixed.x()), roundChannel(mixed.y()),
+                                    roundChannel(mixed.z())};
+              }
+              voxel.weight = std::min(w, config.max_weight);
+            }
+            ++fused_here;
+          }
+        }
+      }
+      if (fused_here > 0) {
+        block_used[b] = 1;
+        block.setUpdated(true);
+      }
+      fused += fused_here;
+    }
+    fused_per_thread[static_cast<size_t>(thread_id)] = fused;
+  });
+  for (const size_t fused : fused_per_thread) stats.voxels_fused += fused;
+
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    if (!newly_allocated[b]) continue;
+    if (block_used[b]) {
+      ++stats.target_blocks_allocated;
+    } else {
+      target->removeBlock(blocks[b]->index());
+    }
+  }
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return stats;
+}
+
+SubmapFusionStats fuseSubmaps(const Submap& source, Submap* target,
+                              const SubmapFusionConfig& config) {
+  if (target == nullptr) throw std::invalid_argument("fuseSubmaps: target is null");
+  if (target == &source) throw std::invalid_argument("fuseSubmaps: source and target are one");
+  if (!source.isFinished() || !target->isFinished()) {
+    throw std::invalid_argument("fuseSubmaps: both submaps must be finished (source " +
+                                std::to_string(source.id()) + ", target " +
+                                std::to_string(target->id()) + ")");
+  }
+  const Transformationd T_T_S = target->T_G_M().inverse() * source.T_G_M();
+  const SubmapFusionStats stats = fuseLayers(source.layer(), T_T_S, config, target->mutableLayer());
+  for (const KeyframeId id : source.keyframeIds()) target->addKeyframe(id);
+  target->refreshStatistics();
+  return stats;
+}
+
+TsdfLayer projectCollection(const SubmapCollection& collection, const LayerConfig& layer_config,
+                            const SubmapFusionConfig& config, bool include_active,
+                            SubmapFusionStats* stats) {
+  const std::string error = config.validate();
+  if (!error.empty()) throw std::invalid_argument("SubmapFusionConfig: " + error);
+  TsdfLayer layer(layer_config);
+  SubmapFusionStats total;
+  for (const SubmapPose& pose : collection.poseSnapshot()) {
+    const std::shared_ptr<Submap> submap = collection.getSubmap(pose.id);
+    if (!submap) continue;  // removed since the snapshot
+    if (submap->isFinished()) {
+      total += fuseLayers(submap->layer(), pose.T_G_M, config, &layer);
+    } else if (include_active) {
+      const std::unique_lock lock = submap->lockLayer();
+      total += fuseLayers(submap->layer(), pose.T_G_M, config, &layer);
+    }
+  }
+  if (stats != nullptr) *stats = total;
+  return layer;
+}
+
+Mesh meshCollection(const SubmapCollection& collection, const LayerConfig& layer_config,
+                    const SubmapFusionConfig& config, const MeshConfig& mesh_config,
+                    bool include_active) {
+  const std::string error = mesh_config.validate();
+  if (!error.empty()) throw std::invalid_argument("MeshConfig: " + error);
+  const TsdfLayer layer = projectCollection(collection, layer_config, config, include_active);
+  MeshIntegrator mesher(layer, mesh_config);
+  mesher.update(/*only_updated_blocks=*/false);
+  return mesher.extractMesh(/*connected=*/true);
+}
+
+}  // namespace cblox

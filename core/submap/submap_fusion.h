@@ -1,0 +1,112 @@
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "core/geometry/se3.h"
+#include "core/mesh/mesh.h"
+#include "core/mesh/mesh_integrator.h"
+#include "core/submap/submap.h"
+#include "core/submap/submap_collection.h"
+#include "core/tsdf/layer_config.h"
+#include "core/tsdf/tsdf_layer.h"
+
+namespace cblox {
+
+/// Settings of subvolume fusion (fuseLayers, fuseSubmaps, projectCollection).
+struct SubmapFusionConfig {
+  /// Fused weights saturate here (as IntegratorConfig::max_weight, whose default it shares).
+  /// Finite and >= min_weight.
+  float max_weight = 10000.0f;
+  /// Source voxels with a lower weight count as unobserved (a sample needing one is
+  /// skipped). Finite and > 0, so never-observed voxels (weight 0) are never used.
+  float min_weight = 1e-4f;
+  /// Fuse colours (weighted like the distance). Off: target colours are left as they are.
+  bool use_color = true;
+  /// Worker threads (the calling thread is one of them), in [1, 64]. The result does not
+  /// depend on it: every target voxel is computed by exactly one thread.
+  int num_threads = 2;
+
+  /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
+  std::string validate() const;
+};
+
+/// What one fusion did. Counters are exact.
+struct SubmapFusionStats {
+  size_t source_blocks = 0;            ///< source blocks with a voxel of weight >= min_weight
+  size_t target_blocks_visited = 0;    ///< target blocks whose voxels were sampled
+  size_t target_blocks_allocated = 0;  ///< target blocks newly allocated and kept
+  size_t voxels_fused = 0;             ///< target voxels updated
+  double seconds = 0.0;                ///< wall time
+
+  SubmapFusionStats& operator+=(const SubmapFusionStats& o) {
+    source_blocks += o.source_blocks;
+    target_blocks_visited += o.target_blocks_visited;
+    target_blocks_allocated += o.target_blocks_allocated;
+    voxels_fused += o.voxels_fused;
+    seconds += o.seconds;
+    return *this;
+  }
+};
+
+/// Fuses the TSDF `source` (frame S) into `target` (frame T), T_T_S mapping S into T.
+/// The layers may have different voxel and block sizes.
+///
+/// Exact behaviour:
+/// - Region: for every source block holding a voxel with weight >= min_weight, the cube
+///   spanned from its first voxel centre to the first voxel centre of its +1,+1,+1
+///   neighbour (the cells whose lower corner is one of its voxels) is mapped into T; every
+///   target block overlapping the axis-aligned bounding box of that cube is allocated if
+///   missing and each of its voxels is sampled once.
+/// - Sample: the target voxel centre p_T goes to p_S = T_T_S^-1 * p_T; with q = p_S / s - 1/2
+///   (s: source voxel size; voxel i has its centre at q = i), base = floor(q), f = q - base,
+///   the 8 corners base + o, o in {0,1}^3, have trilinear coefficients
+///   c_o = prod_axes (o ? f : 1 - f). A corner with c_o == 0 is neither needed nor read
+///   (so a voxel-aligned point reads one voxel); every other corner must exist with weight
+///   >= min_weight, else the sample fails and the target voxel is untouched. The sample is
+///   d_S = sum c_o d_o, w_S = sum c_o w_o, colour_S = sum c_o colour_o (unrounded).
+///   q = A * g + c (g: target global voxel index, A = R_S_T * t / s, t: target voxel size),
+///   evaluated in double at each target block's first voxel and stepped in float from there,
+///   so an identity transform (or a translation by whole voxels) between equal grids maps
+///   voxel centres onto voxel centres exactly.
+/// - Merge into the target voxel (d_T, w_T, colour_T): if w_T == 0 it becomes
+///   (d_S, min(w_S, max_weight), round(colour_S)); otherwise w = w_T + w_S,
+///   d = (d_T w_T + d_S w_S) / w, colour = round((colour_T w_T + colour_S w_S) / w) per
+///   channel, weight = min(w, max_weight). Colours are written only when use_color. Updated
+///   target blocks get Block::setUpdated(true) (for the incremental mesher).
+/// - Target blocks newly allocated here that received no voxel are removed again.
+/// Throws std::invalid_argument for an invalid config, a non-finite T_T_S, a null target
+/// or source == target. Thread safety: nothing else may touch `target` during the call;
+/// `source` is only read (concurrent readers are fine). Uses config.num_threads threads.
+SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T_S,
+                             const SubmapFusionConfig& config, TsdfLayer* target);
+
+/// Fuses submap `source` into submap `target` (both finished) with
+/// T_T_S = T_G_T^-1 * T_G_S (poses read once at the start): fuseLayers, then the source's
+/// keyframe ids are added to the target's and the target's statistics refreshed. The
+/// source is unchanged; the caller removes it from its collection. Throws
+/// std::invalid_argument when either submap is still active, target is null, they are the
+/// same submap, or fuseLayers throws. Thread safety: call on the fusion worker, which owns
+/// finished submaps (see SubmapCollection); pose updates may run concurrently.
+SubmapFusionStats fuseSubmaps(const Submap& source, Submap* target,
+                              const SubmapFusionConfig& config);
+
+/// The whole collection as one TSDF layer in the global frame G (for display and export):
+/// starting from an empty layer with `layer_config`, every submap is fused in (fuseLayers
+/// with T_G_M) in creation order, using one poseSnapshot() so all poses come from the same
+/// instant. An empty collection gives an empty layer. With include_active, the active
+/// submap is fused while holding its layer lock (Submap::lockLayer: integration waits for
+/// that long); without, only finished submaps are used and integration is never blocked.
+/// Throws std::invalid_argument for an invalid config. Thread safety: call on the fusion
+/// worker (it reads finished layers without locks). `stats` (optional) receives the sum.
+TsdfLayer projectCollection(const SubmapCollection& collection, const LayerConfig& layer_config,
+                            const SubmapFusionConfig& config, bool include_active = true,
+                            SubmapFusionStats* stats = nullptr);
+
+/// Mesh of projectCollection() in G: MeshIntegrator over every block, extractMesh(true)
+/// (connected). Same thread-safety and exceptions as projectCollection, plus MeshConfig's.
+Mesh meshCollection(const SubmapCollection& collection, const LayerConfig& layer_config,
+                    const SubmapFusionConfig& config, const MeshConfig& mesh_config,
+                    bool include_active = true);
+
+}  // namespace cblox

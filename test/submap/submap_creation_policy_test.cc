@@ -1,0 +1,104 @@
+#include "core/submap/submap_creation_policy.h"
+
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+
+#include "core/submap/submap_collection.h"
+
+namespace cblox {
+namespace {
+
+using Action = SubmapCreationPolicy::FrameAction;
+using Pending = SubmapCreationPolicy::Pending;
+
+TEST(SubmapCreationPolicyConfig, ValidateNamesTheField) {
+  SubmapCreationPolicyConfig config;
+  EXPECT_EQ(config.validate(), "");
+  config.max_keyframes_per_subvolume = 0;
+  EXPECT_NE(config.validate().find("max_keyframes_per_subvolume"), std::string::npos);
+  EXPECT_THROW(SubmapCreationPolicy{config}, std::invalid_argument);
+}
+
+TEST(SubmapCreationPolicy, RuleNewSubmapAfterNKeyframesOrOnATrackingJump) {
+  const SubmapCreationPolicy policy(SubmapCreationPolicyConfig{3});
+  Submap submap(0, LayerConfig{}, Transformationd(), 100, 0);  // anchor = keyframe 1 of 3
+  EXPECT_FALSE(policy.needsNewSubmap(submap, false));
+  EXPECT_TRUE(policy.needsNewSubmap(submap, true));
+  submap.addKeyframe(101);
+  EXPECT_FALSE(policy.needsNewSubmap(submap, false));
+  submap.addKeyframe(101);  // a repeated keyframe does not count twice
+  EXPECT_FALSE(policy.needsNewSubmap(submap, false));
+  submap.addKeyframe(102);
+  EXPECT_TRUE(policy.needsNewSubmap(submap, false));
+  Submap other(1, LayerConfig{}, Transformationd(), 200, 0);
+  other.finish();
+  EXPECT_TRUE(policy.needsNewSubmap(other, false));
+}
+
+// The mapper's loop: frames before the first keyframe wait; each submap takes N keyframes;
+// frames keep being integrated after the limit until the next keyframe anchors a new
+// submap; a tracking jump makes frames wait and the next keyframe anchor a new submap.
+TEST(SubmapCreationPolicy, DrivesTheMapperLoop) {
+  SubmapCollection collection(SubmapCollectionConfig{});
+  SubmapCreationPolicy policy(SubmapCreationPolicyConfig{2});
+  KeyframeId next_keyframe = 0;
+  const auto keyframe = [&] {
+    const KeyframeId id = next_keyframe++;
+    const Transformationd T_G_K(Eigen::Quaterniond::Identity(),
+                                Eigen::Vector3d(static_cast<double>(id), 0, 0));
+    if (policy.onKeyframe(collection.activeSubmap().get())) {
+      collection.createSubmap(T_G_K, id, id * 1000);
+      return true;
+    }
+    collection.activeSubmap()->addKeyframe(id);
+    return false;
+  };
+  const auto frame = [&](bool jump) {
+    return policy.onFramePose(collection.activeSubmap().get(), jump);
+  };
+
+  EXPECT_EQ(frame(false), Action::kWaitForAnchor);  // no submap yet
+  EXPECT_EQ(policy.pending(), Pending::kNoActiveSubmap);
+  EXPECT_TRUE(keyframe());  // keyframe 0 anchors submap 0
+  EXPECT_EQ(policy.pending(), Pending::kNone);
+  EXPECT_EQ(frame(false), Action::kIntegrate);
+  EXPECT_FALSE(keyframe());                     // keyframe 1: submap 0 has 2 keyframes now
+  EXPECT_EQ(frame(false), Action::kIntegrate);  // still integrated...
+  EXPECT_EQ(policy.pending(), Pending::kKeyframeLimit);
+  EXPECT_TRUE(keyframe());  // ...until keyframe 2 anchors submap 1
+  EXPECT_EQ(collection.size(), 2u);
+  EXPECT_EQ(collection.activeSubmap()->anchorKeyframe(), 2);
+  EXPECT_TRUE(collection.activeSubmap()->T_G_M().translation().isApprox(Eigen::Vector3d(2, 0, 0)));
+  EXPECT_EQ(collection.getSubmap(0)->keyframeIds(), (std::vector<KeyframeId>{0, 1}));
+
+  // A keyframe limit reached without frames in between is still applied.
+  EXPECT_FALSE(keyframe());  // keyframe 3 into submap 1
+  EXPECT_TRUE(keyframe());   // keyframe 4 anchors submap 2
+  EXPECT_EQ(collection.size(), 3u);
+
+  // Tracking jump: frames wait until the next keyframe anchors a new submap.
+  EXPECT_EQ(frame(false), Action::kIntegrate);
+  EXPECT_EQ(frame(true), Action::kWaitForAnchor);
+  EXPECT_EQ(policy.pending(), Pending::kTrackingJump);
+  EXPECT_EQ(frame(false), Action::kWaitForAnchor);
+  EXPECT_TRUE(keyframe());  // keyframe 5 anchors submap 3 though submap 2 had room
+  EXPECT_EQ(collection.activeSubmap()->anchorKeyframe(), 5);
+  EXPECT_EQ(frame(false), Action::kIntegrate);
+  EXPECT_EQ(collection.size(), 4u);
+
+  // No new submap otherwise.
+  EXPECT_EQ(frame(false), Action::kIntegrate);
+  EXPECT_EQ(policy.pending(), Pending::kNone);
+
+  // A jump overrides a pending keyframe limit; reset() forgets the pending decision.
+  EXPECT_FALSE(keyframe());  // keyframe 6: submap 3 full
+  EXPECT_EQ(frame(false), Action::kIntegrate);
+  EXPECT_EQ(frame(true), Action::kWaitForAnchor);
+  EXPECT_EQ(policy.pending(), Pending::kTrackingJump);
+  policy.reset();
+  EXPECT_EQ(policy.pending(), Pending::kNone);
+}
+
+}  // namespace
+}  // namespace cblox

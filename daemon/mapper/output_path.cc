@@ -1,0 +1,30 @@
+#include "daemon/mapper/output_path.h"
+
+namespace cblox {
+
+std::optional<std::filesystem::path> resolveOutputPath(const std::filesystem::path& output_dir,
+                                                       const std::string& requested,
+                                                       std::string* error) {
+  auto fail = [&](const std::string& why) -> std::optional<std::filesystem::path> {
+    if (error != nullptr) *error = "path '" + requested + "' " + why;
+    return std::nullopt;
+  };
+  if (requested.empty()) return fail("is empty");
+  if (requested.find('\0') != std::string::npos) return fail("contains a NUL character");
+  const std::filesystem::path path(requested);
+  for (const auto& part : path) {
+    if (part == "..") return fail("contains '..'");
+  }
+  const std::filesystem::path base = output_dir.lexically_normal();
+  if (path.is_absolute()) {
+    const std::filesystem::path normal = path.lexically_normal();
+    const std::filesystem::path relative = normal.lexically_relative(base);
+    if (relative.empty() || *relative.begin() == "..") {
+      return fail("is outside the output directory " + base.string());
+    }
+    return normal;
+  }
+  return (base / path).lexically_normal();
+}
+
+}  // namespace cblox

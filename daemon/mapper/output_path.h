@@ -1,0 +1,18 @@
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace cblox {
+
+/// Resolves a path an operator asked for (e.g. in an export command) inside the configured
+/// output directory: a relative path is taken relative to it; an absolute path is accepted
+/// only if it lies inside it. Rejected, with a message: an empty path, any ".." component,
+/// a NUL character, an absolute path outside the directory. The result is lexically
+/// normalised; nothing is created or checked on disk. Thread-safe (pure).
+std::optional<std::filesystem::path> resolveOutputPath(const std::filesystem::path& output_dir,
+                                                       const std::string& requested,
+                                                       std::string* error);
+
+}  // namespace cblox

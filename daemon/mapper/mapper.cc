@@ -1,0 +1,941 @@
+#include "daemon/mapper/mapper.h"
+
+#include <pthread.h>
+#include <sched.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+#include <system_error>
+
+#include "core/geometry/depth_to_point_cloud.h"
+#include "core/integrator/projective_tsdf_integrator.h"
+#include "core/integrator/ray_casting_integrator.h"
+#include "core/io/ply_io.h"
+#include "daemon/mapper/output_path.h"
+
+namespace cblox {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+std::string fixed(double value, int decimals) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.*f", decimals, value);
+  return text;
+}
+
+// Copies every block of `source` into the empty `target` (same geometry). The caller holds
+// whatever lock `source` needs.
+void copyLayer(const TsdfLayer& source, TsdfLayer* target) {
+  for (const auto& [key, block] : source.blocks()) {
+    Block* copy = target->allocateBlock(block->index());
+    std::copy_n(block->voxels(), block->numVoxels(), copy->voxels());
+  }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Names, config, small helpers
+
+const char* poseSourceName(PoseSource source) {
+  return source == PoseSource::kGroundTruth ? "ground_truth" : "tracker";
+}
+
+const char* inputProblemName(InputProblem problem) {
+  switch (problem) {
+    case InputProblem::kDepthUndecodable:
+      return "depth_undecodable";
+    case InputProblem::kDepthInvalid:
+      return "depth_invalid";
+    case InputProblem::kDepthOutOfOrder:
+      return "depth_out_of_order";
+    case InputProblem::kNoPose:
+      return "no_pose";
+    case InputProblem::kPoseTooOld:
+      return "pose_too_old";
+    case InputProblem::kPoseGap:
+      return "pose_gap";
+    case InputProblem::kAcrossJump:
+      return "across_jump";
+    case InputProblem::kTrackingLost:
+      return "tracking_lost";
+    case InputProblem::kWaitingForAnchor:
+      return "waiting_for_anchor";
+    case InputProblem::kIntegrationFailed:
+      return "integration_failed";
+    case InputProblem::kPoseUndecodable:
+      return "pose_undecodable";
+    case InputProblem::kPoseInvalid:
+      return "pose_invalid";
+    case InputProblem::kPoseDuplicate:
+      return "pose_duplicate";
+    case InputProblem::kPoseOutOfOrder:
+      return "pose_out_of_order";
+    case InputProblem::kKeyframeInvalid:
+      return "keyframe_invalid";
+    case InputProblem::kKeyframeDuplicate:
+      return "keyframe_duplicate";
+    case InputProblem::kKeyframePoseUnknown:
+      return "keyframe_pose_unknown";
+    case InputProblem::kKeyframePoseInvalid:
+      return "keyframe_pose_invalid";
+    case InputProblem::kMaintenanceDropped:
+      return "maintenance_dropped";
+    case InputProblem::kCommandInvalid:
+      return "command_invalid";
+    case InputProblem::kCount:
+      break;
+  }
+  return "?";
+}
+
+bool isFrameProblem(InputProblem problem) {
+  return static_cast<int>(problem) <= static_cast<int>(InputProblem::kIntegrationFailed);
+}
+
+IntegratorConfig MapperConfig::defaultIntegratorConfig() {
+  IntegratorConfig config;
+  config.truncation_distance_m = 0.12f;  // 3 voxels of 4 cm
+  config.max_ray_length_m = 5.0f;
+  config.num_threads = 1;
+  return config;
+}
+
+std::string MapperConfig::validate() const {
+  if (std::string e = layer.validate(); !e.empty()) return "layer." + e;
+  if (std::string e = integrator.validate(layer.voxel_size); !e.empty()) return "integrator." + e;
+  if (std::string e = mesh.validate(); !e.empty()) return "mesh." + e;
+  if (std::string e = fusion.validate(); !e.empty()) return "fusion." + e;
+  if (std::string e = creation.validate(); !e.empty()) return "creation." + e;
+  if (std::string e = pose_buffer.validate(); !e.empty()) return "pose_buffer." + e;
+  if (keyframe_every_n_frames < 1) {
+    return "keyframe_every_n_frames must be >= 1, got " + std::to_string(keyframe_every_n_frames);
+  }
+  if (pending_capacity < 1) return "pending_capacity must be >= 1";
+  if (!(max_pose_wait_s >= 0.0) || !std::isfinite(max_pose_wait_s)) {
+    return "max_pose_wait_s must be finite and >= 0, got " + std::to_string(max_pose_wait_s);
+  }
+  if (!(restart_after_backwards_s >= 0.0) || !std::isfinite(restart_after_backwards_s)) {
+    return "restart_after_backwards_s must be finite and >= 0, got " +
+           std::to_string(restart_after_backwards_s);
+  }
+  if (maintenance_queue_capacity < 1) return "maintenance_queue_capacity must be >= 1";
+  if (command_queue_capacity < 1) return "command_queue_capacity must be >= 1";
+  if (timing_window < 1) return "timing_window must be >= 1";
+  if (output_dir.empty()) return "output_dir must not be empty";
+  if (worker_niceness < 0 || worker_niceness > 19) {
+    return "worker_niceness must be in [0, 19], got " + std::to_string(worker_niceness);
+  }
+  if (!(log_interval_s > 0.0) || !std::isfinite(log_interval_s)) {
+    return "log_interval_s must be finite and > 0, got " + std::to_string(log_interval_s);
+  }
+  return {};
+}
+
+std::string MapperReply::value(const std::string& key) const {
+  for (const auto& [k, v] : values) {
+    if (k == key) return v;
+  }
+  return {};
+}
+
+Color submapColor(SubmapId id) {
+  // Golden-ratio steps around the hue circle: neighbouring ids get far-apart hues.
+  const double hue = std::fmod(0.13 + 0.618033988749895 * static_cast<double>(id), 1.0) * 6.0;
+  const double value = 0.95, saturation = 0.85;
+  const int sector = static_cast<int>(hue) % 6;
+  const double f = hue - std::floor(hue);
+  const double p = value * (1.0 - saturation), q = value * (1.0 - saturation * f),
+               t = value * (1.0 - saturation * (1.0 - f));
+  double r = 0, g = 0, b = 0;
+  switch (sector) {
+    case 0:
+      r = value, g = t, b = p;
+      break;
+    case 1:
+      r = q, g = value, b = p;
+      break;
+    case 2:
+      r = p, g = value, b = t;
+      break;
+    case 3:
+      r = p, g = q, b = value;
+      break;
+    case 4:
+      r = t, g = p, b = value;
+      break;
+    default:
+      r = value, g = p, b = q;
+      break;
+  }
+  auto channel = [](double c) { return static_cast<uint8_t>(std::lround(c * 255.0)); };
+  return Color{channel(r), channel(g), channel(b)};
+}
+
+// ---------------------------------------------------------------------------------------------
+// The integrator bound to one submap's layer (integrator thread only).
+
+class Mapper::FrameIntegrator {
+ public:
+  FrameIntegrator(SubmapId submap_id, IntegratorType type, const IntegratorConfig& config,
+                  TsdfLayer* layer)
+      : submap_id_(submap_id) {
+    if (type == IntegratorType::kProjective) {
+      projective_ = std::make_unique<ProjectiveTsdfIntegrator>(config, layer);
+    } else {
+      ray_ = std::make_unique<RayCastingIntegrator>(type == IntegratorType::kFast
+                                                        ? RayCastingIntegrator::Mode::kFast
+                                                        : RayCastingIntegrator::Mode::kSimple,
+                                                    config, layer);
+      conversion_.min_depth_m = std::max(1e-3f, config.min_ray_length_m);
+      conversion_.max_depth_m = std::max(conversion_.min_depth_m * 2.0f, config.max_ray_length_m);
+    }
+  }
+
+  SubmapId submapId() const { return submap_id_; }
+
+  IntegrationStats integrate(const Transformation& T_M_D, const DepthImage& depth,
+                             const PinholeCamera& camera, const ColorImage* color) {
+    if (projective_) return projective_->integrateDepthImage(T_M_D, depth, camera, color);
+    const PointCloud cloud = depthToPointCloud(depth, camera, color, conversion_);
+    return ray_->integratePointCloud(T_M_D, cloud);
+  }
+
+ private:
+  SubmapId submap_id_;
+  std::unique_ptr<ProjectiveTsdfIntegrator> projective_;
+  std::unique_ptr<RayCastingIntegrator> ray_;
+  DepthConversionConfig conversion_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Construction, life cycle
+
+namespace {
+
+MapperConfig validated(const MapperConfig& config) {
+  if (const std::string e = config.validate(); !e.empty()) {
+    throw std::invalid_argument("MapperConfig: " + e);
+  }
+  return config;
+}
+
+}  // namespace
+
+Mapper::Mapper(const MapperConfig& config, LogSink log)
+    : config_(validated(config)),
+      log_sink_(std::move(log)),
+      output_dir_(std::filesystem::absolute(config_.output_dir).lexically_normal()),
+      collection_(SubmapCollectionConfig{config_.layer}),
+      poses_(config_.pose_buffer),
+      pending_(config_.pending_capacity),
+      problem_log_(kNumInputProblems,
+                   std::chrono::duration_cast<Clock::duration>(
+                       std::chrono::duration<double>(config_.log_interval_s)),
+                   [this](const std::string& line) { this->log(line); }),
+      policy_(config_.creation) {}
+
+Mapper::~Mapper() { stop(); }
+
+bool Mapper::start(std::string* error) {
+  std::lock_guard<std::mutex> lock(lifecycle_mutex_);
+  if (started_) return true;
+  std::error_code ec;
+  std::filesystem::create_directories(output_dir_, ec);
+  if (ec || !std::filesystem::is_directory(output_dir_)) {
+    if (error != nullptr) {
+      *error = "cannot create output directory " + output_dir_.string() + ": " + ec.message();
+    }
+    return false;
+  }
+  started_ = true;
+  integrator_thread_ = std::thread([this] { integratorLoop(); });
+  maintenance_thread_ = std::thread([this] { maintenanceLoop(); });
+  worker_thread_ = std::thread([this] { workerLoop(); });
+  return true;
+}
+
+void Mapper::stop() {
+  std::lock_guard<std::mutex> lock(lifecycle_mutex_);
+  if (!started_ || stopped_) return;
+  stopped_ = true;
+  stop_ = true;
+  {
+    std::lock_guard<std::mutex> queue_lock(queue_mutex_);  // no lost wake-up
+  }
+  queue_cv_.notify_all();
+  pending_.notify();
+  integrator_thread_.join();
+  maintenance_thread_.join();
+  worker_thread_.join();
+}
+
+void Mapper::log(const std::string& line) const {
+  if (log_sink_) {
+    log_sink_(line);
+  } else {
+    std::fprintf(stderr, "cblox-mapper: %s\n", line.c_str());
+  }
+}
+
+void Mapper::count(InputProblem problem, const std::string& message, uint64_t n) {
+  if (n == 0) return;
+  problems_[static_cast<size_t>(problem)].fetch_add(n, std::memory_order_relaxed);
+  problem_log_.report(static_cast<size_t>(problem),
+                      std::string("rejected (") + inputProblemName(problem) + "): " + message);
+}
+
+void Mapper::reportProblem(InputProblem problem, const std::string& detail) {
+  if (problem == InputProblem::kCount) return;
+  if (isFrameProblem(problem)) frames_received_.fetch_add(1, std::memory_order_relaxed);
+  count(problem, detail);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Inputs (any thread)
+
+bool Mapper::isRestart(int64_t newest_utime, int64_t utime) const {
+  if (config_.restart_after_backwards_s <= 0.0 || newest_utime == INT64_MIN) return false;
+  return static_cast<double>(newest_utime - utime) * 1e-6 > config_.restart_after_backwards_s;
+}
+
+bool Mapper::onDepthFrame(DepthFrame frame) {
+  frames_received_.fetch_add(1, std::memory_order_relaxed);
+  const std::string what = "depth frame " + std::to_string(frame.frame_id);
+  if (const std::string e = validate(frame.intrinsics); !e.empty()) {
+    count(InputProblem::kDepthInvalid, what + ": bad intrinsics: " + e);
+    return false;
+  }
+  if (frame.depth.width != frame.intrinsics.width ||
+      frame.depth.height != frame.intrinsics.height ||
+      frame.depth.data.size() !=
+          static_cast<size_t>(frame.depth.width) * static_cast<size_t>(frame.depth.height)) {
+    count(InputProblem::kDepthInvalid, what + ": depth image " + std::to_string(frame.depth.width) +
+                                           "x" + std::to_string(frame.depth.height) +
+                                           " does not match its calibration " +
+                                           std::to_string(frame.intrinsics.width) + "x" +
+                                           std::to_string(frame.intrinsics.height));
+    return false;
+  }
+  if (!frame.color.empty() &&
+      (!frame.color.sameSize(frame.depth) || frame.color.data.size() != frame.depth.data.size())) {
+    count(InputProblem::kDepthInvalid, what + ": colour image size differs from the depth image");
+    return false;
+  }
+  if (!isFinitePose(frame.T_B_D)) {
+    count(InputProblem::kDepthInvalid, what + ": non-finite depth camera extrinsics");
+    return false;
+  }
+  if (!std::isfinite(frame.min_depth_m) || frame.min_depth_m < 0.0f) frame.min_depth_m = 0.0f;
+  if (!std::isfinite(frame.max_depth_m) || frame.max_depth_m <= frame.min_depth_m) {
+    frame.max_depth_m = 1e9f;  // unknown: no upper limit from the sensor
+  }
+  {
+    std::lock_guard<std::mutex> lock(depth_order_mutex_);
+    if (isRestart(last_depth_utime_, frame.utime)) {
+      source_restarts_.fetch_add(1, std::memory_order_relaxed);
+      log(what + ": depth time stamps went back by " +
+          fixed(static_cast<double>(last_depth_utime_ - frame.utime) * 1e-6, 3) +
+          " s: source restarted, frame order starts afresh");
+      last_depth_utime_ = INT64_MIN;
+    }
+    if (frame.utime <= last_depth_utime_) {
+      count(InputProblem::kDepthOutOfOrder, what + ": time stamp " + std::to_string(frame.utime) +
+                                                " us not after the previous " +
+                                                std::to_string(last_depth_utime_) + " us");
+      return false;
+    }
+    last_depth_utime_ = frame.utime;
+  }
+  pending_.push(PendingFrame{std::move(frame), Clock::now()});
+  return true;
+}
+
+bool Mapper::onFramePose(const TimedPose& pose) {
+  poses_received_.fetch_add(1, std::memory_order_relaxed);
+  TimedPose stored = pose;
+  // A LOST / NOT_INITIALIZED pose is meaningless; keep it (it stops interpolation across the
+  // lost period) even when the tracker filled it with garbage.
+  if (!stored.tracking_ok && !isFinitePose(stored.T_G_C)) stored.T_G_C = Transformationd();
+  const std::string what = "pose at " + std::to_string(pose.utime) + " us";
+  PoseBuffer::AddResult result;
+  {
+    std::lock_guard<std::mutex> lock(pose_order_mutex_);
+    result = poses_.add(stored);
+    const int64_t newest = poses_.newestUtime();
+    if (result == PoseBuffer::AddResult::kOutOfOrder && isRestart(newest, pose.utime)) {
+      source_restarts_.fetch_add(1, std::memory_order_relaxed);
+      log(what + ": pose time stamps went back by " +
+          fixed(static_cast<double>(newest - pose.utime) * 1e-6, 3) +
+          " s: source restarted, pose buffer cleared");
+      poses_.clear();
+      result = poses_.add(stored);
+    }
+  }
+  switch (result) {
+    case PoseBuffer::AddResult::kAdded:
+      pending_.notify();
+      return true;
+    case PoseBuffer::AddResult::kDuplicate:
+      count(InputProblem::kPoseDuplicate, what + ": duplicated time stamp");
+      return false;
+    case PoseBuffer::AddResult::kOutOfOrder:
+      count(InputProblem::kPoseOutOfOrder, what + ": older than the newest pose (" +
+                                               std::to_string(poses_.newestUtime()) + " us)");
+      return false;
+    case PoseBuffer::AddResult::kInvalid:
+      count(InputProblem::kPoseInvalid, what + ": non-finite or non-unit rotation");
+      return false;
+  }
+  return false;
+}
+
+bool Mapper::onKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K) {
+  if (!isFinitePose(T_G_K)) {
+    count(InputProblem::kKeyframeInvalid, "keyframe " + std::to_string(id) + ": non-finite pose");
+    return false;
+  }
+  MaintenanceItem item;
+  item.keyframe_id = id;
+  item.utime = utime;
+  item.T_G_K = T_G_K;
+  bool dropped = false;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    maintenance_queue_.push_back(std::move(item));
+    if (maintenance_queue_.size() > config_.maintenance_queue_capacity) {
+      maintenance_queue_.pop_front();
+      dropped = true;
+    }
+  }
+  queue_cv_.notify_all();
+  if (dropped) count(InputProblem::kMaintenanceDropped, "maintenance queue full: oldest dropped");
+  return true;
+}
+
+void Mapper::onKeyframePoses(std::vector<std::pair<KeyframeId, Transformationd>> T_G_K) {
+  MaintenanceItem item;
+  item.is_batch = true;
+  item.batch = std::move(T_G_K);
+  bool dropped = false;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    maintenance_queue_.push_back(std::move(item));
+    if (maintenance_queue_.size() > config_.maintenance_queue_capacity) {
+      maintenance_queue_.pop_front();
+      dropped = true;
+    }
+  }
+  queue_cv_.notify_all();
+  if (dropped) count(InputProblem::kMaintenanceDropped, "maintenance queue full: oldest dropped");
+}
+
+void Mapper::onCommand(const MapperCommand& command, ReplyCallback reply) {
+  auto fail = [&](const std::string& message) {
+    count(InputProblem::kCommandInvalid, "command '" + command.name + "': " + message);
+    MapperReply r;
+    r.id = command.id;
+    r.ok = false;
+    r.message = message;
+    if (reply) reply(r);
+  };
+  if (command.name == "status") {
+    if (reply) reply(statusReply(command));
+    return;
+  }
+  if (command.name != "export_mesh" && command.name != "export_submap_meshes") {
+    fail("unknown command (known: status, export_mesh, export_submap_meshes)");
+    return;
+  }
+  const auto path = command.args.find("path");
+  if (path == command.args.end()) {
+    fail("missing argument 'path'");
+    return;
+  }
+  std::string error;
+  if (!resolveOutputPath(output_dir_, path->second, &error)) {
+    fail(error);
+    return;
+  }
+  bool queued = false, stopping = false;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    stopping = stop_.load();
+    if (!stopping && command_queue_.size() < config_.command_queue_capacity) {
+      command_queue_.push_back(QueuedCommand{command, std::move(reply)});
+      queued = true;
+    }
+  }
+  if (queued) {
+    queue_cv_.notify_all();
+    return;
+  }
+  MapperReply r;
+  r.id = command.id;
+  r.ok = false;
+  r.message = stopping ? "mapper stopping" : "busy: too many exports waiting, try again later";
+  if (reply) reply(r);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Integrator thread
+
+void Mapper::integratorLoop() {
+  const auto max_wait = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(config_.max_pose_wait_s));
+  while (!stop_) {
+    pending_.waitForWork(std::chrono::milliseconds(20));  // also ages frames without a pose
+    while (!stop_) {
+      integrator_busy_ = true;
+      Transformationd T_G_B;
+      bool jump = false;
+      const Clock::time_point now = Clock::now();
+      std::optional<PendingFrame> frame =
+          pending_.takeNewestReady([&](const PendingFrame& p) -> FrameReadiness {
+            Transformationd T;
+            bool j = false;
+            const PoseBuffer::Lookup result = poses_.lookup(p.frame.utime, &T, &j);
+            auto what = [&p] {
+              return "depth frame " + std::to_string(p.frame.frame_id) + " at " +
+                     std::to_string(p.frame.utime) + " us: ";
+            };
+            switch (result) {
+              case PoseBuffer::Lookup::kFound:
+                T_G_B = T;
+                jump = j;
+                return FrameReadiness::kReady;
+              case PoseBuffer::Lookup::kNotYet:
+                if (now - p.received <= max_wait) return FrameReadiness::kWait;
+                count(InputProblem::kNoPose,
+                      what() + "no pose within " + fixed(config_.max_pose_wait_s, 2) + " s");
+                return FrameReadiness::kReject;
+              case PoseBuffer::Lookup::kTooOld:
+                count(InputProblem::kPoseTooOld, what() + PoseBuffer::name(result));
+                return FrameReadiness::kReject;
+              case PoseBuffer::Lookup::kGap:
+                count(InputProblem::kPoseGap, what() + PoseBuffer::name(result));
+                return FrameReadiness::kReject;
+              case PoseBuffer::Lookup::kAcrossJump:
+                count(InputProblem::kAcrossJump, what() + PoseBuffer::name(result));
+                return FrameReadiness::kReject;
+              case PoseBuffer::Lookup::kLost:
+                count(InputProblem::kTrackingLost, what() + PoseBuffer::name(result));
+                return FrameReadiness::kReject;
+            }
+            return FrameReadiness::kReject;
+          });
+      if (!frame) {
+        integrator_busy_ = false;
+        break;
+      }
+      try {
+        processFrame(std::move(*frame), T_G_B, jump);
+      } catch (const std::exception& e) {
+        count(InputProblem::kIntegrationFailed, e.what());
+      }
+      integrator_busy_ = false;
+    }
+  }
+}
+
+void Mapper::processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump) {
+  DepthFrame& frame = pending.frame;
+  const std::string what = "depth frame " + std::to_string(frame.frame_id) + ": ";
+
+  // Ground-truth mode: this frame becomes a keyframe when there is no submap to integrate
+  // into yet, or after keyframe_every_n_frames integrated frames.
+  if (config_.pose_source == PoseSource::kGroundTruth &&
+      (collection_.activeSubmap() == nullptr ||
+       frames_since_keyframe_ >= config_.keyframe_every_n_frames)) {
+    applyKeyframe(frame.frame_id, frame.utime, T_G_B, /*synthesised=*/true);
+    frames_since_keyframe_ = 0;
+  }
+
+  // Sensor range: readings outside [min_depth_m, max_depth_m] are no measurement.
+  if (frame.min_depth_m > 0.0f || frame.max_depth_m < 1e9f) {
+    for (float& d : frame.depth.data) {
+      if (!(d >= frame.min_depth_m && d <= frame.max_depth_m)) d = 0.0f;
+    }
+  }
+  const PinholeCamera camera(frame.intrinsics);
+  const ColorImage* color = frame.color.empty() ? nullptr : &frame.color;
+  const Transformationd T_G_D = T_G_B * frame.T_B_D;
+
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    std::shared_ptr<Submap> active;
+    SubmapCreationPolicy::FrameAction action;
+    {
+      std::lock_guard<std::mutex> lock(policy_mutex_);
+      active = collection_.activeSubmap();
+      action = policy_.onFramePose(active.get(), jump && attempt == 0);
+    }
+    if (action == SubmapCreationPolicy::FrameAction::kWaitForAnchor) {
+      count(InputProblem::kWaitingForAnchor,
+            what + (jump ? "tracking jump: waiting for the next keyframe to anchor a subvolume"
+                         : "no subvolume yet: waiting for the first keyframe"));
+      return;
+    }
+    const Clock::time_point start = Clock::now();
+    Submap::WriteLock lock = active->lockForIntegration();
+    if (!lock) continue;  // finished meanwhile by a new keyframe: integrate into the new one
+    if (!frame_integrator_ || frame_integrator_->submapId() != active->id()) {
+      frame_integrator_ = std::make_unique<FrameIntegrator>(active->id(), config_.integrator_type,
+                                                            config_.integrator, &lock.layer());
+    }
+    frame_integrator_->integrate(active->T_M_C(T_G_D), frame.depth, camera, color);
+    lock.unlock();
+    recordIntegrationMs(secondsSince(start) * 1e3);
+    frames_integrated_.fetch_add(1, std::memory_order_relaxed);
+    ++frames_since_keyframe_;
+    return;
+  }
+  count(InputProblem::kIntegrationFailed, what + "the active subvolume kept changing");
+}
+
+void Mapper::recordIntegrationMs(double ms) {
+  std::lock_guard<std::mutex> lock(timing_mutex_);
+  last_ms_ = static_cast<float>(ms);
+  timing_ms_.push_back(last_ms_);
+  while (timing_ms_.size() > config_.timing_window) timing_ms_.pop_front();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Keyframes and pose batches (maintenance thread; integrator thread for synthesised keyframes)
+
+void Mapper::applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K,
+                           bool synthesised) {
+  std::shared_ptr<Submap> created;
+  {
+    std::lock_guard<std::mutex> lock(policy_mutex_);
+    if (synthesised && keyframes_seen_.count(id) > 0) id = max_keyframe_seen_ + 1;
+    max_keyframe_seen_ = std::max(max_keyframe_seen_, id);
+    if (!keyframes_seen_.insert(id).second) {
+      count(InputProblem::kKeyframeDuplicate,
+            "keyframe " + std::to_string(id) + ": id already applied");
+      return;
+    }
+    std::shared_ptr<Submap> active = collection_.activeSubmap();
+    if (policy_.onKeyframe(active.get())) {
+      // Finishes the previous submap (waits for the frame being integrated into it).
+      created = collection_.createSubmap(T_G_K, id, utime * 1000);
+    } else {
+      active->addKeyframe(id);
+    }
+  }
+  keyframes_applied_.fetch_add(1, std::memory_order_relaxed);
+  if (created) {
+    log("subvolume " + std::to_string(created->id()) + " anchored at keyframe " +
+        std::to_string(id));
+  }
+}
+
+void Mapper::applyBatch(const std::vector<std::pair<KeyframeId, Transformationd>>& batch) {
+  const KeyframePoseUpdateResult result = collection_.updateKeyframePoses(batch);
+  keyframe_batches_.fetch_add(1, std::memory_order_relaxed);
+  submaps_moved_.fetch_add(result.submaps_moved, std::memory_order_relaxed);
+  count(InputProblem::kKeyframePoseUnknown,
+        std::to_string(result.keyframes_unknown) + " of " + std::to_string(batch.size()) +
+            " keyframe poses in a batch name keyframes no subvolume knows",
+        result.keyframes_unknown);
+  count(InputProblem::kKeyframePoseInvalid,
+        std::to_string(result.poses_invalid) + " of " + std::to_string(batch.size()) +
+            " keyframe poses in a batch are not finite",
+        result.poses_invalid);
+}
+
+void Mapper::maintenanceLoop() {
+  std::unique_lock<std::mutex> lock(queue_mutex_);
+  while (true) {
+    queue_cv_.wait(lock, [this] { return stop_ || !maintenance_queue_.empty(); });
+    if (stop_) return;
+    MaintenanceItem item = std::move(maintenance_queue_.front());
+    maintenance_queue_.pop_front();
+    maintenance_busy_ = true;
+    lock.unlock();
+    try {
+      if (item.is_batch) {
+        applyBatch(item.batch);
+      } else {
+        applyKeyframe(item.keyframe_id, item.utime, item.T_G_K);
+      }
+    } catch (const std::exception& e) {
+      count(item.is_batch ? InputProblem::kKeyframePoseInvalid : InputProblem::kKeyframeInvalid,
+            e.what());
+    }
+    lock.lock();
+    maintenance_busy_ = false;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fusion / export worker
+
+void Mapper::lowerWorkerPriority() {
+  const pid_t tid = static_cast<pid_t>(::syscall(SYS_gettid));
+  if (::setpriority(PRIO_PROCESS, static_cast<id_t>(tid), config_.worker_niceness) != 0) {
+    log(std::string("worker: cannot set niceness ") + std::to_string(config_.worker_niceness) +
+        ": " + std::strerror(errno));
+  }
+  if (config_.worker_sched_idle) {
+    sched_param param{};
+    param.sched_priority = 0;
+    if (const int e = pthread_setschedparam(pthread_self(), SCHED_IDLE, &param); e != 0) {
+      log(std::string("worker: cannot switch to SCHED_IDLE: ") + std::strerror(e));
+    }
+  }
+}
+
+void Mapper::workerLoop() {
+  lowerWorkerPriority();
+  std::unique_lock<std::mutex> lock(queue_mutex_);
+  while (true) {
+    queue_cv_.wait(lock, [this] { return stop_ || !command_queue_.empty(); });
+    if (stop_) break;
+    QueuedCommand queued = std::move(command_queue_.front());
+    command_queue_.pop_front();
+    worker_busy_ = true;
+    lock.unlock();
+    MapperReply reply;
+    try {
+      reply = queued.command.name == "export_mesh" ? exportMesh(queued.command)
+                                                   : exportSubmapMeshes(queued.command);
+    } catch (const std::exception& e) {
+      reply = MapperReply{};
+      reply.ok = false;
+      reply.message = std::string("export failed: ") + e.what();
+    }
+    reply.id = queued.command.id;
+    (reply.ok ? exports_done_ : exports_failed_).fetch_add(1, std::memory_order_relaxed);
+    log(queued.command.name + ": " + reply.message);
+    if (queued.reply) queued.reply(reply);
+    lock.lock();
+    worker_busy_ = false;
+  }
+  // Stopping: answer whatever is still queued.
+  std::deque<QueuedCommand> left;
+  left.swap(command_queue_);
+  lock.unlock();
+  for (QueuedCommand& queued : left) {
+    MapperReply reply;
+    reply.id = queued.command.id;
+    reply.ok = false;
+    reply.message = "mapper stopping";
+    if (queued.reply) queued.reply(reply);
+  }
+}
+
+namespace {
+
+// The layer of `submap` for reading on the worker: a finished layer is the worker's own and
+// is read in place; an active one is copied under its layer lock (held for the copy only).
+const TsdfLayer& readableLayer(const Submap& submap, std::optional<TsdfLayer>* copy) {
+  if (submap.isFinished()) return submap.layer();
+  copy->emplace(submap.layerConfig());
+  const std::unique_lock<std::mutex> lock = submap.lockLayer();
+  copyLayer(submap.layer(), &**copy);
+  return **copy;
+}
+
+}  // namespace
+
+MapperReply Mapper::exportMesh(const MapperCommand& command) {
+  MapperReply reply;
+  std::string error;
+  const auto path = resolveOutputPath(output_dir_, command.args.at("path"), &error);
+  if (!path) {
+    reply.message = error;
+    return reply;
+  }
+  const Clock::time_point start = Clock::now();
+  TsdfLayer global(config_.layer);
+  size_t submaps = 0;
+  for (const SubmapPose& pose : collection_.poseSnapshot()) {
+    const std::shared_ptr<Submap> submap = collection_.getSubmap(pose.id);
+    if (!submap) continue;  // removed since the snapshot
+    std::optional<TsdfLayer> copy;
+    const TsdfLayer& layer = readableLayer(*submap, &copy);
+    fuseLayers(layer, pose.T_G_M, config_.fusion, &global);
+    ++submaps;
+  }
+  MeshIntegrator mesher(global, config_.mesh);
+  mesher.update(/*only_updated_blocks=*/false);
+  const Mesh mesh = mesher.extractMesh(/*connected=*/true);
+  if (mesh.numVertices() == 0) {
+    reply.message = "the map is empty (" + std::to_string(submaps) +
+                    " subvolumes, no surface yet): nothing written";
+    return reply;
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(path->parent_path(), ec);
+  if (!writePly(path->string(), mesh, PlyFormat::kBinaryLittleEndian, &error)) {
+    reply.message = error;
+    return reply;
+  }
+  const double seconds = secondsSince(start);
+  reply.ok = true;
+  reply.message = "wrote " + path->string() + ": " + std::to_string(mesh.numVertices()) +
+                  " vertices, " + std::to_string(mesh.numTriangles()) + " triangles from " +
+                  std::to_string(submaps) + " subvolumes in " + fixed(seconds, 3) + " s";
+  reply.values = {{"path", path->string()},
+                  {"vertices", std::to_string(mesh.numVertices())},
+                  {"triangles", std::to_string(mesh.numTriangles())},
+                  {"subvolumes", std::to_string(submaps)},
+                  {"seconds", fixed(seconds, 3)}};
+  return reply;
+}
+
+MapperReply Mapper::exportSubmapMeshes(const MapperCommand& command) {
+  MapperReply reply;
+  std::string error;
+  const auto dir = resolveOutputPath(output_dir_, command.args.at("path"), &error);
+  if (!dir) {
+    reply.message = error;
+    return reply;
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(*dir, ec);
+  if (ec || !std::filesystem::is_directory(*dir)) {
+    reply.message = "cannot create directory " + dir->string() + ": " + ec.message();
+    return reply;
+  }
+  const Clock::time_point start = Clock::now();
+  size_t files = 0, vertices = 0, triangles = 0;
+  for (const SubmapPose& pose : collection_.poseSnapshot()) {
+    const std::shared_ptr<Submap> submap = collection_.getSubmap(pose.id);
+    if (!submap) continue;
+    std::optional<TsdfLayer> copy;
+    const TsdfLayer& layer = readableLayer(*submap, &copy);
+    MeshIntegrator mesher(layer, config_.mesh);
+    mesher.update(/*only_updated_blocks=*/false);
+    Mesh mesh = transformMesh(pose.T_G_M.cast<float>(), mesher.extractMesh(/*connected=*/true));
+    if (mesh.numVertices() == 0) continue;
+    mesh.colors.assign(mesh.numVertices(), submapColor(pose.id));
+    char name[64];
+    std::snprintf(name, sizeof(name), "submap_%04lld.ply", static_cast<long long>(pose.id));
+    if (!writePly((*dir / name).string(), mesh, PlyFormat::kBinaryLittleEndian, &error)) {
+      reply.message = error;
+      return reply;
+    }
+    ++files;
+    vertices += mesh.numVertices();
+    triangles += mesh.numTriangles();
+  }
+  const double seconds = secondsSince(start);
+  reply.ok = true;
+  reply.message = "wrote " + std::to_string(files) + " subvolume meshes to " + dir->string() +
+                  " (" + std::to_string(vertices) + " vertices) in " + fixed(seconds, 3) + " s";
+  reply.values = {{"path", dir->string()},
+                  {"count", std::to_string(files)},
+                  {"vertices", std::to_string(vertices)},
+                  {"triangles", std::to_string(triangles)},
+                  {"seconds", fixed(seconds, 3)}};
+  return reply;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Status
+
+MapperStatus Mapper::status() const {
+  MapperStatus s;
+  s.num_submaps = collection_.size();
+  const std::shared_ptr<Submap> active = collection_.activeSubmap();
+  s.active_submap_id = active ? active->id() : -1;
+  s.num_blocks = collection_.numBlocks();
+  s.memory_bytes = collection_.memoryBytes();
+  s.frames_received = frames_received_.load();
+  s.frames_integrated = frames_integrated_.load();
+  const PendingFrameCounters pending = pending_.counters();
+  s.frames_dropped = pending.dropped;
+  s.frames_pending = pending_.size();
+  s.poses_received = poses_received_.load();
+  s.keyframes_applied = keyframes_applied_.load();
+  s.keyframe_batches = keyframe_batches_.load();
+  s.submaps_moved = submaps_moved_.load();
+  s.source_restarts = source_restarts_.load();
+  s.exports_done = exports_done_.load();
+  s.exports_failed = exports_failed_.load();
+  for (size_t i = 0; i < kNumInputProblems; ++i) {
+    s.problems[i] = problems_[i].load(std::memory_order_relaxed);
+    if (isFrameProblem(static_cast<InputProblem>(i))) s.frames_rejected += s.problems[i];
+  }
+  std::vector<float> times;
+  {
+    std::lock_guard<std::mutex> lock(timing_mutex_);
+    times.assign(timing_ms_.begin(), timing_ms_.end());
+    s.integration_ms_last = last_ms_;
+  }
+  if (!times.empty()) {
+    std::sort(times.begin(), times.end());
+    auto at = [&](double q) {
+      return times[std::min(times.size() - 1,
+                            static_cast<size_t>(q * static_cast<double>(times.size() - 1) + 0.5))];
+    };
+    s.integration_ms_median = at(0.5);
+    s.integration_ms_p99 = at(0.99);
+  }
+  return s;
+}
+
+MapperReply Mapper::statusReply(const MapperCommand& command) const {
+  const MapperStatus s = status();
+  MapperReply reply;
+  reply.id = command.id;
+  reply.ok = true;
+  reply.message = std::to_string(s.num_submaps) + " subvolumes, " + std::to_string(s.num_blocks) +
+                  " blocks, " + std::to_string(s.frames_integrated) + " frames integrated, " +
+                  std::to_string(s.frames_dropped) + " dropped, " +
+                  std::to_string(s.frames_rejected) + " rejected";
+  reply.values = {{"pose_source", poseSourceName(config_.pose_source)},
+                  {"output_dir", output_dir_.string()},
+                  {"subvolumes", std::to_string(s.num_submaps)},
+                  {"active_subvolume", std::to_string(s.active_submap_id)},
+                  {"blocks", std::to_string(s.num_blocks)},
+                  {"memory_bytes", std::to_string(s.memory_bytes)},
+                  {"frames_received", std::to_string(s.frames_received)},
+                  {"frames_integrated", std::to_string(s.frames_integrated)},
+                  {"frames_dropped", std::to_string(s.frames_dropped)},
+                  {"frames_rejected", std::to_string(s.frames_rejected)},
+                  {"keyframes", std::to_string(s.keyframes_applied)},
+                  {"pose_batches", std::to_string(s.keyframe_batches)},
+                  {"source_restarts", std::to_string(s.source_restarts)},
+                  {"integration_ms_median", fixed(s.integration_ms_median, 2)},
+                  {"integration_ms_p99", fixed(s.integration_ms_p99, 2)}};
+  for (size_t i = 0; i < kNumInputProblems; ++i) {
+    if (s.problems[i] > 0) {
+      reply.values.emplace_back(
+          std::string("rejected_") + inputProblemName(static_cast<InputProblem>(i)),
+          std::to_string(s.problems[i]));
+    }
+  }
+  return reply;
+}
+
+bool Mapper::waitUntilIdle(std::chrono::milliseconds timeout) const {
+  const Clock::time_point deadline = Clock::now() + timeout;
+  while (true) {
+    bool idle = pending_.size() == 0 && !integrator_busy_.load();
+    if (idle) {
+      std::lock_guard<std::mutex> lock(queue_mutex_);
+      idle = maintenance_queue_.empty() && command_queue_.empty() && !maintenance_busy_ &&
+             !worker_busy_;
+    }
+    // Re-check the in-tray: a frame may have been taken between the two looks.
+    if (idle && pending_.size() == 0 && !integrator_busy_.load()) return true;
+    if (Clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+}  // namespace cblox

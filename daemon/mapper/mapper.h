@@ -1,0 +1,374 @@
+#pragma once
+
+// The dense mapper of cblox-mapper without LCM: a SubmapCollection fed with depth frames,
+// frame poses, keyframes and keyframe pose batches through method calls, with its own
+// threads. daemon/cblox_mapper.cc only converts LCM messages into these calls.
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <unordered_set>
+#include <utility>
+#include <vector>
+
+#include "core/geometry/image.h"
+#include "core/geometry/pinhole_camera.h"
+#include "core/geometry/se3.h"
+#include "core/integrator/integrator_config.h"
+#include "core/mesh/mesh_integrator.h"
+#include "core/submap/submap_collection.h"
+#include "core/submap/submap_creation_policy.h"
+#include "core/submap/submap_fusion.h"
+#include "core/tsdf/layer_config.h"
+#include "daemon/config/yaml_config.h"
+#include "daemon/mapper/pending_frames.h"
+#include "daemon/mapper/pose_buffer.h"
+#include "daemon/mapper/rate_limited_log.h"
+
+namespace cblox {
+
+/// Where the mapper's frame poses come from.
+enum class PoseSource {
+  /// Simulator / dataset ground truth (CBLOX_GT_POSE): every pose is tracked, no jumps; the
+  /// mapper synthesises a keyframe every keyframe_every_n_frames integrated frames (id = the
+  /// frame id, or the next unused id when a restarted source repeats frame ids; T_G_K = the
+  /// frame's pose), and the first frame anchors the first subvolume.
+  kGroundTruth,
+  /// The tracker (CBLOX_FRAME_POSE, CBLOX_KEYFRAME, CBLOX_KEYFRAME_POSES).
+  kTracker,
+};
+const char* poseSourceName(PoseSource source);
+
+/// Settings of a Mapper (the `mapper` part of config/mapper.yaml). Plain value type.
+/// Defaults are sized for 752x480 depth at 10-20 Hz on a 2-core computer that also tracks.
+struct MapperConfig {
+  PoseSource pose_source = PoseSource::kGroundTruth;
+
+  /// Subvolume geometry: 4 cm voxels, 8^3-voxel blocks (32 cm).
+  LayerConfig layer{0.04f, 8};
+  /// Integrator (projective by default: ~10x faster than ray casting, BENCHMARKS.md).
+  IntegratorType integrator_type = IntegratorType::kProjective;
+  /// Truncation 3 voxels, depth used up to 5 m, one thread (the other core is the tracker's).
+  IntegratorConfig integrator = defaultIntegratorConfig();
+  /// Mesh extraction for exports.
+  MeshConfig mesh;
+  /// Fusion of subvolumes (export: projection of the collection into one volume).
+  SubmapFusionConfig fusion;
+  /// The paper's subvolume creation rule.
+  SubmapCreationPolicyConfig creation{10};
+  /// Frame-pose buffer: interpolation gap bound and capacity.
+  PoseBuffer::Config pose_buffer{0.25, 1024};
+
+  /// Ground-truth mode: a keyframe every this many integrated frames (>= 1).
+  int keyframe_every_n_frames = 10;
+  /// Depth frames waiting for their pose (newest wins; older ones are dropped), >= 1.
+  size_t pending_capacity = 4;
+  /// A frame newer than every pose waits at most this long for its pose, then is rejected.
+  double max_pose_wait_s = 0.5;
+  /// A depth frame or pose whose time stamp is this much older than the newest one means the
+  /// source restarted (e.g. cblox-capture run again; simulator time starts at 0): the depth
+  /// order, or the pose buffer, starts afresh (logged) instead of rejecting everything as
+  /// out of order. Smaller steps back are rejected as out of order. 0 = never restart.
+  double restart_after_backwards_s = 2.0;
+  /// Keyframes and pose batches waiting for the maintenance thread (oldest dropped), >= 1.
+  size_t maintenance_queue_capacity = 256;
+  /// Export commands waiting for the worker (more are refused as busy), >= 1.
+  size_t command_queue_capacity = 4;
+  /// Integration times kept for the median / p99 in status, >= 1.
+  size_t timing_window = 200;
+  /// Exports are confined to this directory (created at start).
+  std::string output_dir = "out";
+  /// Niceness of the fusion/export worker thread (setpriority on its thread id), [0, 19].
+  int worker_niceness = 10;
+  /// Also put the worker thread in SCHED_IDLE (runs only when a core is otherwise idle).
+  bool worker_sched_idle = true;
+  /// Minimum interval between two log lines of the same bad-input kind, seconds (> 0).
+  double log_interval_s = 10.0;
+
+  /// The default IntegratorConfig of the mapper (see `integrator`).
+  static IntegratorConfig defaultIntegratorConfig();
+  /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
+  std::string validate() const;
+};
+
+/// One depth frame as the mapper takes it (decoded from depth_frame_t). Plain value type.
+struct DepthFrame {
+  int64_t utime = 0;             ///< capture time, microseconds (matched with pose time stamps)
+  int64_t frame_id = 0;          ///< capture frame counter (ground-truth mode: keyframe ids)
+  DepthImage depth;              ///< metres along the depth camera's z; 0/NaN = no measurement
+  ColorImage color;              ///< registered to depth, same size; empty = no colour
+  PinholeIntrinsics intrinsics;  ///< of the depth camera (undistorted)
+  /// Depth camera D in the frame the poses refer to (the body/primary camera B): the camera
+  /// pose used for integration is T_G_D = T_G_B * T_B_D. Identity for a registered RGB-D
+  /// camera that is itself the tracked camera.
+  Transformationd T_B_D;
+  /// Valid depth range of the sensor, metres; readings outside are ignored.
+  float min_depth_m = 0.0f;
+  float max_depth_m = 1e9f;
+};
+
+/// Kinds of bad or unusable input, each counted (MapperStatus::problems) and logged once per
+/// kind with rate limiting.
+enum class InputProblem : int {
+  // Depth frames (counted in frames_rejected):
+  kDepthUndecodable = 0,  ///< the depth message failed to decode (reported by the adapter)
+  kDepthInvalid,          ///< bad intrinsics, sizes that disagree, non-finite extrinsics
+  kDepthOutOfOrder,       ///< time stamp not newer than the previous depth frame's
+  kNoPose,                ///< no pose arrived within max_pose_wait_s
+  kPoseTooOld,            ///< older than every pose kept
+  kPoseGap,               ///< the poses around it are further apart than the gap bound
+  kAcrossJump,            ///< a tracking jump or epoch change lies between its poses
+  kTrackingLost,          ///< a pose around it is LOST / NOT_INITIALIZED
+  kWaitingForAnchor,      ///< after a tracking jump / before the first keyframe
+  kIntegrationFailed,     ///< the integrator threw (never expected; the frame is dropped)
+  // Poses, keyframes, batches, commands (not frames):
+  kPoseUndecodable,      ///< pose message failed to decode, unknown tracking state
+  kPoseInvalid,          ///< non-finite pose or non-unit quaternion
+  kPoseDuplicate,        ///< same time stamp as the previous pose
+  kPoseOutOfOrder,       ///< older than the previous pose
+  kKeyframeInvalid,      ///< non-finite keyframe pose or undecodable keyframe message
+  kKeyframeDuplicate,    ///< keyframe id already applied
+  kKeyframePoseUnknown,  ///< batch entry for a keyframe no subvolume knows
+  kKeyframePoseInvalid,  ///< batch entry with a non-finite pose; undecodable batch
+  kMaintenanceDropped,   ///< keyframe / batch dropped because the queue was full
+  kCommandInvalid,       ///< unknown command, missing or bad argument, path outside
+  kCount
+};
+inline constexpr size_t kNumInputProblems = static_cast<size_t>(InputProblem::kCount);
+/// Short snake_case name of a problem kind, e.g. "pose_gap" (heartbeat counter names).
+/// Thread-safe (pure).
+const char* inputProblemName(InputProblem problem);
+/// True for the kinds that reject a depth frame (summed in frames_rejected). Thread-safe.
+bool isFrameProblem(InputProblem problem);
+
+/// A command (from command_t). Plain value type.
+struct MapperCommand {
+  int64_t id = 0;
+  std::string name;  ///< "status", "export_mesh", "export_submap_meshes"
+  std::map<std::string, std::string> args;
+};
+
+/// The answer to a command (to command_reply_t). Plain value type.
+struct MapperReply {
+  int64_t id = 0;
+  bool ok = false;
+  std::string message;
+  std::vector<std::pair<std::string, std::string>> values;
+  /// The value of `key`, empty when absent. Thread-safe (const).
+  std::string value(const std::string& key) const;
+};
+
+/// A snapshot of the mapper's state and counters since start. Plain value type.
+struct MapperStatus {
+  size_t num_submaps = 0;
+  int64_t active_submap_id = -1;
+  size_t num_blocks = 0;
+  size_t memory_bytes = 0;
+  uint64_t frames_received = 0;  ///< depth frames offered (incl. undecodable ones)
+  uint64_t frames_integrated = 0;
+  uint64_t frames_dropped = 0;   ///< superseded by a newer frame (newest wins) or queue full
+  uint64_t frames_rejected = 0;  ///< sum of the frame problem kinds
+  uint64_t frames_pending = 0;   ///< waiting for their pose now
+  uint64_t poses_received = 0;
+  uint64_t keyframes_applied = 0;  ///< keyframes that anchored a submap or joined one
+  uint64_t keyframe_batches = 0;   ///< pose batches applied
+  uint64_t submaps_moved = 0;      ///< (batch entry, anchored submap) pose updates
+  uint64_t source_restarts = 0;    ///< depth or pose time stamps went back (new stream)
+  uint64_t exports_done = 0;
+  uint64_t exports_failed = 0;
+  float integration_ms_last = 0.0f;
+  float integration_ms_median = 0.0f;
+  float integration_ms_p99 = 0.0f;
+  std::array<uint64_t, kNumInputProblems> problems{};  ///< indexed by InputProblem
+  uint64_t problem(InputProblem p) const { return problems[static_cast<size_t>(p)]; }
+};
+
+/// The dense mapper: integrates depth frames into the active subvolume of a SubmapCollection,
+/// keeps subvolume frames in step with keyframe pose updates, and exports meshes.
+///
+/// Threads (all owned; started by start(), joined by stop()):
+/// - Callers (the LCM thread in cblox-mapper, or a test) call the on*() inputs. They only
+///   validate, count, and hand the input over: depth frames to the bounded PendingFrames
+///   in-tray (newest wins), poses to the PoseBuffer, keyframes and pose batches to the
+///   maintenance queue, export commands to the worker queue. They never block on the map.
+/// - Integrator thread: takes the newest pending frame whose pose the PoseBuffer can give
+///   (waiting up to max_pose_wait_s for a pose that is not there yet; frames it can never
+///   serve are rejected and counted by reason), applies the creation policy (ground-truth
+///   mode: synthesises the keyframes itself), and integrates into the active submap under
+///   Submap::lockForIntegration() with T_M_D = T_G_M^-1 * T_G_B * T_B_D.
+/// - Maintenance thread: applies keyframes (SubmapCreationPolicy::onKeyframe ->
+///   SubmapCollection::createSubmap, or Submap::addKeyframe) and keyframe pose batches
+///   (SubmapCollection::updateKeyframePoses: frames move, no voxel is touched).
+/// - Fusion/export worker thread, at low priority (nice worker_niceness, SCHED_IDLE): the
+///   single owner of FINISHED submap layers (SubmapCollection's rule); runs exports. It holds
+///   the ACTIVE submap's layer lock only while copying that layer (a block memcpy), never
+///   while fusing, meshing or writing, so an export delays integration by the copy only.
+///
+/// Shared state and its guards: the SubmapCollection and Submaps are thread-safe by their
+/// own rule; the creation policy (not thread-safe) is guarded by policy_mutex_, which the
+/// integrator holds only around onFramePose() and the keyframe path holds across
+/// onKeyframe() + createSubmap() (so no frame slips into the old submap after a jump; the
+/// integrator never holds it while holding a layer lock). Counters are atomics; the timing
+/// window has its own mutex. Lock order: policy_mutex_ -> layer lock -> collection mutex ->
+/// submap metadata mutex; PendingFrames' and PoseBuffer's mutexes are leaves.
+///
+/// Thread-safety: every public member function is thread-safe unless noted.
+class Mapper {
+ public:
+  using ReplyCallback = std::function<void(const MapperReply&)>;
+  using LogSink = std::function<void(const std::string&)>;
+
+  /// Throws std::invalid_argument with MapperConfig::validate()'s message. `log` receives
+  /// human-readable lines (default: stderr); it may be called from any of the threads.
+  explicit Mapper(const MapperConfig& config, LogSink log = nullptr);
+  /// Calls stop().
+  ~Mapper();
+  Mapper(const Mapper&) = delete;
+  Mapper& operator=(const Mapper&) = delete;
+
+  /// Creates the output directory and starts the threads. Returns false with a message when
+  /// the output directory cannot be created (nothing started). Call once. Thread-safe.
+  bool start(std::string* error);
+  /// Stops the threads: the integrator finishes the frame in hand, the worker the export in
+  /// hand (queued commands are answered "mapper stopping"); then joins them. Idempotent.
+  /// Thread-safe (must not be called from a reply callback).
+  void stop();
+
+  /// A depth frame arrived. Validates it (sizes, intrinsics, time order) and puts it into the
+  /// in-tray; returns false when it was rejected here (counted and logged). Thread-safe.
+  bool onDepthFrame(DepthFrame frame);
+  /// A frame pose arrived (ground truth: tracking_ok, no jump). Returns false when it was
+  /// rejected (invalid, duplicate or out-of-order time stamp). Thread-safe.
+  bool onFramePose(const TimedPose& pose);
+  /// A new keyframe (tracker mode; in ground-truth mode the mapper makes its own, but this is
+  /// accepted too). Queued for the maintenance thread; false when rejected at once
+  /// (non-finite pose). Thread-safe.
+  bool onKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K);
+  /// Corrected keyframe poses T_G_K (after BA / loop closure). Queued for the maintenance
+  /// thread. Thread-safe.
+  void onKeyframePoses(std::vector<std::pair<KeyframeId, Transformationd>> T_G_K);
+  /// A command. "status" is answered at once on the calling thread; "export_mesh" {path} and
+  /// "export_submap_meshes" {path} are queued for the worker and answered from it; anything
+  /// else is answered at once with ok = false. `reply` is called exactly once (also when the
+  /// mapper stops first). Thread-safe.
+  void onCommand(const MapperCommand& command, ReplyCallback reply);
+  /// Counts and logs a problem found outside the mapper (e.g. a message that failed to
+  /// decode in the LCM adapter). A depth-frame kind also counts as a received frame.
+  /// Thread-safe.
+  void reportProblem(InputProblem problem, const std::string& detail);
+
+  /// A snapshot of the counters and the map's size. Thread-safe.
+  MapperStatus status() const;
+  /// Waits until no frame is pending or in hand and the maintenance and command queues are
+  /// empty (or `timeout` passes); true when idle. For tests and orderly shutdown.
+  /// Thread-safe.
+  bool waitUntilIdle(std::chrono::milliseconds timeout) const;
+
+  /// The map (its methods are thread-safe; see SubmapCollection for which layers may be
+  /// touched from where). Thread-safe.
+  const SubmapCollection& collection() const { return collection_; }
+  /// The absolute output directory. Thread-safe (immutable after construction).
+  const std::filesystem::path& outputDir() const { return output_dir_; }
+  /// Thread-safe (immutable).
+  const MapperConfig& config() const { return config_; }
+
+ private:
+  struct PendingFrame {
+    DepthFrame frame;
+    std::chrono::steady_clock::time_point received;
+  };
+  struct MaintenanceItem {
+    bool is_batch = false;
+    KeyframeId keyframe_id = 0;
+    int64_t utime = 0;
+    Transformationd T_G_K;
+    std::vector<std::pair<KeyframeId, Transformationd>> batch;
+  };
+  struct QueuedCommand {
+    MapperCommand command;
+    ReplyCallback reply;
+  };
+  class FrameIntegrator;  // one integrator bound to one submap's layer
+
+  void integratorLoop();
+  void maintenanceLoop();
+  void workerLoop();
+  // Integrator thread: one frame whose pose is known.
+  void processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump);
+  // Keyframe path (maintenance thread; integrator thread in ground-truth mode).
+  // A synthesised keyframe whose id (frame id) was used before gets the next unused id.
+  void applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K,
+                     bool synthesised = false);
+  void applyBatch(const std::vector<std::pair<KeyframeId, Transformationd>>& batch);
+  // Worker thread.
+  MapperReply exportMesh(const MapperCommand& command);
+  MapperReply exportSubmapMeshes(const MapperCommand& command);
+  MapperReply statusReply(const MapperCommand& command) const;
+  void lowerWorkerPriority();
+
+  void count(InputProblem problem, const std::string& message, uint64_t n = 1);
+  // True when `utime` is more than restart_after_backwards_s older than `newest_utime`.
+  bool isRestart(int64_t newest_utime, int64_t utime) const;
+  void log(const std::string& line) const;
+  void recordIntegrationMs(double ms);
+
+  const MapperConfig config_;
+  const LogSink log_sink_;
+  const std::filesystem::path output_dir_;
+  SubmapCollection collection_;
+  PoseBuffer poses_;
+  PendingFrames<PendingFrame> pending_;
+  RateLimitedLog problem_log_;
+
+  std::mutex policy_mutex_;  // guards policy_, keyframes_seen_
+  SubmapCreationPolicy policy_;
+  std::unordered_set<KeyframeId> keyframes_seen_;
+  KeyframeId max_keyframe_seen_ = -1;
+
+  // Integrator thread only.
+  std::unique_ptr<FrameIntegrator> frame_integrator_;
+  int frames_since_keyframe_ = 0;
+
+  mutable std::mutex queue_mutex_;  // guards the two queues and the busy flags
+  std::condition_variable queue_cv_;
+  std::deque<MaintenanceItem> maintenance_queue_;
+  std::deque<QueuedCommand> command_queue_;
+  bool maintenance_busy_ = false;
+  bool worker_busy_ = false;
+  std::atomic<bool> integrator_busy_{false};
+
+  mutable std::mutex timing_mutex_;
+  std::deque<float> timing_ms_;
+  float last_ms_ = 0.0f;
+
+  std::atomic<uint64_t> frames_received_{0}, frames_integrated_{0}, poses_received_{0},
+      keyframes_applied_{0}, keyframe_batches_{0}, submaps_moved_{0}, exports_done_{0},
+      exports_failed_{0}, source_restarts_{0};
+  std::mutex pose_order_mutex_;  // serialises the restart decision of onFramePose
+  std::array<std::atomic<uint64_t>, kNumInputProblems> problems_{};
+  std::mutex depth_order_mutex_;
+  int64_t last_depth_utime_ = INT64_MIN;
+
+  std::atomic<bool> stop_{false};
+  bool started_ = false, stopped_ = false;
+  std::mutex lifecycle_mutex_;
+  std::thread integrator_thread_, maintenance_thread_, worker_thread_;
+};
+
+/// A distinct colour per submap id (golden-ratio hue steps, full saturation, bright), for
+/// per-submap meshes. Thread-safe (pure).
+Color submapColor(SubmapId id);
+
+}  // namespace cblox

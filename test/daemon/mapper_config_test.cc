@@ -1,0 +1,154 @@
+#include "daemon/config/mapper_config.h"
+
+#include <gtest/gtest.h>
+
+#include "daemon/config/yaml_config.h"
+
+namespace cblox {
+namespace {
+
+TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
+  const MapperProcessConfig shipped =
+      loadMapperConfig(loadYamlFile(std::string(CBLOX_CONFIG_DIR) + "/mapper.yaml"));
+  const MapperProcessConfig defaults;
+  const MapperConfig& a = shipped.mapper;
+  const MapperConfig& b = defaults.mapper;
+  EXPECT_EQ(a.pose_source, b.pose_source);
+  EXPECT_EQ(shipped.lcm_url, defaults.lcm_url);
+  EXPECT_EQ(a.output_dir, b.output_dir);
+  EXPECT_EQ(shipped.depth_channel, defaults.depth_channel);
+  EXPECT_EQ(shipped.ground_truth_channel, defaults.ground_truth_channel);
+  EXPECT_EQ(shipped.frame_pose_channel, defaults.frame_pose_channel);
+  EXPECT_EQ(shipped.keyframe_channel, defaults.keyframe_channel);
+  EXPECT_EQ(shipped.keyframe_poses_channel, defaults.keyframe_poses_channel);
+  EXPECT_EQ(shipped.command_channel, defaults.command_channel);
+  EXPECT_EQ(shipped.command_reply_channel, defaults.command_reply_channel);
+  EXPECT_EQ(shipped.map_status_channel, defaults.map_status_channel);
+  EXPECT_EQ(shipped.heartbeat_channel, defaults.heartbeat_channel);
+  EXPECT_EQ(a.layer.voxel_size, b.layer.voxel_size);
+  EXPECT_EQ(a.layer.voxels_per_side, b.layer.voxels_per_side);
+  EXPECT_EQ(a.integrator_type, b.integrator_type);
+  EXPECT_EQ(a.integrator.truncation_distance_m, b.integrator.truncation_distance_m);
+  EXPECT_EQ(a.integrator.max_weight, b.integrator.max_weight);
+  EXPECT_EQ(a.integrator.min_ray_length_m, b.integrator.min_ray_length_m);
+  EXPECT_EQ(a.integrator.max_ray_length_m, b.integrator.max_ray_length_m);
+  EXPECT_EQ(a.integrator.weight_model, b.integrator.weight_model);
+  EXPECT_EQ(a.integrator.use_weight_dropoff, b.integrator.use_weight_dropoff);
+  EXPECT_EQ(a.integrator.color_blending, b.integrator.color_blending);
+  EXPECT_EQ(a.integrator.num_threads, b.integrator.num_threads);
+  EXPECT_EQ(a.integrator.max_integration_time_s, b.integrator.max_integration_time_s);
+  EXPECT_EQ(a.mesh.min_weight, b.mesh.min_weight);
+  EXPECT_EQ(a.mesh.use_color, b.mesh.use_color);
+  EXPECT_EQ(a.mesh.compute_normals, b.mesh.compute_normals);
+  EXPECT_EQ(a.mesh.num_threads, b.mesh.num_threads);
+  EXPECT_EQ(a.fusion.max_weight, b.fusion.max_weight);
+  EXPECT_EQ(a.fusion.min_weight, b.fusion.min_weight);
+  EXPECT_EQ(a.fusion.use_color, b.fusion.use_color);
+  EXPECT_EQ(a.fusion.num_threads, b.fusion.num_threads);
+  EXPECT_EQ(a.creation.max_keyframes_per_subvolume, b.creation.max_keyframes_per_subvolume);
+  EXPECT_EQ(a.keyframe_every_n_frames, b.keyframe_every_n_frames);
+  EXPECT_EQ(a.pose_buffer.max_gap_s, b.pose_buffer.max_gap_s);
+  EXPECT_EQ(a.pose_buffer.capacity, b.pose_buffer.capacity);
+  EXPECT_EQ(a.max_pose_wait_s, b.max_pose_wait_s);
+  EXPECT_EQ(a.restart_after_backwards_s, b.restart_after_backwards_s);
+  EXPECT_EQ(a.pending_capacity, b.pending_capacity);
+  EXPECT_EQ(a.maintenance_queue_capacity, b.maintenance_queue_capacity);
+  EXPECT_EQ(a.command_queue_capacity, b.command_queue_capacity);
+  EXPECT_EQ(a.worker_niceness, b.worker_niceness);
+  EXPECT_EQ(a.worker_sched_idle, b.worker_sched_idle);
+  EXPECT_EQ(shipped.status_period_s, defaults.status_period_s);
+  EXPECT_EQ(shipped.progress_period_s, defaults.progress_period_s);
+  EXPECT_EQ(a.timing_window, b.timing_window);
+  EXPECT_EQ(a.log_interval_s, b.log_interval_s);
+  EXPECT_TRUE(defaults.validate().empty()) << defaults.validate();
+}
+
+TEST(MapperConfigTest, AbsentKeysKeepTheMapperDefaultsNotTheGenericOnes) {
+  const MapperProcessConfig config =
+      loadMapperConfig(YAML::Load("integrator: {type: fast}\nlayer: {voxels_per_side: 16}\n"));
+  EXPECT_EQ(config.mapper.integrator_type, IntegratorType::kFast);
+  EXPECT_EQ(config.mapper.layer.voxel_size, 0.04f);
+  EXPECT_EQ(config.mapper.layer.voxels_per_side, 16);
+  EXPECT_EQ(config.mapper.integrator.truncation_distance_m, 0.12f);
+  EXPECT_EQ(config.mapper.integrator.num_threads, 1);
+  const MapperProcessConfig empty = loadMapperConfig(YAML::Load(""));
+  EXPECT_EQ(empty.mapper.layer.voxel_size, 0.04f);
+}
+
+TEST(MapperConfigTest, ReadsOverrides) {
+  const MapperProcessConfig config = loadMapperConfig(YAML::Load(
+      "pose_source: tracker\noutput_dir: /data/maps\nlcm_url: udpm://x\n"
+      "channels: {depth: D, command: C}\nlayer: {voxel_size: 0.02}\n"
+      "integrator: {truncation_distance_m: 0.08, num_threads: 2}\n"
+      "subvolumes: {max_keyframes_per_subvolume: 5, keyframe_every_n_frames: 3}\n"
+      "poses: {max_gap_s: 0.1, max_wait_s: 0.2, buffer_capacity: 64, restart_after_backwards_s: "
+      "0}\n"
+      "queues: {pending_frames: 2, maintenance: 8, commands: 1}\n"
+      "worker: {niceness: 19, sched_idle: false}\n"
+      "status: {period_s: 0.5, progress_period_s: 2, timing_window: 10, log_interval_s: 1}\n"
+      "fusion: {num_threads: 1}\nmesh: {use_color: false}\n"));
+  const MapperConfig& m = config.mapper;
+  EXPECT_EQ(m.pose_source, PoseSource::kTracker);
+  EXPECT_EQ(m.output_dir, "/data/maps");
+  EXPECT_EQ(config.lcm_url, "udpm://x");
+  EXPECT_EQ(config.depth_channel, "D");
+  EXPECT_EQ(config.command_channel, "C");
+  EXPECT_EQ(m.layer.voxel_size, 0.02f);
+  EXPECT_EQ(m.integrator.truncation_distance_m, 0.08f);
+  EXPECT_EQ(m.integrator.num_threads, 2);
+  EXPECT_EQ(m.creation.max_keyframes_per_subvolume, 5);
+  EXPECT_EQ(m.keyframe_every_n_frames, 3);
+  EXPECT_EQ(m.pose_buffer.max_gap_s, 0.1);
+  EXPECT_EQ(m.max_pose_wait_s, 0.2);
+  EXPECT_EQ(m.pose_buffer.capacity, 64u);
+  EXPECT_EQ(m.restart_after_backwards_s, 0.0);
+  EXPECT_EQ(m.pending_capacity, 2u);
+  EXPECT_EQ(m.maintenance_queue_capacity, 8u);
+  EXPECT_EQ(m.command_queue_capacity, 1u);
+  EXPECT_EQ(m.worker_niceness, 19);
+  EXPECT_FALSE(m.worker_sched_idle);
+  EXPECT_EQ(config.status_period_s, 0.5);
+  EXPECT_EQ(config.progress_period_s, 2.0);
+  EXPECT_EQ(m.timing_window, 10u);
+  EXPECT_EQ(m.log_interval_s, 1.0);
+  EXPECT_EQ(m.fusion.num_threads, 1);
+  EXPECT_FALSE(m.mesh.use_color);
+}
+
+TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
+  struct Case {
+    const char* yaml;
+    const char* message;
+  };
+  const Case cases[] = {
+      {"pose_sorce: tracker\n", "pose_sorce"},
+      {"pose_source: slam\n", "pose_source"},
+      {"channels: {dept: X}\n", "dept"},
+      {"layer: {voxel_size: -1}\n", "voxel_size"},
+      {"integrator: {truncation_distance_m: 0.01}\n", "truncation"},  // < one 4 cm voxel
+      {"integrator: {type: magic}\n", "integrator.type"},
+      {"subvolumes: {keyframe_every_n_frames: 0}\n", "keyframe_every_n_frames"},
+      {"subvolumes: {max_keyframes_per_subvolume: 0}\n", "max_keyframes_per_subvolume"},
+      {"poses: {max_gap_s: 0}\n", "max_gap_s"},
+      {"poses: {max_wait_s: -1}\n", "max_pose_wait_s"},
+      {"poses: {restart_after_backwards_s: -1}\n", "restart_after_backwards_s"},
+      {"queues: {pending_frames: 0}\n", "pending_capacity"},
+      {"worker: {niceness: 25}\n", "worker_niceness"},
+      {"status: {period_s: 0}\n", "period_s"},
+      {"fusion: {num_threads: 0}\n", "num_threads"},
+      {"output_dir: ''\n", "output_dir"},
+      {"integrator: {num_threads: two}\n", "integrator.num_threads"},
+  };
+  for (const Case& c : cases) {
+    try {
+      loadMapperConfig(YAML::Load(c.yaml));
+      ADD_FAILURE() << "accepted: " << c.yaml;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos)
+          << c.yaml << " -> " << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace cblox

@@ -1,0 +1,240 @@
+// Multi-process test: cblox-capture plays the simulated room over LCM, cblox-mapper
+// integrates it with ground-truth poses, cblox-ctl asks for the mesh, and the mesh is checked
+// against the scene's exact surface (library evaluation and the cblox-eval tool).
+// Must run inside a private network namespace (scripts/netns-run.sh; ctest does this).
+
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <cblox/heartbeat_t.hpp>
+#include <cblox/map_status_t.hpp>
+#include <lcm/lcm-cpp.hpp>
+
+#include "core/eval/mesh_accuracy.h"
+#include "core/io/ply_io.h"
+#include "core/raycast/triangle_mesh_raycaster.h"
+#include "drivers/open_frame_source.h"
+#include "test/test_support/temp_dir.h"
+
+extern char** environ;
+
+namespace cblox {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+const char* kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+constexpr double kVoxel = 0.04;  // config/mapper.yaml
+constexpr int kFrames = 60;
+
+struct Received {
+  std::optional<map_status_t> status;
+  size_t status_count = 0;
+  std::optional<heartbeat_t> mapper_heartbeat;
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&, const map_status_t* m) {
+    status = *m;
+    ++status_count;
+  }
+  void onHeartbeat(const lcm::ReceiveBuffer*, const std::string&, const heartbeat_t* m) {
+    if (m->process == "cblox-mapper") mapper_heartbeat = *m;
+  }
+};
+
+pid_t spawn(const std::vector<std::string>& args) {
+  std::vector<char*> argv;
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = -1;
+  EXPECT_EQ(posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ), 0);
+  return pid;
+}
+
+/// Pumps LCM until `pid` exits or the deadline passes; returns its exit status or nullopt.
+std::optional<int> waitWhilePumping(lcm::LCM* lcm, pid_t pid, Clock::time_point deadline) {
+  int status = 0;
+  while (Clock::now() < deadline) {
+    lcm->handleTimeout(50);
+    if (waitpid(pid, &status, WNOHANG) == pid) {
+      return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    }
+  }
+  return std::nullopt;
+}
+
+void pumpFor(lcm::LCM* lcm, std::chrono::milliseconds duration) {
+  const auto until = Clock::now() + duration;
+  while (Clock::now() < until) lcm->handleTimeout(20);
+}
+
+/// Runs a tool to completion while pumping LCM; exit status or -1 on timeout (killed).
+int runTool(lcm::LCM* lcm, const std::vector<std::string>& args, std::chrono::seconds timeout) {
+  const pid_t pid = spawn(args);
+  if (pid <= 0) return -1;
+  const std::optional<int> status = waitWhilePumping(lcm, pid, Clock::now() + timeout);
+  if (!status) {
+    kill(pid, SIGKILL);
+    waitpid(pid, nullptr, 0);
+    return -1;
+  }
+  return *status;
+}
+
+TEST(MapperLcmTest, CaptureMapperCtlEndToEndOnTheSimulatedRoom) {
+  test::TempDir dir("mapper_lcm");
+  const std::string out = dir.file("out");
+  // Shipped defaults, but a new subvolume every 20 frames so the export fuses three.
+  const std::string config = dir.write(
+      "mapper.yaml", "subvolumes: {keyframe_every_n_frames: 5, max_keyframes_per_subvolume: 4}\n");
+
+  lcm::LCM lcm(kUrl);
+  ASSERT_TRUE(lcm.good());
+  Received received;
+  lcm.subscribe("CBLOX_MAP_STATUS", &Received::onStatus, &received);
+  lcm.subscribe("CBLOX_HEARTBEAT", &Received::onHeartbeat, &received);
+
+  const pid_t mapper = spawn({CBLOX_MAPPER_EXE, "--config", config, "--output-dir", out,
+                              "--pose-source", "ground_truth", "--lcm-url", kUrl});
+  ASSERT_GT(mapper, 0);
+  // The mapper is up when it publishes its first status.
+  const auto start = Clock::now();
+  while (!received.status && Clock::now() - start < std::chrono::seconds(10)) {
+    lcm.handleTimeout(50);
+  }
+  ASSERT_TRUE(received.status.has_value()) << "no CBLOX_MAP_STATUS within 10 s";
+
+  const int capture_status =
+      runTool(&lcm,
+              {CBLOX_CAPTURE_EXE, "--source", "sim:room", "--trajectory", "orbit", "--frames",
+               std::to_string(kFrames), "--rate", "10", "--lcm-url", kUrl, "--quiet"},
+              std::chrono::seconds(60));
+  ASSERT_EQ(capture_status, 0);
+
+  // Wait until the mapper has accounted for every frame (integrated, dropped or rejected).
+  const auto settle = Clock::now();
+  auto accounted = [&] {
+    const map_status_t& s = *received.status;
+    return s.frames_integrated + s.frames_dropped + s.frames_rejected;
+  };
+  while (accounted() < kFrames && Clock::now() - settle < std::chrono::seconds(10)) {
+    lcm.handleTimeout(50);
+  }
+  const map_status_t before_export = *received.status;
+  std::printf(
+      "mapper status: received %lld, integrated %lld, dropped %lld, rejected %lld, "
+      "%d subvolumes, %lld blocks, integration median %.1f ms p99 %.1f ms\n",
+      static_cast<long long>(before_export.frames_received),
+      static_cast<long long>(before_export.frames_integrated),
+      static_cast<long long>(before_export.frames_dropped),
+      static_cast<long long>(before_export.frames_rejected), before_export.num_subvolumes,
+      static_cast<long long>(before_export.num_blocks), before_export.integration_ms_median,
+      before_export.integration_ms_p99);
+  EXPECT_EQ(before_export.frames_received, kFrames);
+  EXPECT_GT(before_export.frames_integrated, 0);
+  EXPECT_GE(before_export.frames_integrated, kFrames * 9 / 10);  // 10 Hz leaves no reason to drop
+  EXPECT_EQ(before_export.frames_rejected, 0);
+  EXPECT_EQ(before_export.num_subvolumes, 3);
+  EXPECT_GT(before_export.num_blocks, 0);
+
+  // The operator asks for the mesh.
+  EXPECT_EQ(
+      runTool(&lcm,
+              {CBLOX_CTL_EXE, "--lcm-url", kUrl, "--timeout", "30", "export-mesh", "room.ply"},
+              std::chrono::seconds(40)),
+      0);
+  const std::string mesh_path = out + "/room.ply";
+  ASSERT_TRUE(std::filesystem::exists(mesh_path));
+  EXPECT_EQ(runTool(&lcm,
+                    {CBLOX_CTL_EXE, "--lcm-url", kUrl, "--timeout", "30", "export-submap-meshes",
+                     "subvolumes"},
+                    std::chrono::seconds(40)),
+            0);
+  for (int id = 0; id < 3; ++id) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "/subvolumes/submap_%04d.ply", id);
+    EXPECT_TRUE(std::filesystem::exists(out + name)) << name;
+  }
+  // Paths outside the output directory are refused (exit 1: the mapper answered "failed").
+  EXPECT_EQ(runTool(&lcm, {CBLOX_CTL_EXE, "--lcm-url", kUrl, "export-mesh", "../escape.ply"},
+                    std::chrono::seconds(20)),
+            1);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("escape.ply")));
+  EXPECT_EQ(runTool(&lcm, {CBLOX_CTL_EXE, "--lcm-url", kUrl, "status"}, std::chrono::seconds(20)),
+            0);
+
+  // Accuracy against the scene's exact surface.
+  std::string error;
+  Mesh mesh;
+  ASSERT_TRUE(readPly(mesh_path, &mesh, &error)) << error;
+  const std::shared_ptr<const Mesh> scene = loadSimSceneMesh("sim:room", &error);
+  ASSERT_NE(scene, nullptr) << error;
+  const auto raycaster = TriangleMeshRaycaster::create(*scene, &error);
+  ASSERT_NE(raycaster, nullptr) << error;
+  MeshAccuracyOptions options;
+  options.completeness_threshold_m = 2.0 * kVoxel;
+  const std::optional<MeshAccuracy> accuracy =
+      evaluateMeshAccuracy(*raycaster, mesh, options, &error);
+  ASSERT_TRUE(accuracy.has_value()) << error;
+  const ErrorStatistics& a = accuracy->accuracy_m;
+  std::printf(
+      "mesh: %zu vertices; accuracy median %.2f mm, RMSE %.2f mm, p90 %.2f mm, "
+      "max %.2f mm; completeness %.1f %% within %.0f mm\n",
+      mesh.numVertices(), a.median * 1e3, a.rmse * 1e3, a.p90 * 1e3, a.max * 1e3,
+      100.0 * accuracy->completeness, options.completeness_threshold_m * 1e3);
+  EXPECT_GT(mesh.numVertices(), 1000u);
+  EXPECT_LT(a.median, 0.25 * kVoxel);
+  EXPECT_LT(a.rmse, kVoxel);
+
+  // The evaluation tool agrees (exit 0, JSON written).
+  const std::string gt_path = dir.file("room_gt.ply");
+  ASSERT_TRUE(writePly(gt_path, *scene, PlyFormat::kBinaryLittleEndian, &error)) << error;
+  EXPECT_EQ(runTool(&lcm,
+                    {CBLOX_EVAL_EXE, "--gt-mesh", gt_path, "--mesh", mesh_path, "--threshold",
+                     "0.08", "--json", dir.file("eval.json")},
+                    std::chrono::seconds(60)),
+            0);
+  EXPECT_NE(test::readFile(dir.file("eval.json")).find("\"median_m\""), std::string::npos);
+
+  // Graceful stop on SIGTERM: exit 0, a last heartbeat "stopped".
+  ASSERT_EQ(kill(mapper, SIGTERM), 0);
+  const std::optional<int> mapper_status =
+      waitWhilePumping(&lcm, mapper, Clock::now() + std::chrono::seconds(20));
+  if (!mapper_status) {
+    kill(mapper, SIGKILL);
+    waitpid(mapper, nullptr, 0);
+    FAIL() << "cblox-mapper did not stop within 20 s of SIGTERM";
+  }
+  EXPECT_EQ(*mapper_status, 0);
+  pumpFor(&lcm, std::chrono::milliseconds(300));
+  ASSERT_TRUE(received.mapper_heartbeat.has_value());
+  EXPECT_EQ(received.mapper_heartbeat->state, "stopped");
+  EXPECT_GE(received.status_count, 3u);
+}
+
+TEST(MapperLcmTest, BadConfigurationExitsWithStatusTwo) {
+  test::TempDir dir("mapper_lcm");
+  const std::string config = dir.write("bad.yaml", "layer: {voxel_sise: 0.04}\n");
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{CBLOX_MAPPER_EXE, "--config", config},
+        std::vector<std::string>{CBLOX_MAPPER_EXE, "--pose-source", "imu"},
+        std::vector<std::string>{CBLOX_MAPPER_EXE, "--config", dir.file("missing.yaml")},
+        std::vector<std::string>{CBLOX_MAPPER_EXE, "--bogus", "1"}}) {
+    const pid_t pid = spawn(args);
+    int status = 0;
+    ASSERT_EQ(waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 2) << args[1] << " " << args[2];
+  }
+}
+
+}  // namespace
+}  // namespace cblox

@@ -1,0 +1,578 @@
+// The Mapper in-process (no LCM): ground-truth and tracker pose modes, subvolume creation,
+// exports confined to the output directory, pose batches, rejected and dropped frames.
+
+#include "daemon/mapper/mapper.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <future>
+#include <limits>
+#include <mutex>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/io/ply_io.h"
+#include "drivers/synthetic/scenes.h"
+#include "drivers/synthetic/synthetic_frame_source.h"
+#include "test/test_support/temp_dir.h"
+
+namespace cblox {
+namespace {
+
+using std::chrono::milliseconds;
+
+constexpr float kVoxel = 0.04f;
+
+PinholeIntrinsics smallCamera() { return {120.0, 120.0, 79.5, 59.5, 160, 120}; }
+
+/// `count` frames of the analytic room along a 1.5 m orbit, 10 Hz.
+std::vector<SyntheticFrame> renderRoom(int count) {
+  SyntheticDepthSource source(
+      makeDemoRoom(), smallCamera(),
+      makeOrbitTrajectory(Eigen::Vector3d(0, 0, 0), 1.5, 1.4, count, Eigen::Vector3d(0, 0, 1.0)),
+      10.0, 6.0);
+  std::vector<SyntheticFrame> frames(source.size());
+  for (SyntheticFrame& frame : frames) source.next(&frame);
+  return frames;
+}
+
+const std::vector<SyntheticFrame>& roomFrames() {
+  static const std::vector<SyntheticFrame> frames = renderRoom(24);
+  return frames;
+}
+
+int64_t utimeOf(const SyntheticFrame& frame) { return frame.timestamp_ns / 1000; }
+
+DepthFrame depthFrame(const SyntheticFrame& frame, int64_t frame_id) {
+  DepthFrame depth;
+  depth.utime = utimeOf(frame);
+  depth.frame_id = frame_id;
+  depth.depth = frame.depth;
+  depth.color = frame.color;
+  depth.intrinsics = smallCamera();
+  depth.min_depth_m = 0.1f;
+  depth.max_depth_m = 10.0f;
+  return depth;
+}
+
+TimedPose groundTruthPose(int64_t utime, const Transformationd& T_G_C) {
+  TimedPose pose;
+  pose.utime = utime;
+  pose.T_G_C = T_G_C;
+  return pose;
+}
+
+MapperConfig testConfig(const std::filesystem::path& output_dir) {
+  MapperConfig config;
+  config.layer = LayerConfig{kVoxel, 8};
+  config.output_dir = output_dir.string();
+  config.keyframe_every_n_frames = 3;
+  config.creation.max_keyframes_per_subvolume = 2;  // a new subvolume every 6 frames
+  config.worker_sched_idle = false;                 // keep test timing independent of load
+  config.worker_niceness = 0;
+  return config;
+}
+
+/// Log lines collected from the mapper's threads.
+struct LogLines {
+  std::mutex mutex;
+  std::vector<std::string> lines;
+  Mapper::LogSink sink() {
+    return [this](const std::string& line) {
+      std::lock_guard<std::mutex> lock(mutex);
+      lines.push_back(line);
+    };
+  }
+  size_t countContaining(const std::string& text) {
+    std::lock_guard<std::mutex> lock(mutex);
+    return static_cast<size_t>(std::count_if(lines.begin(), lines.end(), [&](const auto& l) {
+      return l.find(text) != std::string::npos;
+    }));
+  }
+};
+
+/// Feeds frames [begin, end) with their ground-truth poses, one at a time (no drops).
+void feed(Mapper* mapper, size_t begin, size_t end) {
+  const auto& frames = roomFrames();
+  for (size_t i = begin; i < end; ++i) {
+    ASSERT_TRUE(mapper->onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));
+    ASSERT_TRUE(mapper->onFramePose(groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C)));
+    ASSERT_TRUE(mapper->waitUntilIdle(milliseconds(10000)));
+  }
+}
+
+MapperReply runCommand(Mapper* mapper, const std::string& name, const std::string& path = "") {
+  MapperCommand command;
+  command.id = 42;
+  command.name = name;
+  if (!path.empty()) command.args["path"] = path;
+  std::promise<MapperReply> promise;
+  mapper->onCommand(command, [&](const MapperReply& r) { promise.set_value(r); });
+  auto future = promise.get_future();
+  EXPECT_EQ(future.wait_for(std::chrono::seconds(60)), std::future_status::ready);
+  return future.get();
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+TEST(MapperTest, GroundTruthModeIntegratesAndStartsASubvolumeEveryNKeyframes) {
+  test::TempDir dir("mapper");
+  LogLines log;
+  Mapper mapper(testConfig(dir.path()), log.sink());
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  feed(&mapper, 0, 18);
+  const MapperStatus s = mapper.status();
+  EXPECT_EQ(s.frames_received, 18u);
+  EXPECT_EQ(s.frames_integrated, 18u);
+  EXPECT_EQ(s.frames_dropped, 0u);
+  EXPECT_EQ(s.frames_rejected, 0u);
+  EXPECT_EQ(s.keyframes_applied, 6u);  // frames 0, 3, 6, 9, 12, 15
+  ASSERT_EQ(s.num_submaps, 3u);        // anchored at frames 0, 6, 12
+  EXPECT_EQ(s.active_submap_id, 2);
+  EXPECT_GT(s.num_blocks, 0u);
+  EXPECT_GT(s.integration_ms_median, 0.0f);
+  const std::vector<SubmapPose> poses = mapper.collection().poseSnapshot();
+  for (size_t i = 0; i < poses.size(); ++i) {
+    EXPECT_EQ(poses[i].anchor_keyframe, static_cast<KeyframeId>(6 * i));
+    // The submap frame is the anchor keyframe's (= that frame's) pose.
+    EXPECT_TRUE(poses[i].T_G_M.isApprox(roomFrames()[6 * i].T_G_C, 1e-12));
+  }
+  EXPECT_TRUE(mapper.collection().getSubmap(0)->isFinished());
+  EXPECT_EQ(mapper.collection().getSubmap(1)->keyframeIds(), (std::vector<KeyframeId>{6, 9}));
+  EXPECT_EQ(log.countContaining("anchored at keyframe"), 3u);
+  mapper.stop();
+}
+
+TEST(MapperTest, ExportsAccurateMeshesInsideTheOutputDirectoryOnly) {
+  test::TempDir dir("mapper");
+  Mapper mapper(testConfig(dir.path()));
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+
+  // Nothing integrated yet: the export fails, nothing is written.
+  MapperReply empty = runCommand(&mapper, "export_mesh", "empty.ply");
+  EXPECT_FALSE(empty.ok);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("empty.ply")));
+
+  feed(&mapper, 0, 24);
+  const MapperReply reply = runCommand(&mapper, "export_mesh", "meshes/room.ply");
+  ASSERT_TRUE(reply.ok) << reply.message;
+  EXPECT_EQ(reply.id, 42);
+  EXPECT_EQ(reply.value("path"), dir.file("meshes/room.ply"));
+  EXPECT_EQ(reply.value("subvolumes"), "4");
+  EXPECT_FALSE(reply.value("seconds").empty());
+  Mesh mesh;
+  ASSERT_TRUE(readPly(dir.file("meshes/room.ply"), &mesh, &error)) << error;
+  EXPECT_EQ(std::to_string(mesh.numVertices()), reply.value("vertices"));
+  EXPECT_EQ(std::to_string(mesh.numTriangles()), reply.value("triangles"));
+  ASSERT_GT(mesh.numVertices(), 1000u);
+  // The fused mesh of four subvolumes lies on the analytic room.
+  const AnalyticScene room = makeDemoRoom();
+  std::vector<double> errors;
+  double sum_sq = 0.0;
+  for (const Eigen::Vector3f& v : mesh.vertices) {
+    errors.push_back(std::abs(room.signedDistance(v.cast<double>())));
+    sum_sq += errors.back() * errors.back();
+  }
+  const double rmse = std::sqrt(sum_sq / static_cast<double>(errors.size()));
+  EXPECT_LT(median(errors), 0.25 * kVoxel);
+  EXPECT_LT(rmse, kVoxel);
+
+  // An absolute path inside the output directory is fine.
+  EXPECT_TRUE(runCommand(&mapper, "export_mesh", dir.file("abs.ply")).ok);
+  EXPECT_TRUE(std::filesystem::exists(dir.file("abs.ply")));
+  // Escapes are refused at once; nothing is written.
+  const std::string escape = dir.path().filename().string() + "_escape.ply";  // unique name
+  const std::filesystem::path outside = dir.path().parent_path() / escape;
+  for (const std::string& bad : {"../" + escape, "a/../../" + escape, outside.string()}) {
+    const MapperReply r = runCommand(&mapper, "export_mesh", bad);
+    EXPECT_FALSE(r.ok) << bad;
+    EXPECT_FALSE(r.message.empty());
+  }
+  EXPECT_FALSE(std::filesystem::exists(outside));
+  EXPECT_FALSE(runCommand(&mapper, "export_mesh").ok);  // no path
+  EXPECT_FALSE(runCommand(&mapper, "make_coffee").ok);
+  EXPECT_GE(mapper.status().problem(InputProblem::kCommandInvalid), 5u);
+
+  // One mesh per subvolume, each in its own colour.
+  const MapperReply subs = runCommand(&mapper, "export_submap_meshes", "subs");
+  ASSERT_TRUE(subs.ok) << subs.message;
+  EXPECT_EQ(subs.value("count"), "4");
+  std::set<std::tuple<int, int, int>> colours;
+  for (int id = 0; id < 4; ++id) {
+    Mesh sub;
+    char name[32];
+    std::snprintf(name, sizeof(name), "subs/submap_%04d.ply", id);
+    ASSERT_TRUE(readPly(dir.file(name), &sub, &error)) << error;
+    ASSERT_TRUE(sub.hasColors());
+    EXPECT_TRUE(std::all_of(sub.colors.begin(), sub.colors.end(),
+                            [&](const Color& c) { return c == sub.colors.front(); }));
+    EXPECT_EQ(sub.colors.front(), submapColor(id));
+    colours.insert({sub.colors.front().r, sub.colors.front().g, sub.colors.front().b});
+    // In the global frame: on the room's surfaces.
+    std::vector<double> e;
+    for (const Eigen::Vector3f& v : sub.vertices) {
+      e.push_back(std::abs(room.signedDistance(v.cast<double>())));
+    }
+    EXPECT_LT(median(e), 0.25 * kVoxel) << name;
+  }
+  EXPECT_EQ(colours.size(), 4u);
+
+  const MapperReply status = runCommand(&mapper, "status");
+  EXPECT_TRUE(status.ok);
+  EXPECT_EQ(status.value("frames_integrated"), "24");
+  EXPECT_EQ(mapper.status().exports_done, 3u);
+  EXPECT_EQ(mapper.status().exports_failed, 1u);
+}
+
+TEST(MapperTest, ExportDoesNotStopIntegration) {
+  test::TempDir dir("mapper");
+  Mapper mapper(testConfig(dir.path()));
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  feed(&mapper, 0, 8);
+  // Exports run on the worker while frames keep arriving (the active layer is copied under
+  // its lock; everything else happens without it).
+  std::vector<std::future<MapperReply>> replies;
+  std::vector<std::shared_ptr<std::promise<MapperReply>>> promises;
+  for (int i = 0; i < 3; ++i) {
+    auto promise = std::make_shared<std::promise<MapperReply>>();
+    replies.push_back(promise->get_future());
+    MapperCommand command;
+    command.id = i;
+    command.name = i % 2 ? "export_submap_meshes" : "export_mesh";
+    command.args["path"] = "concurrent_" + std::to_string(i) + (i % 2 ? "" : ".ply");
+    mapper.onCommand(command, [promise](const MapperReply& r) { promise->set_value(r); });
+  }
+  feed(&mapper, 8, 24);
+  for (auto& reply : replies) {
+    ASSERT_EQ(reply.wait_for(std::chrono::seconds(60)), std::future_status::ready);
+    EXPECT_TRUE(reply.get().ok);
+  }
+  EXPECT_EQ(mapper.status().frames_integrated, 24u);
+}
+
+// Inputs from several threads at once, as in the process (LCM thread, worker replies) plus
+// status polling: every frame is accounted for, nothing crashes. Meant for ThreadSanitizer
+// (scripts/tsan.sh) as much as for the counters.
+TEST(MapperTest, ConcurrentFramesPoseBatchesExportsAndStatus) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  config.max_pose_wait_s = 5.0;
+  Mapper mapper(config);
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  const auto& frames = roomFrames();
+  std::atomic<bool> done{false};
+  std::thread feeder([&] {
+    for (size_t i = 0; i < frames.size(); ++i) {  // as fast as possible: drops are fine
+      mapper.onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i)));
+      mapper.onFramePose(groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C));
+      std::this_thread::sleep_for(milliseconds(2));
+    }
+    done = true;
+  });
+  std::thread corrector([&] {
+    const Transformationd nudge(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.001, 0, 0));
+    while (!done) {
+      std::vector<std::pair<KeyframeId, Transformationd>> batch;
+      for (KeyframeId k = 0; k < 24; ++k) batch.emplace_back(k, nudge * frames[k].T_G_C);
+      mapper.onKeyframePoses(std::move(batch));
+      std::this_thread::sleep_for(milliseconds(3));
+    }
+  });
+  std::atomic<int> replies{0}, ok{0};
+  std::thread operator_thread([&] {
+    for (int i = 0; !done; ++i) {
+      MapperCommand command;
+      command.id = i;
+      command.name = i % 3 == 2 ? "status" : (i % 3 ? "export_submap_meshes" : "export_mesh");
+      std::string path = std::to_string(i % 4);  // (not "c" + ...: GCC 12 -Wrestrict)
+      if (i % 3 == 0) path += ".ply";
+      command.args["path"] = path;
+      mapper.onCommand(command, [&](const MapperReply& r) {
+        ok += r.ok;
+        ++replies;
+      });
+      (void)mapper.status();
+      std::this_thread::sleep_for(milliseconds(5));
+    }
+  });
+  feeder.join();
+  corrector.join();
+  operator_thread.join();
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(30000)));
+  mapper.stop();  // answers whatever is still queued
+  const MapperStatus s = mapper.status();
+  EXPECT_EQ(s.frames_received, frames.size());
+  EXPECT_EQ(s.frames_integrated + s.frames_dropped + s.frames_rejected, s.frames_received);
+  EXPECT_GT(s.frames_integrated, 0u);
+  EXPECT_GT(s.keyframe_batches, 0u);
+  EXPECT_GT(replies.load(), 0);
+  EXPECT_GT(ok.load(), 0);
+}
+
+TEST(MapperTest, KeyframePoseBatchMovesSubvolumesWithoutTouchingVoxels) {
+  test::TempDir dir("mapper");
+  Mapper mapper(testConfig(dir.path()));
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  feed(&mapper, 0, 12);
+  ASSERT_EQ(mapper.collection().size(), 2u);
+  const size_t blocks = mapper.status().num_blocks;
+  const Transformationd moved =
+      Transformationd(Eigen::Quaterniond(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ())),
+                      Eigen::Vector3d(1.0, 0.0, 0.0)) *
+      roomFrames()[6].T_G_C;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  mapper.onKeyframePoses(
+      {{6, moved},
+       {999, moved},
+       {0, Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d(nan, 0.0, 0.0))}});
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  EXPECT_TRUE(mapper.collection().getSubmap(1)->T_G_M().isApprox(moved, 1e-12));
+  EXPECT_TRUE(mapper.collection().getSubmap(0)->T_G_M().isApprox(roomFrames()[0].T_G_C, 1e-12));
+  const MapperStatus s = mapper.status();
+  EXPECT_EQ(s.keyframe_batches, 1u);
+  EXPECT_EQ(s.submaps_moved, 1u);
+  EXPECT_EQ(s.problem(InputProblem::kKeyframePoseUnknown), 1u);
+  EXPECT_EQ(s.problem(InputProblem::kKeyframePoseInvalid), 1u);
+  EXPECT_EQ(s.num_blocks, blocks);
+}
+
+TEST(MapperTest, FrameWithoutPoseIsRejectedAfterTheWait) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  config.max_pose_wait_s = 0.05;
+  Mapper mapper(config);
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  ASSERT_TRUE(mapper.onDepthFrame(depthFrame(roomFrames()[0], 0)));
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(5000)));
+  const MapperStatus s = mapper.status();
+  EXPECT_EQ(s.problem(InputProblem::kNoPose), 1u);
+  EXPECT_EQ(s.frames_rejected, 1u);
+  EXPECT_EQ(s.frames_integrated, 0u);
+  EXPECT_EQ(s.frames_pending, 0u);
+}
+
+TEST(MapperTest, NewestFrameWinsAndTheOthersAreCountedAsDropped) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  config.pending_capacity = 4;
+  config.max_pose_wait_s = 30.0;  // nothing expires during the test
+  Mapper mapper(config);
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  // Six frames faster than their poses: the in-tray keeps the newest four.
+  for (int i = 0; i < 6; ++i) ASSERT_TRUE(mapper.onDepthFrame(depthFrame(roomFrames()[i], i)));
+  EXPECT_EQ(mapper.status().frames_dropped, 2u);
+  // The newest frame's pose arrives: it is integrated, the three older ones are superseded.
+  ASSERT_TRUE(mapper.onFramePose(groundTruthPose(utimeOf(roomFrames()[5]), roomFrames()[5].T_G_C)));
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  const MapperStatus s = mapper.status();
+  EXPECT_EQ(s.frames_received, 6u);
+  EXPECT_EQ(s.frames_integrated, 1u);
+  EXPECT_EQ(s.frames_dropped, 5u);
+  EXPECT_EQ(s.frames_rejected, 0u);
+  EXPECT_EQ(mapper.collection().getSubmap(0)->anchorKeyframe(), 5);
+}
+
+TEST(MapperTest, BadInputIsRejectedCountedAndLoggedOncePerKind) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  LogLines log;
+  Mapper mapper(config, log.sink());
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  const SyntheticFrame& f = roomFrames()[2];
+
+  DepthFrame wrong_size = depthFrame(f, 2);
+  wrong_size.intrinsics.width = 100;
+  EXPECT_FALSE(mapper.onDepthFrame(wrong_size));
+  EXPECT_FALSE(mapper.onDepthFrame(wrong_size));  // counted, not logged again
+  DepthFrame bad_color = depthFrame(f, 2);
+  bad_color.color = ColorImage(10, 10);
+  EXPECT_FALSE(mapper.onDepthFrame(bad_color));
+  DepthFrame bad_intrinsics = depthFrame(f, 2);
+  bad_intrinsics.intrinsics.fx = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(mapper.onDepthFrame(bad_intrinsics));
+  ASSERT_TRUE(mapper.onDepthFrame(depthFrame(f, 2)));
+  EXPECT_FALSE(mapper.onDepthFrame(depthFrame(f, 3)));                // same time stamp
+  EXPECT_FALSE(mapper.onDepthFrame(depthFrame(roomFrames()[1], 1)));  // older
+
+  ASSERT_TRUE(mapper.onFramePose(groundTruthPose(utimeOf(f), f.T_G_C)));
+  EXPECT_FALSE(mapper.onFramePose(groundTruthPose(utimeOf(f), f.T_G_C)));
+  EXPECT_FALSE(mapper.onFramePose(groundTruthPose(utimeOf(f) - 1, f.T_G_C)));
+  TimedPose nan_pose = groundTruthPose(utimeOf(f) + 10, f.T_G_C);
+  nan_pose.T_G_C =
+      Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d::Constant(std::nan("")));
+  EXPECT_FALSE(mapper.onFramePose(nan_pose));
+  EXPECT_FALSE(mapper.onKeyframe(7, 0, nan_pose.T_G_C));
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  // The valid frame went in despite everything around it (a synthesised keyframe, id 2).
+  EXPECT_EQ(mapper.status().frames_integrated, 1u);
+  mapper.onKeyframe(2, 0, f.T_G_C);  // the synthesised keyframe's id again
+  mapper.reportProblem(InputProblem::kDepthUndecodable, "truncated message");
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+
+  const MapperStatus s = mapper.status();
+  EXPECT_EQ(s.problem(InputProblem::kDepthInvalid), 4u);
+  EXPECT_EQ(s.problem(InputProblem::kDepthOutOfOrder), 2u);
+  EXPECT_EQ(s.problem(InputProblem::kDepthUndecodable), 1u);
+  EXPECT_EQ(s.problem(InputProblem::kPoseDuplicate), 1u);
+  EXPECT_EQ(s.problem(InputProblem::kPoseOutOfOrder), 1u);
+  EXPECT_EQ(s.problem(InputProblem::kPoseInvalid), 1u);
+  EXPECT_EQ(s.problem(InputProblem::kKeyframeInvalid), 1u);
+  EXPECT_EQ(s.problem(InputProblem::kKeyframeDuplicate), 1u);
+  EXPECT_EQ(s.frames_received, 8u);
+  EXPECT_EQ(s.frames_rejected, 7u);
+  EXPECT_EQ(s.frames_integrated, 1u);
+  // Once per kind within the log interval.
+  EXPECT_EQ(log.countContaining("(depth_invalid)"), 1u);
+  EXPECT_EQ(log.countContaining("(depth_out_of_order)"), 1u);
+  EXPECT_EQ(log.countContaining("(keyframe_duplicate)"), 1u);
+}
+
+TEST(MapperTest, TrackerModeFollowsKeyframesAndStartsANewSubvolumeAfterAJump) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  config.pose_source = PoseSource::kTracker;
+  config.creation.max_keyframes_per_subvolume = 10;
+  Mapper mapper(config);
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  const auto& frames = roomFrames();
+  auto frameWithPose = [&](size_t i, bool jump = false, bool ok = true, int32_t epoch = 0) {
+    ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));
+    TimedPose pose = groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C);
+    pose.jump = jump;
+    pose.tracking_ok = ok;
+    pose.epoch = epoch;
+    ASSERT_TRUE(mapper.onFramePose(pose));
+    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  };
+  // Before the first keyframe there is no subvolume: the frame waits for an anchor.
+  frameWithPose(0);
+  EXPECT_EQ(mapper.status().problem(InputProblem::kWaitingForAnchor), 1u);
+  ASSERT_TRUE(mapper.onKeyframe(100, utimeOf(frames[1]), frames[1].T_G_C));
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  frameWithPose(1);
+  frameWithPose(2);
+  ASSERT_TRUE(mapper.onKeyframe(101, utimeOf(frames[2]), frames[2].T_G_C));  // joins submap 0
+  frameWithPose(3, /*jump=*/false, /*ok=*/false);                            // tracking lost
+  frameWithPose(4, /*jump=*/true);  // relocalised: waits for the next keyframe
+  frameWithPose(5);
+  EXPECT_EQ(mapper.collection().size(), 1u);
+  ASSERT_TRUE(mapper.onKeyframe(102, utimeOf(frames[5]), frames[5].T_G_C));
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  frameWithPose(6);
+  frameWithPose(7);
+
+  const MapperStatus s = mapper.status();
+  EXPECT_EQ(s.frames_integrated, 4u);  // 1, 2, 6, 7
+  EXPECT_EQ(s.problem(InputProblem::kTrackingLost), 1u);
+  EXPECT_EQ(s.problem(InputProblem::kWaitingForAnchor), 3u);  // 0, 4, 5
+  ASSERT_EQ(mapper.collection().size(), 2u);
+  EXPECT_EQ(mapper.collection().getSubmap(0)->keyframeIds(), (std::vector<KeyframeId>{100, 101}));
+  EXPECT_EQ(mapper.collection().getSubmap(1)->anchorKeyframe(), 102);
+  EXPECT_TRUE(mapper.collection().getSubmap(1)->T_G_M().isApprox(frames[5].T_G_C, 1e-12));
+  EXPECT_GT(mapper.collection().getSubmap(1)->numBlocks(), 0u);
+}
+
+TEST(MapperTest, InterpolatesPosesBetweenFrameTimes) {
+  test::TempDir dir("mapper");
+  Mapper mapper(testConfig(dir.path()));
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  const auto& frames = roomFrames();
+  // Poses 100 ms apart around the frame, none at its time stamp.
+  ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[1], 1)));
+  ASSERT_TRUE(mapper.onFramePose(groundTruthPose(utimeOf(frames[0]), frames[0].T_G_C)));
+  ASSERT_TRUE(mapper.onFramePose(groundTruthPose(utimeOf(frames[2]), frames[2].T_G_C)));
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  EXPECT_EQ(mapper.status().frames_integrated, 1u);
+  // The synthesised keyframe's pose is the interpolated one.
+  const Transformationd expected =
+      Transformationd::interpolate(frames[0].T_G_C, frames[2].T_G_C, 0.5);
+  EXPECT_TRUE(mapper.collection().getSubmap(0)->T_G_M().isApprox(expected, 1e-9));
+}
+
+TEST(MapperTest, ARestartedSourceStartsAfreshInsteadOfBeingRejected) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  config.restart_after_backwards_s = 0.3;
+  LogLines log;
+  Mapper mapper(config, log.sink());
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  feed(&mapper, 0, 9);  // 0 .. 0.8 s
+  // A small step back is out of order, not a restart.
+  EXPECT_FALSE(mapper.onDepthFrame(depthFrame(roomFrames()[7], 7)));
+  EXPECT_FALSE(
+      mapper.onFramePose(groundTruthPose(utimeOf(roomFrames()[7]), roomFrames()[7].T_G_C)));
+  // The capture runs again from time 0 with frame ids from 0: every frame is integrated.
+  feed(&mapper, 0, 6);
+  const MapperStatus s = mapper.status();
+  EXPECT_EQ(s.source_restarts, 2u);  // depth and poses
+  EXPECT_EQ(s.frames_integrated, 15u);
+  EXPECT_EQ(s.problem(InputProblem::kDepthOutOfOrder), 1u);
+  EXPECT_EQ(s.problem(InputProblem::kPoseOutOfOrder), 1u);
+  EXPECT_EQ(s.problem(InputProblem::kKeyframeDuplicate), 0u);
+  // Synthesised keyframes of the second run got fresh ids (frame ids 0 and 3 were taken).
+  EXPECT_EQ(s.keyframes_applied, 5u);  // 0, 3, 6, then 7, 8 for frames 0, 3 of the rerun
+  EXPECT_EQ(log.countContaining("source restarted"), 2u);
+}
+
+TEST(MapperTest, StopIsIdempotentAndAnswersLateCommands) {
+  test::TempDir dir("mapper");
+  Mapper mapper(testConfig(dir.path()));
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  feed(&mapper, 0, 2);
+  mapper.stop();
+  mapper.stop();
+  const MapperReply late = runCommand(&mapper, "export_mesh", "late.ply");
+  EXPECT_FALSE(late.ok);
+  EXPECT_EQ(late.message, "mapper stopping");
+}
+
+TEST(MapperTest, RejectsInvalidConfigAndUncreatableOutputDir) {
+  MapperConfig config;
+  config.keyframe_every_n_frames = 0;
+  EXPECT_THROW(Mapper{config}, std::invalid_argument);
+  config = MapperConfig{};
+  config.layer.voxel_size = 0.1f;  // truncation 0.12 m stays valid; 0.05 would not
+  config.integrator.truncation_distance_m = 0.05f;
+  EXPECT_THROW(Mapper{config}, std::invalid_argument);
+  test::TempDir dir("mapper");
+  dir.write("file", "x");
+  config = testConfig(dir.path() / "file" / "sub");
+  Mapper mapper(config);
+  std::string error;
+  EXPECT_FALSE(mapper.start(&error));
+  EXPECT_NE(error.find("output directory"), std::string::npos);
+}
+
+TEST(MapperTest, SubmapColoursDiffer) {
+  std::set<std::tuple<int, int, int>> colours;
+  for (SubmapId id = 0; id < 32; ++id) {
+    const Color c = submapColor(id);
+    colours.insert({c.r, c.g, c.b});
+  }
+  EXPECT_EQ(colours.size(), 32u);
+}
+
+}  // namespace
+}  // namespace cblox

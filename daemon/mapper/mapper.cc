@@ -411,17 +411,7 @@ bool Mapper::onKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G
   item.keyframe_id = id;
   item.utime = utime;
   item.T_G_K = T_G_K;
-  bool dropped = false;
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    maintenance_queue_.push_back(std::move(item));
-    if (maintenance_queue_.size() > config_.maintenance_queue_capacity) {
-      maintenance_queue_.pop_front();
-      dropped = true;
-    }
-  }
-  queue_cv_.notify_all();
-  if (dropped) count(InputProblem::kMaintenanceDropped, "maintenance queue full: oldest dropped");
+  enqueueMaintenance(std::move(item));
   return true;
 }
 
@@ -429,6 +419,10 @@ void Mapper::onKeyframePoses(std::vector<std::pair<KeyframeId, Transformationd>>
   MaintenanceItem item;
   item.is_batch = true;
   item.batch = std::move(T_G_K);
+  enqueueMaintenance(std::move(item));
+}
+
+void Mapper::enqueueMaintenance(MaintenanceItem item) {
   bool dropped = false;
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);

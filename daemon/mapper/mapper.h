@@ -304,6 +304,8 @@ class Mapper {
 
   void integratorLoop();
   void maintenanceLoop();
+  /// Appends to the maintenance queue (the oldest item is dropped, and counted, when full).
+  void enqueueMaintenance(MaintenanceItem item);
   void workerLoop();
   // Integrator thread: one frame whose pose is known.
   void processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump);

@@ -139,7 +139,7 @@ class MapperNode {
     msg.integration_ms_last = s.integration_ms_last;
     msg.integration_ms_median = s.integration_ms_median;
     msg.integration_ms_p99 = s.integration_ms_p99;
-    msg.fusion_candidates = 0;  // subvolume fusion (map maintenance) is not implemented yet
+    msg.fusion_candidates = 0;  // map maintenance (issue 6) does not run yet: these stay 0
     msg.covariance_requested = 0;
     msg.subvolumes_fused = 0;
     msg.rejected_by_q = 0;

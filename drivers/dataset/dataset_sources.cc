@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 namespace cblox {
@@ -48,6 +49,18 @@ SourceInfo sevenScenesInfo(const SevenScenesReader& reader) {
   return info;
 }
 
+/// A depth-camera frame (no stereo pair): takes the images out of the reader's scratch frame.
+void fillDepthFrame(size_t i, int64_t timestamp_ns, DepthImage* depth, ColorImage* color,
+                    const std::optional<Transformationd>& T_G_C, CaptureFrame* frame) {
+  frame->frame_id = static_cast<int64_t>(i);
+  frame->timestamp_ns = timestamp_ns;
+  frame->left = GrayImage();
+  frame->right = GrayImage();
+  std::swap(frame->depth, *depth);
+  std::swap(frame->color, *color);
+  frame->T_G_C = T_G_C;
+}
+
 }  // namespace
 
 IndexedFrameSource::IndexedFrameSource(SourceInfo info, size_t available, size_t max_frames)
@@ -84,13 +97,8 @@ TumRgbdSource::TumRgbdSource(TumRgbdReader reader, size_t max_frames)
 
 bool TumRgbdSource::readFrame(size_t i, CaptureFrame* frame, std::string* error) {
   if (!reader_.read(i, &scratch_, error)) return false;
-  frame->frame_id = static_cast<int64_t>(i);
-  frame->timestamp_ns = std::llround(scratch_.timestamp_s * 1e9);
-  frame->left = GrayImage();
-  frame->right = GrayImage();
-  std::swap(frame->depth, scratch_.depth);
-  std::swap(frame->color, scratch_.color);
-  frame->T_G_C = scratch_.T_G_C;
+  fillDepthFrame(i, std::llround(scratch_.timestamp_s * 1e9), &scratch_.depth, &scratch_.color,
+                 scratch_.T_G_C, frame);
   return true;
 }
 
@@ -100,13 +108,8 @@ SevenScenesSource::SevenScenesSource(SevenScenesReader reader, size_t max_frames
 
 bool SevenScenesSource::readFrame(size_t i, CaptureFrame* frame, std::string* error) {
   if (!reader_.read(i, &scratch_, error)) return false;
-  frame->frame_id = static_cast<int64_t>(i);
-  frame->timestamp_ns = std::llround(static_cast<double>(i) * 1e9 / kRateHz);
-  frame->left = GrayImage();
-  frame->right = GrayImage();
-  std::swap(frame->depth, scratch_.depth);
-  std::swap(frame->color, scratch_.color);
-  frame->T_G_C = scratch_.T_G_C;
+  fillDepthFrame(i, std::llround(static_cast<double>(i) * 1e9 / kRateHz), &scratch_.depth,
+                 &scratch_.color, scratch_.T_G_C, frame);
   return true;
 }
 

@@ -16,7 +16,8 @@ struct IntegrationStats {
   size_t rays_cut_by_budget = 0;   ///< fast: rays cast but left unfinished by the budget
   size_t voxel_updates = 0;        ///< voxel updates applied
   size_t blocks_allocated = 0;     ///< blocks added to the layer by this frame
-  bool budget_exhausted = false;   ///< fast: the time budget cut this frame short
+  size_t blocks_not_reached = 0;   ///< projective: blocks skipped because the budget ran out
+  bool budget_exhausted = false;   ///< fast, projective: the time budget cut this frame short
   double seconds = 0.0;            ///< wall time of the whole call
 
   IntegrationStats& operator+=(const IntegrationStats& o) {
@@ -30,6 +31,7 @@ struct IntegrationStats {
     rays_cut_by_budget += o.rays_cut_by_budget;
     voxel_updates += o.voxel_updates;
     blocks_allocated += o.blocks_allocated;
+    blocks_not_reached += o.blocks_not_reached;
     budget_exhausted = budget_exhausted || o.budget_exhausted;
     return *this;
   }

@@ -57,9 +57,11 @@ struct IntegratorConfig {
   /// A ray stops after it updated more than this many consecutive voxels that other rays
   /// of the same frame had already updated.
   int max_consecutive_ray_collisions = 2;
-  /// Time budget per frame in seconds, checked inside the ray loops; 0 = unlimited.
-  /// Points are visited in an order that covers the image evenly, so a cut frame leaves
-  /// a sparser, not a partial, update.
+  /// Time budget per frame in seconds; 0 = unlimited. Fast integrator: checked inside the
+  /// ray loops; points are visited in an order that covers the image evenly, so a cut frame
+  /// leaves a sparser, not a partial, update. Projective integrator: checked before each
+  /// claim of 4 blocks; claims run in bit-reversed order, so the blocks a cut frame updates
+  /// are spread over the whole image. The simple integrator ignores it.
   double max_integration_time_s = 0.0;
   VisitedVoxelSet visited_voxel_set = VisitedVoxelSet::kBlockBitmap;
   /// log2 of the bucket count of each approximate set (start set, and the visited-voxel

@@ -7,6 +7,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/integrator/deadline.h"
+#include "core/integrator/even_coverage_order.h"
 #include "core/integrator/thread_team.h"
 
 #if defined(__SSE2__)
@@ -176,6 +178,7 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
                                                                const PinholeCamera& camera,
                                                                const ColorImage* color) {
   const auto start_time = std::chrono::steady_clock::now();
+  const Deadline deadline(config_.max_integration_time_s);
   const PinholeIntrinsics& K = camera.intrinsics();
   if (depth.width != K.width || depth.height != K.height) {
     throw std::invalid_argument("ProjectiveTsdfIntegrator: depth image is " +
@@ -298,7 +301,13 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
     newly_allocated.swap(sorted_new);
   }
   std::vector<uint8_t> touched(blocks.size(), 0);
-  std::atomic<size_t> next_block{0};
+  // Claims of kBlocksPerClaim neighbouring blocks; under a time budget they are taken in
+  // bit-reversed order, so whatever part of the frame fits in the budget covers it evenly.
+  const size_t num_claims = (blocks.size() + kBlocksPerClaim - 1) / kBlocksPerClaim;
+  const std::vector<uint32_t> claim_order =
+      config_.max_integration_time_s > 0.0 ? evenCoverageOrder(static_cast<uint32_t>(num_claims))
+                                           : std::vector<uint32_t>();
+  std::atomic<size_t> next_claim{0};
   const RowProjector projector{fx, fy, cx, cy, width, height};
   // Raw pointers in locals: the compiler cannot prove voxel writes do not alias members.
   const PixelSample* const samples = samples_.data();
@@ -309,9 +318,16 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
     IntegrationStats& stats = states[static_cast<size_t>(id)].stats;
     float row_z[64];  // voxels_per_side <= 64
     int32_t row_pixel[64];
-    for (size_t begin = next_block.fetch_add(kBlocksPerClaim); begin < blocks.size();
-         begin = next_block.fetch_add(kBlocksPerClaim)) {
+    for (size_t taken = next_claim.fetch_add(1); taken < num_claims;
+         taken = next_claim.fetch_add(1)) {
+      const size_t claim = claim_order.empty() ? taken : claim_order[taken];
+      const size_t begin = claim * kBlocksPerClaim;
       const size_t end = std::min(begin + kBlocksPerClaim, blocks.size());
+      if (deadline.expired()) {
+        stats.blocks_not_reached += end - begin;
+        stats.budget_exhausted = true;
+        continue;
+      }
       for (size_t b = begin; b < end; ++b) {
         Block& block = *blocks[b];
         TsdfVoxel* voxel = block.voxels();

@@ -10,7 +10,7 @@ namespace {
 bool present(const YAML::Node& node, const char* key) { return !isAbsent(node) && node[key]; }
 
 // The shared loaders start from the components' defaults; the mapper's defaults differ for a
-// few keys (4 cm voxels, 12 cm truncation, 5 m rays, one integration thread): keys absent
+// few keys (4 cm voxels, 12 cm truncation, 5 m rays, one integration thread, 80 ms budget): keys absent
 // from the file keep the mapper's values.
 LayerConfig loadMapperLayer(const YAML::Node& node, const LayerConfig& defaults) {
   LayerConfig layer = loadLayerConfig(node, "layer");
@@ -28,6 +28,9 @@ IntegratorConfig loadMapperIntegrator(const YAML::Node& node, float voxel_size,
     merged["truncation_distance_m"] = defaults.truncation_distance_m;
   if (!merged["max_ray_length_m"]) merged["max_ray_length_m"] = defaults.max_ray_length_m;
   if (!merged["num_threads"]) merged["num_threads"] = defaults.num_threads;
+  if (!merged["max_integration_time_s"]) {
+    merged["max_integration_time_s"] = defaults.max_integration_time_s;
+  }
   return loadIntegratorConfig(merged, voxel_size, type, "integrator");
 }
 

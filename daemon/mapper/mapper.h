@@ -178,6 +178,7 @@ struct MapperStatus {
   size_t memory_bytes = 0;
   uint64_t frames_received = 0;  ///< depth frames offered (incl. undecodable ones)
   uint64_t frames_integrated = 0;
+  uint64_t frames_cut_by_budget = 0;  ///< integrated, but the time budget cut them short
   uint64_t frames_dropped = 0;   ///< superseded by a newer frame (newest wins) or queue full
   uint64_t frames_rejected = 0;  ///< sum of the frame problem kinds
   uint64_t frames_pending = 0;   ///< waiting for their pose now
@@ -355,8 +356,8 @@ class Mapper {
   std::deque<float> timing_ms_;
   float last_ms_ = 0.0f;
 
-  std::atomic<uint64_t> frames_received_{0}, frames_integrated_{0}, poses_received_{0},
-      keyframes_applied_{0}, keyframe_batches_{0}, submaps_moved_{0}, exports_done_{0},
+  std::atomic<uint64_t> frames_received_{0}, frames_integrated_{0}, frames_cut_by_budget_{0},
+      poses_received_{0}, keyframes_applied_{0}, keyframe_batches_{0}, submaps_moved_{0}, exports_done_{0},
       exports_failed_{0}, source_restarts_{0};
   std::mutex pose_order_mutex_;  // serialises the restart decision of onFramePose
   std::array<std::atomic<uint64_t>, kNumInputProblems> problems_{};

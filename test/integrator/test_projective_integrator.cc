@@ -157,6 +157,48 @@ TEST(ProjectiveTsdfIntegrator, ThreadsOneAndTwoAreBitIdentical) {
   }
 }
 
+TEST(ProjectiveTsdfIntegrator, TimeBudgetCutsTheFrameAndCountsWhatItSkipped) {
+  const PinholeCamera camera = test::smallCamera();
+  const test::View view = test::renderSphereViews(1).front();
+  IntegratorConfig config;
+  TsdfLayer full_layer(LayerConfig{kVoxelSize, 8});
+  const IntegrationStats full = ProjectiveTsdfIntegrator(config, &full_layer)
+                                    .integrateDepthImage(view.T_G_C.cast<float>(), view.depth,
+                                                         camera, &view.color);
+  EXPECT_FALSE(full.budget_exhausted);
+  EXPECT_EQ(full.blocks_not_reached, 0u);
+  ASSERT_GT(full.voxel_updates, 0u);
+
+  // A budget that has run out before the voxel phase: nothing is updated, every block the
+  // frame needed is counted as not reached, and no empty block is left in the layer.
+  config.max_integration_time_s = 1e-9;
+  TsdfLayer cut_layer(LayerConfig{kVoxelSize, 8});
+  const IntegrationStats cut = ProjectiveTsdfIntegrator(config, &cut_layer)
+                                   .integrateDepthImage(view.T_G_C.cast<float>(), view.depth,
+                                                        camera, &view.color);
+  EXPECT_TRUE(cut.budget_exhausted);
+  EXPECT_EQ(cut.voxel_updates, 0u);
+  EXPECT_GE(cut.blocks_not_reached, full_layer.numBlocks());
+  EXPECT_EQ(cut_layer.numBlocks(), 0u);
+
+  // A generous budget changes nothing: bit-identical to the unlimited run.
+  config.max_integration_time_s = 60.0;
+  TsdfLayer generous_layer(LayerConfig{kVoxelSize, 8});
+  const IntegrationStats generous = ProjectiveTsdfIntegrator(config, &generous_layer)
+                                        .integrateDepthImage(view.T_G_C.cast<float>(),
+                                                             view.depth, camera, &view.color);
+  EXPECT_FALSE(generous.budget_exhausted);
+  EXPECT_EQ(generous.voxel_updates, full.voxel_updates);
+  ASSERT_EQ(generous_layer.numBlocks(), full_layer.numBlocks());
+  for (const auto& [key, block] : full_layer.blocks()) {
+    const Block* other = generous_layer.getBlock(block->index());
+    ASSERT_NE(other, nullptr);
+    for (int i = 0; i < block->numVoxels(); ++i) {
+      ASSERT_EQ(block->voxel(i).distance, other->voxel(i).distance);
+    }
+  }
+}
+
 // Blocks of 2^3 voxels take the scalar projection path (rows shorter than a SIMD vector),
 // 8^3 the SIMD one. After one frame the voxels observed in both volumes agree to float
 // rounding (voxel centres are reached by different sums), except the rare voxel whose

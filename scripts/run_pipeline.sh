@@ -6,12 +6,13 @@
 #
 # Usage: scripts/run_pipeline.sh [--scene room|hall|town] [--trajectory orbit|loop|...]
 #                                [--rate HZ] [--frames N] [--out DIR] [--name NAME]
+#                                [--mapper-config FILE]   (default config/mapper.yaml)
 # Writes DIR/NAME.ply (the mapper's mesh), DIR/NAME_gt.ply (exact scene), DIR/NAME_eval.json
 # and DIR/NAME_error.png. Needs a build (scripts/build.sh); BUILD_DIR selects it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
-scene=room trajectory=orbit rate=20 frames=0 out=out name=""
+scene=room trajectory=orbit rate=20 frames=0 out=out name="" mapper_config=config/mapper.yaml
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --scene) scene=$2; shift 2 ;;
@@ -20,6 +21,7 @@ while [[ $# -gt 0 ]]; do
     --frames) frames=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     --name) name=$2; shift 2 ;;
+    --mapper-config) mapper_config=$2; shift 2 ;;
     *) echo "run_pipeline: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
@@ -30,11 +32,12 @@ bin=$(cd "$BUILD_DIR/daemon" && pwd)
 
 if [[ "${CBLOX_IN_NETNS:-}" != "1" ]]; then
   CBLOX_IN_NETNS=1 exec scripts/netns-run.sh "$0" --scene "$scene" --trajectory "$trajectory" \
-    --rate "$rate" --frames "$frames" --out "$out" --name "$name"
+    --rate "$rate" --frames "$frames" --out "$out" --name "$name" \
+    --mapper-config "$mapper_config"
 fi
 
 url="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
-"$bin/cblox-mapper" --config config/mapper.yaml --pose-source ground_truth --output-dir "$out" \
+"$bin/cblox-mapper" --config "$mapper_config" --pose-source ground_truth --output-dir "$out" \
   --lcm-url "$url" > "$out/${name}_mapper.log" 2>&1 &
 mapper=$!
 trap 'kill -TERM $mapper 2>/dev/null || true' EXIT
@@ -59,6 +62,6 @@ wait $mapper || { echo "pipeline: cblox-mapper exited with $?" >&2; exit 1; }
 trap - EXIT
 "$bin/cblox-capture" --source "sim:$scene" --write-scene "$out/${name}_gt.ply" > /dev/null
 "$bin/cblox-eval" --gt-mesh "$out/${name}_gt.ply" --mesh "$out/$name.ply" --max-error 0.04 \
-  --voxel-size "$(awk '/^  voxel_size:/ {print $2; exit}' config/mapper.yaml)" \
+  --voxel-size "$(awk '/^  voxel_size:/ {print $2; exit}' "$mapper_config")" \
   --json "$out/${name}_eval.json" --error-png "$out/${name}_error.png"
 echo "pipeline: mesh $out/$name.ply (mapper log $out/${name}_mapper.log)"

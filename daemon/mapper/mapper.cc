@@ -751,7 +751,7 @@ MapperReply Mapper::exportMesh(const MapperCommand& command) {
   MapperReply reply;
   std::string error;
   const auto path = resolveOutputPath(output_dir_, command.args.at("path"), &error);
-  if (!path) {
+  if (!path || !staysInsideOnDisk(output_dir_, *path, &error)) {
     reply.message = error;
     return reply;
   }
@@ -797,7 +797,7 @@ MapperReply Mapper::exportSubmapMeshes(const MapperCommand& command) {
   MapperReply reply;
   std::string error;
   const auto dir = resolveOutputPath(output_dir_, command.args.at("path"), &error);
-  if (!dir) {
+  if (!dir || !staysInsideOnDisk(output_dir_, *dir, &error)) {
     reply.message = error;
     return reply;
   }

@@ -27,4 +27,28 @@ std::optional<std::filesystem::path> resolveOutputPath(const std::filesystem::pa
   return (base / path).lexically_normal();
 }
 
+bool staysInsideOnDisk(const std::filesystem::path& output_dir,
+                       const std::filesystem::path& target, std::string* error) {
+  std::error_code ec;
+  const std::filesystem::path base = std::filesystem::canonical(output_dir, ec);
+  if (ec) {
+    if (error != nullptr) *error = "output directory " + output_dir.string() + ": " + ec.message();
+    return false;
+  }
+  const std::filesystem::path resolved = std::filesystem::weakly_canonical(target, ec);
+  if (ec) {
+    if (error != nullptr) *error = "path " + target.string() + ": " + ec.message();
+    return false;
+  }
+  const std::filesystem::path relative = resolved.lexically_relative(base);
+  if (relative.empty() || *relative.begin() == "..") {
+    if (error != nullptr) {
+      *error = "path '" + target.string() + "' leads outside the output directory " +
+               base.string() + " (through a symbolic link, to " + resolved.string() + ")";
+    }
+    return false;
+  }
+  return true;
+}
+
 }  // namespace cblox

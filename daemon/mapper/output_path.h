@@ -15,4 +15,12 @@ std::optional<std::filesystem::path> resolveOutputPath(const std::filesystem::pa
                                                        const std::string& requested,
                                                        std::string* error);
 
+/// Checks on disk that `target` (a path resolveOutputPath returned) really lies inside
+/// `output_dir` once symbolic links are followed: the longest existing prefix of `target` is
+/// resolved (std::filesystem::weakly_canonical) and must be inside canonical(output_dir).
+/// Returns false with a message when a link leads outside or output_dir does not exist.
+/// Call it right before writing. Thread-safe (reads the file system only).
+bool staysInsideOnDisk(const std::filesystem::path& output_dir,
+                       const std::filesystem::path& target, std::string* error);
+
 }  // namespace cblox

@@ -1,4 +1,7 @@
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <string>
 #include <thread>
@@ -159,6 +162,27 @@ TEST(OutputPathTest, ConfinesPathsToTheOutputDirectory) {
     EXPECT_NE(error.find(c.why), std::string::npos) << c.path << ": " << error;
   }
   EXPECT_FALSE(resolveOutputPath("/data/out", std::string("a\0b", 3), &error).has_value());
+}
+
+TEST(OutputPathTest, SymbolicLinksOutOfTheDirectoryAreCaught) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / ("cblox_links_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "out" / "sub");
+  fs::create_directories(root / "elsewhere");
+  fs::create_directory_symlink(root / "elsewhere", root / "out" / "escape");
+  std::string error;
+  // Lexically fine, but the link leads outside.
+  const auto via_link = resolveOutputPath(root / "out", "escape/map.ply", &error);
+  ASSERT_TRUE(via_link.has_value());
+  EXPECT_FALSE(staysInsideOnDisk(root / "out", *via_link, &error));
+  EXPECT_NE(error.find("leads outside the output directory"), std::string::npos) << error;
+  // Real subdirectories and files not yet written are fine.
+  EXPECT_TRUE(staysInsideOnDisk(root / "out", root / "out" / "sub" / "map.ply", &error)) << error;
+  EXPECT_TRUE(staysInsideOnDisk(root / "out", root / "out" / "new" / "dir" / "m.ply", &error))
+      << error;
+  EXPECT_FALSE(staysInsideOnDisk(root / "missing", root / "missing" / "m.ply", &error));
+  fs::remove_all(root);
 }
 
 }  // namespace

@@ -26,6 +26,7 @@
 
 #include "core/io/ply_io.h"
 #include "daemon/config/capture_config.h"
+#include "daemon/config/command_line.h"
 #include "daemon/config/yaml_config.h"
 #include "daemon/lcm/messages.h"
 #include "drivers/frame_folder_writer.h"
@@ -71,31 +72,23 @@ int64_t toInt(const std::string& flag, const std::string& value) {
 
 Args parseArgs(int argc, char** argv) {
   Args args;
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (flag == "--help" || flag == "-h") {
-      printUsage();
-      std::exit(0);
-    }
-    if (flag == "--quiet") {
-      args.quiet = true;
-      continue;
-    }
-    if (i + 1 >= argc) throw ConfigError(flag + ": missing value (see --help)");
-    const std::string value = argv[++i];
-    if (flag == "--config") args.config_file = value;
-    else if (flag == "--source") args.source = value;
-    else if (flag == "--trajectory") args.trajectory = value;
-    else if (flag == "--laps") args.laps = static_cast<int>(toInt(flag, value));
-    else if (flag == "--rate") args.rate = value;
-    else if (flag == "--frames") args.frames = static_cast<int>(toInt(flag, value));
-    else if (flag == "--noise") args.noise = value;
-    else if (flag == "--lcm-url") args.lcm_url = value;
-    else if (flag == "--depth-encoding") args.depth_encoding = value;
-    else if (flag == "--render-to") args.render_to = value;
-    else if (flag == "--write-scene") args.write_scene = value;
-    else throw ConfigError("unknown option '" + flag + "' (see --help)");
-  }
+  parseFlags(
+      argc, argv, printUsage, {"--quiet"}, [&](const std::string&) { args.quiet = true; },
+      [&](const std::string& flag, const std::string& value) {
+        if (flag == "--config") args.config_file = value;
+        else if (flag == "--source") args.source = value;
+        else if (flag == "--trajectory") args.trajectory = value;
+        else if (flag == "--laps") args.laps = static_cast<int>(toInt(flag, value));
+        else if (flag == "--rate") args.rate = value;
+        else if (flag == "--frames") args.frames = static_cast<int>(toInt(flag, value));
+        else if (flag == "--noise") args.noise = value;
+        else if (flag == "--lcm-url") args.lcm_url = value;
+        else if (flag == "--depth-encoding") args.depth_encoding = value;
+        else if (flag == "--render-to") args.render_to = value;
+        else if (flag == "--write-scene") args.write_scene = value;
+        else return false;
+        return true;
+      });
   return args;
 }
 

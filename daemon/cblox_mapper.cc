@@ -37,6 +37,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "daemon/config/mapper_config.h"
+#include "daemon/config/command_line.h"
 #include "daemon/config/yaml_config.h"
 #include "daemon/lcm/messages.h"
 #include "daemon/mapper/mapper.h"
@@ -64,29 +65,21 @@ struct Args {
 
 Args parseArgs(int argc, char** argv) {
   Args args;
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (flag == "--help" || flag == "-h") {
-      printUsage();
-      std::exit(0);
-    }
-    if (flag == "--quiet") {
-      args.quiet = true;
-      continue;
-    }
-    if (i + 1 >= argc) throw ConfigError(flag + ": missing value (see --help)");
-    const std::string value = argv[++i];
-    if (flag == "--config")
-      args.config_file = value;
-    else if (flag == "--pose-source")
-      args.pose_source = value;
-    else if (flag == "--output-dir")
-      args.output_dir = value;
-    else if (flag == "--lcm-url")
-      args.lcm_url = value;
-    else
-      throw ConfigError("unknown option '" + flag + "' (see --help)");
-  }
+  parseFlags(argc, argv, printUsage, {"--quiet"}, [&](const std::string&) { args.quiet = true; },
+             [&](const std::string& flag, const std::string& value) {
+               if (flag == "--config") {
+                 args.config_file = value;
+               } else if (flag == "--pose-source") {
+                 args.pose_source = value;
+               } else if (flag == "--output-dir") {
+                 args.output_dir = value;
+               } else if (flag == "--lcm-url") {
+                 args.lcm_url = value;
+               } else {
+                 return false;
+               }
+               return true;
+             });
   return args;
 }
 

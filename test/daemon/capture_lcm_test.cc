@@ -24,8 +24,7 @@
 #include "daemon/lcm/messages.h"
 #include "drivers/sim/builtin_scenes.h"
 #include "drivers/open_frame_source.h"
-
-extern char** environ;
+#include "test/test_support/spawn.h"
 
 namespace cblox {
 namespace {
@@ -52,14 +51,7 @@ struct Received {
   }
 };
 
-pid_t spawn(const std::vector<std::string>& args) {
-  std::vector<char*> argv;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = -1;
-  EXPECT_EQ(posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ), 0);
-  return pid;
-}
+pid_t spawn(const std::vector<std::string>& args) { return test::spawnProcess(args); }
 
 TEST(CaptureLcmTest, PublishesSimulatorFramesThatMatchTheSourceExactly) {
   constexpr int kFrames = 12;

@@ -24,9 +24,8 @@
 #include "core/io/ply_io.h"
 #include "core/raycast/triangle_mesh_raycaster.h"
 #include "drivers/open_frame_source.h"
+#include "test/test_support/spawn.h"
 #include "test/test_support/temp_dir.h"
-
-extern char** environ;
 
 namespace cblox {
 namespace {
@@ -50,14 +49,7 @@ struct Received {
   }
 };
 
-pid_t spawn(const std::vector<std::string>& args) {
-  std::vector<char*> argv;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = -1;
-  EXPECT_EQ(posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ), 0);
-  return pid;
-}
+pid_t spawn(const std::vector<std::string>& args) { return test::spawnProcess(args); }
 
 /// Pumps LCM until `pid` exits or the deadline passes; returns its exit status or nullopt.
 std::optional<int> waitWhilePumping(lcm::LCM* lcm, pid_t pid, Clock::time_point deadline) {

@@ -26,9 +26,8 @@
 
 #include "daemon/lcm/messages.h"
 #include "drivers/open_frame_source.h"
+#include "test/test_support/spawn.h"
 #include "test/test_support/temp_dir.h"
-
-extern char** environ;
 
 namespace cblox {
 namespace {
@@ -74,11 +73,8 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
   const std::vector<std::string> args = {CBLOX_MAPPER_EXE, "--pose-source", "tracker",
                                          "--output-dir", dir.path().string(), "--lcm-url", kUrl,
                                          "--quiet"};
-  std::vector<char*> argv;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t mapper = -1;
-  ASSERT_EQ(posix_spawn(&mapper, argv[0], nullptr, nullptr, argv.data(), environ), 0);
+  const pid_t mapper = test::spawnProcess(args);
+  ASSERT_GT(mapper, 0);
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
 
   lcm::LCM lcm(kUrl);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 
 #include "core/io/ply_io.h"
@@ -37,7 +38,11 @@ StampedTrajectory orbitAroundMesh(const Mesh& mesh, const MotionProfile& motion,
 
 std::unique_ptr<FrameSource> openSim(const std::string& what, const SourceOptions& options,
                                      std::string* error) {
-  std::shared_ptr<const Mesh> mesh = loadSimSceneMesh("sim:" + what, error);
+  // A built-in scene is generated once here, for its mesh and its paths.
+  std::optional<BuiltinScene> builtin;
+  if (isBuiltin(what)) builtin = makeBuiltinScene(what);
+  std::shared_ptr<const Mesh> mesh = builtin ? std::make_shared<const Mesh>(builtin->mesh)
+                                             : loadSimSceneMesh("sim:" + what, error);
   if (mesh == nullptr) return nullptr;
   SimSourceConfig config = options.sim;
   config.max_frames = options.max_frames > 0 ? options.max_frames : config.max_frames;
@@ -52,8 +57,8 @@ std::unique_ptr<FrameSource> openSim(const std::string& what, const SourceOption
       if (!read.has_value()) return nullptr;
       trajectory = std::move(*read);
       trajectory_name = std::filesystem::path(options.trajectory).filename().string();
-    } else if (isBuiltin(what)) {
-      const BuiltinScene scene = makeBuiltinScene(what);
+    } else if (builtin) {
+      const BuiltinScene& scene = *builtin;
       trajectory = makeSceneTrajectory(scene, parseTrajectoryKind(options.trajectory),
                                        std::max(config.rate_hz, 50.0), options.laps);
       if (!options.keep_rig_range) {

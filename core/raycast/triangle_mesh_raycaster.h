@@ -86,9 +86,6 @@ class TriangleMeshRaycaster {
                             const PinholeIntrinsics& intrinsics, int row_begin, int row_end,
                             std::span<RaycastHit> hits) const;
 
-  /// Unit normal (v1 - v0) x (v2 - v0) / |...| of triangle i (zero for a degenerate one).
-  const Eigen::Vector3f& triangleNormal(uint32_t i) const { return triangle_normals_[i]; }
-
   /// True if anything lies on `ray` within [t_near, t_far] (shadow ray). Thread-safe.
   bool occluded(const Ray& ray) const;
 

@@ -63,31 +63,35 @@ FrameSource::Status SimSource::next(CaptureFrame* frame, std::string* /*error*/)
   const double t = trajectory_.front().timestamp_s + static_cast<double>(id) / config_.rate_hz;
   const Transformationd T_G_L = poseAt(t);
 
-  renderer_.render(T_G_L, &scratch_);
   const SensorNoiseConfig& noise = config_.noise;
   if (noise.exposure_time_s > 0.0 && noise.blur_samples > 1) {
-    // Motion blur: average the grey images over the exposure window.
+    // Motion blur: depth and colour at the frame's pose (the same views render() makes);
+    // the grey images are averages of renders spread over the exposure window.
     const SimRigConfig& rig = config_.renderer.rig;
+    renderer_.renderView(rig.depthIsLeftCamera() ? T_G_L : T_G_L * rig.T_L_D,
+                         rig.depthIntrinsics(), nullptr, &scratch_.color, &scratch_.depth);
     const Transformationd T_L_R(Eigen::Quaterniond::Identity(),
                                 Eigen::Vector3d(rig.baseline_m, 0.0, 0.0));
-    std::vector<uint32_t> sum_left(scratch_.left.data.size(), 0);
-    std::vector<uint32_t> sum_right(scratch_.right.data.size(), 0);
+    const size_t pixels = static_cast<size_t>(rig.stereo.width) * rig.stereo.height;
+    std::vector<uint32_t> sum_left(pixels, 0), sum_right(pixels, 0);
     GrayImage left, right;
     for (int s = 0; s < noise.blur_samples; ++s) {
       const double ts = t + noise.exposure_time_s * ((s + 0.5) / noise.blur_samples - 0.5);
       const Transformationd T = poseAt(ts);
       renderer_.renderView(T, rig.stereo, &left, nullptr, nullptr);
       renderer_.renderView(T * T_L_R, rig.stereo, &right, nullptr, nullptr);
-      for (size_t i = 0; i < sum_left.size(); ++i) sum_left[i] += left.data[i];
-      for (size_t i = 0; i < sum_right.size(); ++i) sum_right[i] += right.data[i];
+      for (size_t i = 0; i < pixels; ++i) sum_left[i] += left.data[i];
+      for (size_t i = 0; i < pixels; ++i) sum_right[i] += right.data[i];
     }
     const uint32_t n = static_cast<uint32_t>(noise.blur_samples);
-    for (size_t i = 0; i < sum_left.size(); ++i) {
-      scratch_.left.data[i] = static_cast<uint8_t>((sum_left[i] + n / 2) / n);
+    for (size_t i = 0; i < pixels; ++i) {
+      left.data[i] = static_cast<uint8_t>((sum_left[i] + n / 2) / n);
+      right.data[i] = static_cast<uint8_t>((sum_right[i] + n / 2) / n);
     }
-    for (size_t i = 0; i < sum_right.size(); ++i) {
-      scratch_.right.data[i] = static_cast<uint8_t>((sum_right[i] + n / 2) / n);
-    }
+    std::swap(scratch_.left, left);
+    std::swap(scratch_.right, right);
+  } else {
+    renderer_.render(T_G_L, &scratch_);
   }
   const double gain = sensor_.gain(t - trajectory_.front().timestamp_s);
   sensor_.applyImageNoise(id, 0, gain, &scratch_.left);

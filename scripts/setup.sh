@@ -8,7 +8,7 @@ packages=(
   build-essential cmake ninja-build ccache pkg-config git
   libeigen3-dev libabsl-dev libyaml-cpp-dev libopencv-dev
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jdk-headless
-  libembree-dev
+  libembree-dev libceres-dev libsuitesparse-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   iproute2 util-linux python3
 )

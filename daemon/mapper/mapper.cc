@@ -656,23 +656,37 @@ void Mapper::maintenanceLoop() {
   std::unique_lock<std::mutex> lock(queue_mutex_);
   while (true) {
     queue_cv_.wait(lock, [this] { return stop_ || !maintenance_queue_.empty(); });
-    if (stop_) return;
+    if (stop_) break;
     MaintenanceItem item = std::move(maintenance_queue_.front());
     maintenance_queue_.pop_front();
     maintenance_busy_ = true;
     lock.unlock();
-    try {
-      if (item.is_batch) {
-        applyBatch(item.batch);
-      } else {
-        applyKeyframe(item.keyframe_id, item.utime, item.T_G_K);
-      }
-    } catch (const std::exception& e) {
-      count(item.is_batch ? InputProblem::kKeyframePoseInvalid : InputProblem::kKeyframeInvalid,
-            e.what());
-    }
+    applyMaintenanceItem(item);
     lock.lock();
     maintenance_busy_ = false;
+  }
+  // Stopping: keyframes and pose batches still queued are applied (no voxel is touched, so
+  // this is quick and bounded by the queue's capacity), so the map's frames are final.
+  std::deque<MaintenanceItem> left;
+  left.swap(maintenance_queue_);
+  lock.unlock();
+  for (const MaintenanceItem& item : left) applyMaintenanceItem(item);
+  if (!left.empty()) {
+    log("stopping: applied " + std::to_string(left.size()) +
+        " queued keyframe / pose-batch message(s)");
+  }
+}
+
+void Mapper::applyMaintenanceItem(const MaintenanceItem& item) {
+  try {
+    if (item.is_batch) {
+      applyBatch(item.batch);
+    } else {
+      applyKeyframe(item.keyframe_id, item.utime, item.T_G_K);
+    }
+  } catch (const std::exception& e) {
+    count(item.is_batch ? InputProblem::kKeyframePoseInvalid : InputProblem::kKeyframeInvalid,
+          e.what());
   }
 }
 

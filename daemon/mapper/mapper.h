@@ -243,7 +243,8 @@ class Mapper {
   /// the output directory cannot be created (nothing started). Call once. Thread-safe.
   bool start(std::string* error);
   /// Stops the threads: the integrator finishes the frame in hand, the worker the export in
-  /// hand (queued commands are answered "mapper stopping"); then joins them. Idempotent.
+  /// hand (queued commands are answered "mapper stopping"), the maintenance thread applies
+  /// the keyframes and pose batches still queued (logged); then joins them. Idempotent.
   /// Thread-safe (must not be called from a reply callback).
   void stop();
 
@@ -315,6 +316,8 @@ class Mapper {
   void applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K,
                      bool synthesised = false);
   void applyBatch(const std::vector<std::pair<KeyframeId, Transformationd>>& batch);
+  // A keyframe or a batch, errors counted (maintenance thread).
+  void applyMaintenanceItem(const MaintenanceItem& item);
   // Worker thread.
   MapperReply exportMesh(const MapperCommand& command);
   MapperReply exportSubmapMeshes(const MapperCommand& command);

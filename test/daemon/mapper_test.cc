@@ -491,6 +491,24 @@ TEST(MapperTest, TrackerModeFollowsKeyframesAndStartsANewSubvolumeAfterAJump) {
   EXPECT_GT(mapper.collection().getSubmap(1)->numBlocks(), 0u);
 }
 
+TEST(MapperTest, StopAppliesTheKeyframesStillQueued) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  config.pose_source = PoseSource::kTracker;
+  config.creation.max_keyframes_per_subvolume = 1000;
+  Mapper mapper(config, [](const std::string&) {});
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  const auto& frames = roomFrames();
+  constexpr KeyframeId kCount = 200;  // below the maintenance queue's capacity
+  for (KeyframeId id = 0; id < kCount; ++id) {
+    ASSERT_TRUE(mapper.onKeyframe(id, 1000 + static_cast<int64_t>(id), frames[0].T_G_C));
+  }
+  mapper.stop();  // no waitUntilIdle: whatever is still queued must be applied by stop()
+  ASSERT_EQ(mapper.collection().size(), 1u);
+  EXPECT_EQ(mapper.collection().getSubmap(0)->keyframeIds().size(), kCount);
+}
+
 TEST(MapperTest, InterpolatesPosesBetweenFrameTimes) {
   test::TempDir dir("mapper");
   Mapper mapper(testConfig(dir.path()));

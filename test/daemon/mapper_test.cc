@@ -17,6 +17,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <sched.h>
+#include <sys/resource.h>
 
 #include "core/io/ply_io.h"
 #include "drivers/synthetic/scenes.h"
@@ -507,6 +509,49 @@ TEST(MapperTest, StopAppliesTheKeyframesStillQueued) {
   mapper.stop();  // no waitUntilIdle: whatever is still queued must be applied by stop()
   ASSERT_EQ(mapper.collection().size(), 1u);
   EXPECT_EQ(mapper.collection().getSubmap(0)->keyframeIds().size(), kCount);
+}
+
+// Scheduling of every thread of this process: (policy, niceness) per thread id.
+std::vector<std::pair<int, int>> threadSchedules() {
+  std::vector<std::pair<int, int>> result;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/task")) {
+    const pid_t tid = static_cast<pid_t>(std::stol(entry.path().filename().string()));
+    errno = 0;
+    const int nice = getpriority(PRIO_PROCESS, static_cast<id_t>(tid));
+    result.emplace_back(sched_getscheduler(tid), nice);
+  }
+  return result;
+}
+
+TEST(MapperTest, WorkerThreadRunsAtIdlePriority) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  config.worker_niceness = 7;
+  config.worker_sched_idle = true;
+  LogLines lines;
+  Mapper mapper(config, lines.sink());
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  const std::pair<int, int> expected{SCHED_IDLE, 7};
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  std::vector<std::pair<int, int>> schedules;
+  do {  // the worker lowers its own priority as it starts
+    schedules = threadSchedules();
+    if (std::count(schedules.begin(), schedules.end(), expected) == 1) break;
+    std::this_thread::sleep_for(milliseconds(5));
+  } while (std::chrono::steady_clock::now() < deadline);
+  EXPECT_EQ(std::count(schedules.begin(), schedules.end(), expected), 1) << [&] {
+    std::string s;
+    for (const auto& [policy, nice] : schedules)
+      s += " (" + std::to_string(policy) + ", " + std::to_string(nice) + ")";
+    std::lock_guard<std::mutex> lock(lines.mutex);
+    for (const auto& l : lines.lines) s += "\n" + l;
+    return s;
+  }();
+  // The integrator and maintenance threads keep the process's normal priority.
+  const std::pair<int, int> normal{SCHED_OTHER, getpriority(PRIO_PROCESS, 0)};
+  EXPECT_GE(std::count(schedules.begin(), schedules.end(), normal), 3);  // main + 2 mapper
+  mapper.stop();
 }
 
 TEST(MapperTest, InterpolatesPosesBetweenFrameTimes) {

@@ -1,0 +1,46 @@
+#pragma once
+
+#include <array>
+
+#include <opencv2/core.hpp>
+
+#include "core/features/orb_descriptor.h"
+#include "core/features/orb_pattern.h"
+
+namespace cblox {
+
+/// Distance (pixels at the keypoint's level) from a keypoint to the farthest pixel that
+/// rotated BRIEF reads: the pattern's points lie in [-13, 12]^2, so after any rotation and
+/// rounding they lie within 13 * sqrt(2) < 19 pixels. Keypoints at least this far from the
+/// level border need no bounds check.
+inline constexpr int kRotatedBriefRadius = 19;
+
+/// ORB's rotated BRIEF descriptor (256 bits, OpenCV's 31x31 pattern), computed exactly as
+/// OpenCV's ORB (and ORB-SLAM2) compute it: for pair i with points a, b of the pattern and
+/// the keypoint angle theta, a' = round(R(theta) a) (round half to even, float arithmetic as
+/// OpenCV), bit i = I(center + a') < I(center + b'), on the Gaussian-blurred level image.
+/// Immutable after construction: thread-safe.
+class RotatedBrief {
+ public:
+  RotatedBrief();
+
+  /// Descriptor of the keypoint at pixel (round(x), round(y)) of `blurred_level` (CV_8UC1,
+  /// the pyramid level blurred with blurLevel()) with orientation `angle_deg` (degrees). The
+  /// caller guarantees that the keypoint is at least kRotatedBriefRadius pixels from every
+  /// border (unchecked).
+  OrbDescriptor compute(const cv::Mat& blurred_level, float x, float y, float angle_deg) const;
+
+  /// The smoothing ORB applies before the intensity tests: 7x7 Gaussian, sigma 2,
+  /// BORDER_REFLECT_101, computed the way OpenCV's ORB computes it (in place, on the level
+  /// inside a buffer padded with its reflection; OpenCV then rounds slightly differently from
+  /// cv::GaussianBlur on a whole image, which ORB-SLAM2 uses). *dst becomes a view into
+  /// *padded (a buffer reused when its size matches). Thread-safe apart from the outputs.
+  static void blurLevel(const cv::Mat& level, cv::Mat* padded, cv::Mat* dst);
+
+ private:
+  // Pattern coordinates as floats, points interleaved: [2i] = a of pair i, [2i+1] = b.
+  alignas(16) std::array<float, 2 * kOrbPatternPairs> px_{};
+  alignas(16) std::array<float, 2 * kOrbPatternPairs> py_{};
+};
+
+}  // namespace cblox

@@ -1,0 +1,176 @@
+// Google Benchmark: ORB-SLAM2-style feature extraction (cblox::OrbExtractor, 1200 features,
+// scale 1.2, 8 levels) against OpenCV's ORB (cv::ORB::create(1200, 1.2f, 8)) on the same
+// simulator frames, plus stereo matching and RGB-D depth of the extracted keypoints.
+// Frames: sim:room (752x480 default rig, exact images), 8 poses 1 s apart along its loop,
+// rendered once before timing. One iteration = one image (frames taken in turn). OpenCV's
+// own worker threads are off (cv::setNumThreads(1)) so every figure is one core. Also FAST
+// alone (cblox::FastDetector vs cv::FAST, thresholds 7 and 20, level-0 image).
+//
+//   build/test/bench/cblox-bench-features --benchmark_repetitions=15
+//   --benchmark_report_aggregates_only=true
+//
+// The *_median rows are the figures to report (the host is shared); run it under
+// `taskset -c 0` for one pinned core.
+
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+
+#include "core/features/fast_detector.h"
+#include "core/features/orb_extractor.h"
+#include "core/features/rgbd_depth.h"
+#include "core/features/stereo_matcher.h"
+#include "drivers/open_frame_source.h"
+
+namespace cblox {
+namespace {
+
+struct Frames {
+  std::vector<CaptureFrame> frames;
+  double fx = 0.0, baseline_m = 0.0;
+};
+
+const Frames& frames() {
+  static const Frames f = [] {
+    Frames result;
+    SourceOptions options;
+    options.sim.rate_hz = 1.0;
+    options.max_frames = 8;
+    std::string error;
+    std::unique_ptr<FrameSource> source = openFrameSource("sim:room", options, &error);
+    if (source == nullptr || !source->info().stereo.has_value()) {
+      std::fprintf(stderr, "cannot open sim:room: %s\n", error.c_str());
+      std::exit(1);
+    }
+    result.fx = source->info().stereo->intrinsics.fx;
+    result.baseline_m = source->info().stereo->baseline_m;
+    CaptureFrame frame;
+    while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+      result.frames.push_back(frame);
+    }
+    if (result.frames.empty()) {
+      std::fprintf(stderr, "sim:room delivered no frame: %s\n", error.c_str());
+      std::exit(1);
+    }
+    return result;
+  }();
+  return f;
+}
+
+cv::Mat view(const GrayImage& image) {
+  return cv::Mat(image.height, image.width, CV_8UC1, const_cast<uint8_t*>(image.data.data()));
+}
+
+void BM_OrbExtractor(benchmark::State& state) {
+  const Frames& f = frames();
+  OrbExtractor extractor{OrbExtractorConfig{}};
+  size_t i = 0, features = 0, images = 0;
+  for (auto _ : state) {
+    const ExtractedFeatures out = extractor.extract(f.frames[i++ % f.frames.size()].left);
+    features += out.keypoints.size();
+    ++images;
+    benchmark::DoNotOptimize(out.descriptors.data());
+  }
+  state.counters["features"] = static_cast<double>(features) / static_cast<double>(images);
+}
+
+void BM_CvOrb(benchmark::State& state) {
+  const Frames& f = frames();
+  cv::Ptr<cv::ORB> orb = cv::ORB::create(1200, 1.2f, 8);
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;
+  size_t i = 0, features = 0, images = 0;
+  for (auto _ : state) {
+    orb->detectAndCompute(view(f.frames[i++ % f.frames.size()].left), cv::noArray(), keypoints,
+                          descriptors);
+    features += keypoints.size();
+    ++images;
+    benchmark::DoNotOptimize(descriptors.data);
+  }
+  state.counters["features"] = static_cast<double>(features) / static_cast<double>(images);
+}
+
+void BM_MatchStereo(benchmark::State& state) {
+  const Frames& f = frames();
+  OrbExtractor left{OrbExtractorConfig{}}, right{OrbExtractorConfig{}};
+  std::vector<std::pair<ExtractedFeatures, ExtractedFeatures>> pairs;
+  for (const CaptureFrame& frame : f.frames) {
+    pairs.emplace_back(left.extract(frame.left), right.extract(frame.right));
+  }
+  size_t i = 0, matched = 0, images = 0;
+  for (auto _ : state) {
+    const auto& [l, r] = pairs[i++ % pairs.size()];
+    const StereoDepth depth = matchStereo(l, r, f.fx, f.baseline_m, StereoMatcherConfig{});
+    matched += depth.numWithDepth();
+    ++images;
+  }
+  state.counters["matched"] = static_cast<double>(matched) / static_cast<double>(images);
+}
+
+void BM_DepthFromRgbd(benchmark::State& state) {
+  const Frames& f = frames();
+  OrbExtractor extractor{OrbExtractorConfig{}};
+  std::vector<ExtractedFeatures> extracted;
+  for (const CaptureFrame& frame : f.frames) extracted.push_back(extractor.extract(frame.left));
+  size_t i = 0;
+  for (auto _ : state) {
+    const size_t k = i++ % extracted.size();
+    const StereoDepth depth =
+        depthFromRgbd(extracted[k].keypoints, f.frames[k].depth, f.fx * f.baseline_m);
+    benchmark::DoNotOptimize(depth.depth.data());
+  }
+}
+
+// FAST alone on the level-0 image: cblox::FastDetector against cv::FAST (identical corners).
+void BM_FastDetector(benchmark::State& state) {
+  const Frames& f = frames();
+  FastDetector detector;
+  std::vector<FastCorner> corners;
+  size_t i = 0;
+  for (auto _ : state) {
+    detector.detect(view(f.frames[i++ % f.frames.size()].left), static_cast<int>(state.range(0)),
+                    &corners);
+    benchmark::DoNotOptimize(corners.data());
+  }
+}
+
+void BM_CvFast(benchmark::State& state) {
+  const Frames& f = frames();
+  std::vector<cv::KeyPoint> corners;
+  size_t i = 0;
+  for (auto _ : state) {
+    cv::FAST(view(f.frames[i++ % f.frames.size()].left), corners, static_cast<int>(state.range(0)),
+             true);
+    benchmark::DoNotOptimize(corners.data());
+  }
+}
+
+BENCHMARK(BM_OrbExtractor)->Name("extract/cblox::OrbExtractor")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CvOrb)->Name("extract/cv::ORB")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_MatchStereo)->Name("stereo/matchStereo")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DepthFromRgbd)->Name("rgbd/depthFromRgbd")->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_FastDetector)
+    ->Name("fast/cblox::FastDetector")
+    ->Arg(7)
+    ->Arg(20)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CvFast)->Name("fast/cv::FAST")->Arg(7)->Arg(20)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace cblox
+
+int main(int argc, char** argv) {
+  cv::setNumThreads(1);
+  cblox::frames();  // render before any timing
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

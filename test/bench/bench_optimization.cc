@@ -1,0 +1,191 @@
+// Google Benchmark: the sparse SLAM's optimisers (core/optimization), single-threaded.
+//  - motion-only pose optimisation (hand-written LM, ORB-SLAM2's 4 x 10 scheme) with 300
+//    observations (1 px noise, 10% gross outliers);
+//  - local BA of an ORB-SLAM2-like window: 10 free + 10 fixed keyframes, 2000 landmarks,
+//    ~8000 observations (1 px noise, 2% gross outliers), DENSE_SCHUR and SPARSE_SCHUR;
+//  - BA with 10 / 60 / 120 / 250 free keyframes and both Schur solvers (kAuto's crossover);
+//  - the BA linearization + information matrix of the local window (for core/covariance);
+//  - an SE(3) pose graph of 500 keyframes (loop with covisibility edges and drift).
+//
+//   build/test/bench/cblox-bench-optimization --benchmark_repetitions=3
+//       --benchmark_report_aggregates_only=true   (one command line)
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <random>
+#include <vector>
+
+#include "core/optimization/ba_linearization.h"
+#include "core/optimization/bundle_adjustment.h"
+#include "core/optimization/pose_graph_optimizer.h"
+#include "core/optimization/pose_optimizer.h"
+#include "test/optimization/synthetic_scenes.h"
+
+namespace cblox {
+namespace {
+
+struct PoseWorkload {
+  test::PoseScene scene;
+  Transformationd start;
+};
+
+const PoseWorkload& poseWorkload() {
+  static const PoseWorkload w = [] {
+    PoseWorkload result;
+    result.scene = test::makePoseScene(300, 1.0, 7);
+    std::mt19937 rng(8);
+    for (size_t i = 0; i < result.scene.observations.size(); i += 10) {
+      result.scene.observations[i].u += 40.0;
+    }
+    result.start = test::perturbPose(result.scene.T_C_G_true, 0.03, 0.02, rng);
+    return result;
+  }();
+  return w;
+}
+
+void BM_PoseOptimization(benchmark::State& state) {
+  const PoseWorkload& w = poseWorkload();
+  const StereoCameraModel camera = test::syntheticCamera();
+  PoseOptimizationResult result;
+  for (auto _ : state) {
+    result = optimizePose(camera, w.start, w.scene.observations);
+    benchmark::DoNotOptimize(result);
+  }
+  state.counters["observations"] = static_cast<double>(w.scene.observations.size());
+  state.counters["inliers"] = result.num_inliers;
+  state.counters["iterations"] = result.iterations;
+}
+
+// A window of `keyframes` keyframes (the first `fixed` fixed) over 2000 landmarks, about 4
+// observations per landmark.
+test::BaScene window(int keyframes, int fixed, double observe_probability) {
+  test::BaSceneOptions options;
+  options.keyframes = keyframes;
+  options.landmarks = 2000;
+  options.step_m = 0.25;
+  options.observe_probability = observe_probability;
+  options.pixel_noise = 1.0;
+  options.seed = 11;
+  test::BaScene scene = test::makeBaScene(options);
+  for (int k = 0; k < fixed; ++k) scene.problem.keyframes[k].fixed = true;
+  for (size_t i = 0; i < scene.problem.observations.size(); i += 50) {
+    scene.problem.observations[i].v += 30.0;  // 2% gross outliers
+  }
+  test::perturbInitialState(&scene, 0.02, 0.01, 0.05, 12);
+  return scene;
+}
+
+const test::BaScene& localWindow() {
+  static const test::BaScene scene = window(20, 10, 0.225);
+  return scene;
+}
+
+void runBundleAdjustment(benchmark::State& state, const test::BaScene& scene,
+                         BaLinearSolver solver) {
+  BundleAdjustmentConfig config;
+  config.linear_solver = solver;
+  BundleAdjustmentResult result;
+  for (auto _ : state) {
+    result = bundleAdjust(scene.problem, config);
+    benchmark::DoNotOptimize(result);
+  }
+  int free_keyframes = 0;
+  for (const BaKeyframe& kf : scene.problem.keyframes) free_keyframes += kf.fixed ? 0 : 1;
+  state.counters["free_kf"] = free_keyframes;
+  state.counters["landmarks"] = static_cast<double>(scene.problem.landmarks.size());
+  state.counters["observations"] = static_cast<double>(scene.problem.observations.size());
+  state.counters["outliers"] = result.num_outliers;
+  state.counters["iterations"] = result.iterations;
+  state.SetLabel(result.linear_solver);
+}
+
+// range(0) = 0: the default config (kAuto: DENSE_SCHUR here), 1: SPARSE_SCHUR.
+void BM_LocalBundleAdjustment(benchmark::State& state) {
+  runBundleAdjustment(state, localWindow(),
+                      state.range(0) ? BaLinearSolver::kSparseSchur : BaLinearSolver::kAuto);
+}
+
+// range(0) free keyframes (plus 10 fixed), range(1) = 1 for SPARSE_SCHUR.
+void BM_BundleAdjustmentSolvers(benchmark::State& state) {
+  static std::vector<std::pair<int, test::BaScene>> scenes;
+  const int free = static_cast<int>(state.range(0));
+  auto it =
+      std::find_if(scenes.begin(), scenes.end(), [&](const auto& s) { return s.first == free; });
+  if (it == scenes.end()) {
+    // Keep ~4 observations per landmark as the window grows.
+    scenes.emplace_back(free, window(free + 10, 10, 0.225 * 20.0 / (free + 10)));
+    it = scenes.end() - 1;
+  }
+  runBundleAdjustment(state, it->second,
+                      state.range(1) ? BaLinearSolver::kSparseSchur : BaLinearSolver::kDenseSchur);
+}
+
+void BM_LinearizationAndInformation(benchmark::State& state) {
+  const test::BaScene& scene = localWindow();
+  const BundleAdjustmentResult ba = bundleAdjust(scene.problem);
+  for (auto _ : state) {
+    const BaLinearization lin = linearizeBundleAdjustmentSolution(scene.problem, ba);
+    const Eigen::SparseMatrix<double> H = informationMatrix(lin);
+    benchmark::DoNotOptimize(H.nonZeros());
+  }
+}
+
+void BM_PoseGraph(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  std::vector<Transformationd> truth;
+  for (int k = 0; k < n; ++k) {
+    const double a = 2.0 * M_PI * k / n;
+    truth.push_back(Transformationd::exp((Eigen::Matrix<double, 6, 1>() << 20.0 * std::cos(a), 0.0,
+                                          20.0 * std::sin(a), 0.0, -a, 0.0)
+                                             .finished())
+                        .inverse());
+  }
+  std::vector<PoseGraphEdge> edges;
+  for (int k = 0; k < n; ++k) {
+    for (int d = 1; d <= 3; ++d) {  // spanning tree + covisibility edges; the last wrap = loop
+      if (k + d >= n && !(d == 1 && k == n - 1)) continue;
+      PoseGraphEdge e;
+      e.i = k;
+      e.j = (k + d) % n;
+      e.T_i_j = truth[e.i] * truth[e.j].inverse();
+      edges.push_back(e);
+    }
+  }
+  std::mt19937 rng(21);
+  std::vector<PoseGraphVertex> vertices;
+  Transformationd T = truth[0];
+  for (int k = 0; k < n; ++k) {
+    vertices.push_back(PoseGraphVertex{static_cast<std::uint64_t>(k), T, k == 0});
+    T = test::perturbPose(truth[(k + 1) % n] * truth[k].inverse(), 0.01, 0.002, rng) * T;
+  }
+  PoseGraphResult result;
+  for (auto _ : state) {
+    result = optimizePoseGraph(vertices, edges);
+    benchmark::DoNotOptimize(result);
+  }
+  state.counters["edges"] = static_cast<double>(edges.size());
+  state.counters["iterations"] = result.iterations;
+}
+
+BENCHMARK(BM_PoseOptimization)->Name("pose_optimization/300_obs")->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_LocalBundleAdjustment)
+    ->Name("local_ba/10_free_10_fixed")
+    ->ArgName("sparse_schur")
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BundleAdjustmentSolvers)
+    ->Name("ba_solvers")
+    ->ArgNames({"free_kf", "sparse"})
+    ->ArgsProduct({{10, 60, 120, 250}, {0, 1}})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LinearizationAndInformation)
+    ->Name("ba_linearization/local_window")
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PoseGraph)->Name("pose_graph/keyframes")->Arg(500)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace cblox
+
+BENCHMARK_MAIN();

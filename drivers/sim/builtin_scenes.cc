@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/mesh/primitive_meshes.h"
+#include "drivers/sim/training_yard_scene.h"
 
 namespace cblox {
 namespace {
@@ -69,14 +70,15 @@ void appendChair(Mesh* mesh, float x, float y, float back_dir, const Color& colo
 
 }  // namespace
 
-std::vector<std::string> builtinSceneNames() { return {"room", "hall", "town"}; }
+std::vector<std::string> builtinSceneNames() { return {"room", "hall", "town", "yard"}; }
 
 BuiltinScene makeBuiltinScene(const std::string& name) {
   if (name == "room") return makeLivingRoom();
   if (name == "hall") return makeIndustrialHall();
   if (name == "town") return makeTown();
+  if (name == "yard") return makeTrainingYard();
   throw std::invalid_argument("unknown built-in scene '" + name +
-                              "' (known: room, hall, town)");
+                              "' (known: room, hall, town, yard)");
 }
 
 BuiltinScene makeLivingRoom() {

@@ -38,7 +38,8 @@ struct BuiltinScene {
   double texture_wavelength_m = 0.4;
 };
 
-/// The built-in scene names: "room", "hall", "town".
+/// The built-in scene names: "room", "hall", "town" (evaluation scenes) and "yard" (the
+/// vocabulary training scene, drivers/sim/training_yard_scene.h).
 std::vector<std::string> builtinSceneNames();
 
 /// Builds a scene by name. Throws std::invalid_argument naming the known scenes for an

@@ -17,7 +17,8 @@ TEST(BuiltinScenesTest, EverySceneIsAValidManifoldMeshOfTheAnnouncedSize) {
   };
   const Expect expects[] = {{"room", {4.9f, 6.4f, 2.6f}, {5.1f, 6.6f, 2.8f}},
                             {"hall", {39.9f, 19.9f, 9.9f}, {40.1f, 20.1f, 10.1f}},
-                            {"town", {260.0f, 260.0f, 10.0f}, {270.0f, 270.0f, 25.0f}}};
+                            {"town", {260.0f, 260.0f, 10.0f}, {270.0f, 270.0f, 25.0f}},
+                            {"yard", {30.7f, 30.7f, 3.9f}, {30.9f, 30.9f, 4.1f}}};
   for (const Expect& e : expects) {
     const BuiltinScene scene = makeBuiltinScene(e.name);
     EXPECT_EQ(scene.name, e.name);

@@ -23,7 +23,12 @@ namespace {
 template <typename T>
 void resizeImage(Image<T>* image, int width, int height) {
   if (image == nullptr) return;
-  if (image->width != width || image->height != height) *image = Image<T>(width, height);
+  // The data size is checked too: a moved-from image keeps its width and height but no
+  // pixels.
+  if (image->width != width || image->height != height ||
+      image->data.size() != static_cast<size_t>(width) * static_cast<size_t>(height)) {
+    *image = Image<T>(width, height);
+  }
 }
 
 }  // namespace

@@ -48,6 +48,23 @@ TEST(SimRendererTest, FrontoParallelPlaneHasExactDepthEverywhere) {
   EXPECT_EQ(images.color.width, 320);
 }
 
+TEST(SimRendererTest, RendersIntoMovedFromImages) {
+  // A caller that moves the images out (e.g. into a list of frames) and renders again into
+  // the same object gets fresh, complete images: width and height survive a move, pixels not.
+  const SimRenderer renderer(build(wallAt(2.5f)), smallRig());
+  SimImages images;
+  renderer.render(Transformationd::Identity(), &images);
+  std::vector<SimImages> kept;
+  kept.push_back(std::move(images));
+  renderer.render(Transformationd::Identity(), &images);
+  ASSERT_EQ(images.depth.data.size(), 320u * 240u);
+  ASSERT_EQ(images.left.data.size(), 320u * 240u);
+  ASSERT_EQ(images.right.data.size(), 320u * 240u);
+  ASSERT_EQ(images.color.data.size(), 320u * 240u);
+  for (float d : images.depth.data) ASSERT_FLOAT_EQ(d, 2.5f);
+  EXPECT_EQ(images.left.data, kept[0].left.data);
+}
+
 TEST(SimRendererTest, TiltedPlaneDepthMatchesAnalyticRayPlaneIntersection) {
   // Plane through (0, 0, 3) with normal n = (0.3, -0.2, -1): n . X = n . (0, 0, 3).
   const Eigen::Vector3d n(0.3, -0.2, -1.0);

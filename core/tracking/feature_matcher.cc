@@ -1,0 +1,289 @@
+#include "core/tracking/feature_matcher.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace cblox {
+
+namespace {
+
+constexpr int kHistogramBins = 30;
+
+// ORB-SLAM2's RadiusByViewingCos: a smaller window when the landmark is seen head on.
+float radiusByViewingCos(float view_cos) { return view_cos > 0.998f ? 2.5f : 4.0f; }
+
+struct Best {
+  int distance = std::numeric_limits<int>::max();
+  int second = std::numeric_limits<int>::max();
+  int level = -1, second_level = -1;
+  int index = -1;
+  void offer(int d, int level_of_candidate, int candidate) {
+    if (d < distance) {
+      second = distance;
+      second_level = level;
+      distance = d;
+      level = level_of_candidate;
+      index = candidate;
+    } else if (d < second) {
+      second = d;
+      second_level = level_of_candidate;
+    }
+  }
+};
+
+// Applies the orientation check to matches (feature index, rotation): unsets the rejected.
+template <typename Unset>
+int filterByRotation(const std::vector<std::pair<size_t, float>>& matches, Unset unset) {
+  std::vector<float> rotations;
+  rotations.reserve(matches.size());
+  for (const auto& m : matches) rotations.push_back(m.second);
+  const std::vector<size_t> keep = consistentRotations(rotations);
+  size_t k = 0;
+  for (size_t i = 0; i < matches.size(); ++i) {
+    if (k < keep.size() && keep[k] == i) {
+      ++k;
+    } else {
+      unset(matches[i].first);
+    }
+  }
+  return static_cast<int>(keep.size());
+}
+
+// Iterates the nodes two FeatureVectors share (both sorted by node id).
+template <typename F>
+void forCommonNodes(const FeatureVector& a, const FeatureVector& b, F f) {
+  auto ia = a.begin();
+  auto ib = b.begin();
+  while (ia != a.end() && ib != b.end()) {
+    if (ia->first == ib->first) {
+      f(ia->second, ib->second);
+      ++ia;
+      ++ib;
+    } else if (ia->first < ib->first) {
+      ++ia;
+    } else {
+      ++ib;
+    }
+  }
+}
+
+}  // namespace
+
+std::optional<LandmarkProjection> projectLandmark(Landmark* landmark, const Transformationd& T_C_G,
+                                                  const TrackingCamera& camera,
+                                                  const ScalePyramid& pyramid, float min_view_cos) {
+  const Eigen::Vector3d& p_G = landmark->position();
+  const Eigen::Vector3d p_C = T_C_G * p_G;
+  if (!(p_C.z() > 0.0)) return std::nullopt;
+  const PinholeIntrinsics& k = camera.intrinsics;
+  const double inv_z = 1.0 / p_C.z();
+  const double u = k.fx * p_C.x() * inv_z + k.cx;
+  const double v = k.fy * p_C.y() * inv_z + k.cy;
+  if (!(u >= 0.0 && u < k.width && v >= 0.0 && v < k.height)) return std::nullopt;
+  const Eigen::Vector3d centre = -(T_C_G.rotationMatrix().transpose() * T_C_G.translation());
+  const Eigen::Vector3d ray = p_G - centre;
+  const double distance = ray.norm();
+  if (distance < landmark->minDistance() || distance > landmark->maxDistance()) {
+    return std::nullopt;
+  }
+  const double view_cos = ray.dot(landmark->normal()) / distance;
+  if (view_cos < min_view_cos) return std::nullopt;
+  LandmarkProjection p;
+  p.landmark = landmark;
+  p.u = static_cast<float>(u);
+  p.v = static_cast<float>(v);
+  p.u_right = static_cast<float>(u - camera.bf() * inv_z);
+  p.level = landmark->predictScale(distance, pyramid);
+  p.view_cos = static_cast<float>(view_cos);
+  return p;
+}
+
+int searchLocalLandmarks(Frame* frame, const std::vector<LandmarkProjection>& projections, float th,
+                         const FeatureMatcherConfig& config, const ScalePyramid& pyramid) {
+  const FrameFeatures& f = *frame->features;
+  int matches = 0;
+  for (const LandmarkProjection& p : projections) {
+    Landmark* landmark = p.landmark;
+    if (landmark == nullptr || landmark->bad()) continue;
+    const float r = radiusByViewingCos(p.view_cos) * th * pyramid.scale(p.level);
+    const std::vector<uint32_t> candidates =
+        f.grid.featuresInArea(f.keypoints, p.u, p.v, r, p.level - 1, p.level);
+    Best best;
+    for (const uint32_t i : candidates) {
+      const std::shared_ptr<Landmark>& held = frame->landmarks[i];
+      if (held && held->numObservations() > 0) continue;
+      if (f.right_u[i] > 0.0f && std::abs(p.u_right - f.right_u[i]) > r) continue;
+      best.offer(hammingDistance(landmark->descriptor(), f.descriptors[i]), f.keypoints[i].octave,
+                 static_cast<int>(i));
+    }
+    if (best.index < 0 || best.distance > kOrbDistanceHigh) continue;
+    if (best.level == best.second_level &&
+        static_cast<float>(best.distance) > config.nn_ratio * static_cast<float>(best.second)) {
+      continue;
+    }
+    frame->landmarks[static_cast<size_t>(best.index)] = landmark->shared_from_this();
+    frame->outlier[static_cast<size_t>(best.index)] = 0;
+    ++matches;
+  }
+  return matches;
+}
+
+int searchLastFrame(Frame* current, const Frame& last, float th, const TrackingCamera& camera,
+                    const ScalePyramid& pyramid, const FeatureMatcherConfig& config) {
+  const Transformationd& T_C_G = *current->T_C_G;
+  const Transformationd& T_L_G = *last.T_C_G;
+  const Eigen::Vector3d centre_in_last = T_L_G * T_C_G.inverse().translation();
+  const bool forward = centre_in_last.z() > camera.baseline_m;
+  const bool backward = -centre_in_last.z() > camera.baseline_m;
+  const FrameFeatures& cf = *current->features;
+  const FrameFeatures& lf = *last.features;
+  const PinholeIntrinsics& k = camera.intrinsics;
+  std::vector<std::pair<size_t, float>> matched;
+  for (size_t i = 0; i < last.size(); ++i) {
+    const std::shared_ptr<Landmark>& landmark = last.landmarks[i];
+    if (!landmark || last.outlier[i] || landmark->bad()) continue;
+    const Eigen::Vector3d p_C = T_C_G * landmark->position();
+    if (!(p_C.z() > 0.0)) continue;
+    const double u = k.fx * p_C.x() / p_C.z() + k.cx;
+    const double v = k.fy * p_C.y() / p_C.z() + k.cy;
+    if (!(u >= 0.0 && u < k.width && v >= 0.0 && v < k.height)) continue;
+    const int octave = lf.keypoints[i].octave;
+    const float radius = th * pyramid.scale(octave);
+    std::vector<uint32_t> candidates;
+    if (forward) {
+      candidates = cf.grid.featuresInArea(cf.keypoints, static_cast<float>(u),
+                                          static_cast<float>(v), radius, octave);
+    } else if (backward) {
+      candidates = cf.grid.featuresInArea(cf.keypoints, static_cast<float>(u),
+                                          static_cast<float>(v), radius, 0, octave);
+    } else {
+      candidates = cf.grid.featuresInArea(cf.keypoints, static_cast<float>(u),
+                                          static_cast<float>(v), radius, octave - 1, octave + 1);
+    }
+    const float u_right = static_cast<float>(u - camera.bf() / p_C.z());
+    Best best;
+    for (const uint32_t j : candidates) {
+      const std::shared_ptr<Landmark>& held = current->landmarks[j];
+      if (held && held->numObservations() > 0) continue;
+      if (cf.right_u[j] > 0.0f && std::abs(u_right - cf.right_u[j]) > radius) continue;
+      best.offer(hammingDistance(landmark->descriptor(), cf.descriptors[j]), cf.keypoints[j].octave,
+                 static_cast<int>(j));
+    }
+    if (best.index < 0 || best.distance > kOrbDistanceHigh) continue;
+    const size_t j = static_cast<size_t>(best.index);
+    current->landmarks[j] = landmark;
+    current->outlier[j] = 0;
+    matched.emplace_back(j, lf.keypoints[i].angle_deg - cf.keypoints[j].angle_deg);
+  }
+  if (!config.check_orientation) return static_cast<int>(matched.size());
+  return filterByRotation(matched, [&](size_t j) { current->landmarks[j] = nullptr; });
+}
+
+int searchByBow(const Keyframe& keyframe, const FrameFeatures& frame,
+                const FeatureMatcherConfig& config, std::vector<Landmark*>* matches) {
+  matches->assign(frame.size(), nullptr);
+  const FrameFeatures& kf = keyframe.features();
+  std::vector<std::pair<size_t, float>> matched;
+  forCommonNodes(
+      kf.feature_vector, frame.feature_vector,
+      [&](const std::vector<uint32_t>& kf_indices, const std::vector<uint32_t>& frame_indices) {
+        for (const uint32_t i : kf_indices) {
+          Landmark* landmark = keyframe.landmark(i);
+          if (landmark == nullptr || landmark->bad()) continue;
+          Best best;
+          for (const uint32_t j : frame_indices) {
+            if ((*matches)[j] != nullptr) continue;
+            best.offer(hammingDistance(kf.descriptors[i], frame.descriptors[j]), 0,
+                       static_cast<int>(j));
+          }
+          if (best.index < 0 || best.distance > kOrbDistanceLow) continue;
+          if (static_cast<float>(best.distance) >=
+              config.nn_ratio * static_cast<float>(best.second)) {
+            continue;
+          }
+          const size_t j = static_cast<size_t>(best.index);
+          (*matches)[j] = landmark;
+          matched.emplace_back(j, kf.keypoints[i].angle_deg - frame.keypoints[j].angle_deg);
+        }
+      });
+  if (!config.check_orientation) return static_cast<int>(matched.size());
+  return filterByRotation(matched, [&](size_t j) { (*matches)[j] = nullptr; });
+}
+
+int searchByBow(const Keyframe& a, const Keyframe& b, const FeatureMatcherConfig& config,
+                std::vector<Landmark*>* matches) {
+  const FrameFeatures& fa = a.features();
+  const FrameFeatures& fb = b.features();
+  matches->assign(fa.size(), nullptr);
+  std::vector<uint8_t> taken(fb.size(), 0);
+  std::vector<std::pair<size_t, float>> matched;
+  forCommonNodes(
+      fa.feature_vector, fb.feature_vector,
+      [&](const std::vector<uint32_t>& a_indices, const std::vector<uint32_t>& b_indices) {
+        for (const uint32_t i : a_indices) {
+          const Landmark* la = a.landmark(i);
+          if (la == nullptr || la->bad()) continue;
+          Best best;
+          for (const uint32_t j : b_indices) {
+            const Landmark* lb = b.landmark(j);
+            if (taken[j] || lb == nullptr || lb->bad()) continue;
+            best.offer(hammingDistance(fa.descriptors[i], fb.descriptors[j]), 0,
+                       static_cast<int>(j));
+          }
+          if (best.index < 0 || best.distance > kOrbDistanceLow) continue;
+          if (static_cast<float>(best.distance) >=
+              config.nn_ratio * static_cast<float>(best.second)) {
+            continue;
+          }
+          const size_t j = static_cast<size_t>(best.index);
+          (*matches)[i] = b.landmark(j);
+          taken[j] = 1;
+          matched.emplace_back(i, fa.keypoints[i].angle_deg - fb.keypoints[j].angle_deg);
+        }
+      });
+  if (!config.check_orientation) return static_cast<int>(matched.size());
+  return filterByRotation(matched, [&](size_t i) { (*matches)[i] = nullptr; });
+}
+
+std::vector<size_t> consistentRotations(const std::vector<float>& rotations) {
+  std::array<std::vector<size_t>, kHistogramBins> bins;
+  for (size_t i = 0; i < rotations.size(); ++i) {
+    float r = std::fmod(rotations[i], 360.0f);
+    if (r < 0.0f) r += 360.0f;
+    int bin = static_cast<int>(std::lround(r * kHistogramBins / 360.0f));
+    if (bin >= kHistogramBins) bin = 0;
+    bins[static_cast<size_t>(bin)].push_back(i);
+  }
+  // The three largest bins (ORB-SLAM2's ComputeThreeMaxima).
+  std::array<int, 3> top{-1, -1, -1};
+  std::array<size_t, 3> size{0, 0, 0};
+  for (int b = 0; b < kHistogramBins; ++b) {
+    const size_t s = bins[static_cast<size_t>(b)].size();
+    if (s > size[0]) {
+      size = {s, size[0], size[1]};
+      top = {b, top[0], top[1]};
+    } else if (s > size[1]) {
+      size = {size[0], s, size[1]};
+      top = {top[0], b, top[1]};
+    } else if (s > size[2]) {
+      size[2] = s;
+      top[2] = b;
+    }
+  }
+  if (static_cast<double>(size[1]) < 0.1 * static_cast<double>(size[0]))
+    top[1] = top[2] = -1;
+  else if (static_cast<double>(size[2]) < 0.1 * static_cast<double>(size[0]))
+    top[2] = -1;
+  std::vector<size_t> keep;
+  for (const int b : top) {
+    if (b >= 0)
+      keep.insert(keep.end(), bins[static_cast<size_t>(b)].begin(),
+                  bins[static_cast<size_t>(b)].end());
+  }
+  std::sort(keep.begin(), keep.end());
+  return keep;
+}
+
+}  // namespace cblox

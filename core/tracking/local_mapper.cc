@@ -1,0 +1,363 @@
+#include "core/tracking/local_mapper.h"
+
+#include <algorithm>
+#include <chrono>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "core/tracking/landmark_fusion.h"
+
+namespace cblox {
+
+std::string LocalMapperConfig::validate() const {
+  std::ostringstream error;
+  if (!(min_found_ratio >= 0.0 && min_found_ratio <= 1.0)) {
+    error << "min_found_ratio must be in [0, 1], got " << min_found_ratio;
+  } else if (min_observations < 1) {
+    error << "min_observations must be >= 1, got " << min_observations;
+  } else if (fuse_neighbours < 0 || fuse_second_neighbours < 0) {
+    error << "fuse_neighbours and fuse_second_neighbours must be >= 0";
+  } else if (!(fuse_radius > 0.0f)) {
+    error << "fuse_radius must be > 0, got " << fuse_radius;
+  } else if (!(redundant_ratio > 0.0 && redundant_ratio <= 1.0)) {
+    error << "redundant_ratio must be in (0, 1], got " << redundant_ratio;
+  } else if (std::string e = cblox::validate(bundle_adjustment); !e.empty()) {
+    error << "bundle_adjustment: " << e;
+  }
+  return error.str();
+}
+
+LocalMapper::LocalMapper(SparseMap* map, const TrackingCamera& camera, const ScalePyramid& pyramid,
+                         const LocalMapperConfig& config)
+    : map_(map), camera_(camera), pyramid_(pyramid), config_(config) {
+  if (map == nullptr) throw std::invalid_argument("LocalMapper: map is null");
+  if (std::string e = camera.validate(); !e.empty()) {
+    throw std::invalid_argument("LocalMapper: camera: " + e);
+  }
+  if (std::string e = config.validate(); !e.empty()) {
+    throw std::invalid_argument("LocalMapper: " + e);
+  }
+}
+
+bool LocalMapper::acceptsKeyframes() const {
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  return !busy_ && queue_.empty();
+}
+
+size_t LocalMapper::queuedKeyframes() const {
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  return queue_.size();
+}
+
+void LocalMapper::insertKeyframe(Keyframe* keyframe) {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    queue_.push_back(keyframe);
+  }
+  abort_ba_ = true;  // a new keyframe is more useful than finishing the current BA
+  queue_cv_.notify_all();
+}
+
+void LocalMapper::stop() {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    stop_ = true;
+  }
+  abort_ba_ = true;
+  queue_cv_.notify_all();
+}
+
+void LocalMapper::waitUntilIdle() {
+  std::unique_lock<std::mutex> lock(queue_mutex_);
+  queue_cv_.wait(lock, [this] { return stop_ || (queue_.empty() && !busy_); });
+}
+
+void LocalMapper::run() {
+  while (true) {
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
+      if (stop_) return;
+    }
+    processOne();
+  }
+}
+
+LocalMapperStats LocalMapper::stats() const {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  return stats_;
+}
+
+bool LocalMapper::processOne() {
+  Keyframe* keyframe = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    if (queue_.empty()) return false;
+    keyframe = queue_.front();
+    queue_.pop_front();
+    busy_ = true;
+  }
+  processNewKeyframe(keyframe);
+  cullRecentLandmarks(keyframe);
+  bool more_waiting;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    more_waiting = !queue_.empty();
+  }
+  if (!more_waiting) fuseWithNeighbours(keyframe);
+  abort_ba_ = false;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    more_waiting = !queue_.empty() || stop_;
+  }
+  if (!more_waiting) {
+    localBundleAdjustment(keyframe);
+    if (config_.cull_keyframes) cullKeyframes(keyframe);
+  }
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.keyframes_processed;
+  }
+  if (on_keyframe_) on_keyframe_(keyframe);
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    busy_ = false;
+  }
+  queue_cv_.notify_all();
+  return true;
+}
+
+void LocalMapper::processNewKeyframe(Keyframe* keyframe) {
+  std::unique_lock<std::shared_mutex> lock(map_->mutex());
+  for (Landmark* l : keyframe->landmarks()) {
+    if (l == nullptr || l->bad()) continue;
+    if (l->first_keyframe_id == keyframe->id && l->observations().size() == 1) {
+      recent_landmarks_.push_back(l->shared_from_this());  // made by the tracker just now
+    } else {
+      l->updateNormalAndDepth(pyramid_);
+      l->updateDescriptor();
+    }
+  }
+  keyframe->updateConnections();
+}
+
+void LocalMapper::cullRecentLandmarks(Keyframe* keyframe) {
+  std::unique_lock<std::shared_mutex> lock(map_->mutex());
+  uint64_t culled = 0;
+  for (auto it = recent_landmarks_.begin(); it != recent_landmarks_.end();) {
+    Landmark* l = it->get();
+    const KeyframeId age = keyframe->id - l->first_keyframe_id;
+    if (l->bad()) {
+      it = recent_landmarks_.erase(it);
+    } else if (l->foundRatio() < config_.min_found_ratio ||
+               (age >= 2 &&
+                static_cast<int>(l->observations().size()) < config_.min_observations)) {
+      map_->retireLandmark(l);
+      ++culled;
+      it = recent_landmarks_.erase(it);
+    } else if (age >= 3) {
+      it = recent_landmarks_.erase(it);  // survived its probation
+    } else {
+      ++it;
+    }
+  }
+  std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+  stats_.landmarks_culled += culled;
+}
+
+void LocalMapper::fuseWithNeighbours(Keyframe* keyframe) {
+  std::unique_lock<std::shared_mutex> lock(map_->mutex());
+  if (keyframe->bad()) return;
+  std::vector<Keyframe*> targets;
+  for (Keyframe* k : keyframe->bestCovisible(static_cast<size_t>(config_.fuse_neighbours))) {
+    if (k->bad() || k->fuse_target_for_keyframe == keyframe->id) continue;
+    targets.push_back(k);
+    k->fuse_target_for_keyframe = keyframe->id;
+  }
+  const size_t first_ring = targets.size();
+  for (size_t i = 0; i < first_ring; ++i) {
+    for (Keyframe* k2 :
+         targets[i]->bestCovisible(static_cast<size_t>(config_.fuse_second_neighbours))) {
+      if (k2->bad() || k2 == keyframe || k2->fuse_target_for_keyframe == keyframe->id) continue;
+      targets.push_back(k2);
+      k2->fuse_target_for_keyframe = keyframe->id;
+    }
+  }
+  int fused = 0;
+  // The keyframe's landmarks into its neighbours...
+  for (Keyframe* target : targets) {
+    std::vector<Landmark*> mine;
+    for (Landmark* l : keyframe->landmarks()) {
+      if (l != nullptr && !l->bad()) mine.push_back(l);
+    }
+    fused += fuseLandmarks(map_, target, mine, config_.fuse_radius, camera_, pyramid_);
+  }
+  // ... and the neighbours' landmarks into the keyframe.
+  std::vector<Landmark*> theirs;
+  for (Keyframe* target : targets) {
+    for (Landmark* l : target->landmarks()) {
+      if (l == nullptr || l->bad() || l->fuse_candidate_for_keyframe == keyframe->id) continue;
+      l->fuse_candidate_for_keyframe = keyframe->id;
+      theirs.push_back(l);
+    }
+  }
+  fused += fuseLandmarks(map_, keyframe, theirs, config_.fuse_radius, camera_, pyramid_);
+  for (Landmark* l : keyframe->landmarks()) {
+    if (l == nullptr || l->bad()) continue;
+    l->updateDescriptor();
+    l->updateNormalAndDepth(pyramid_);
+  }
+  keyframe->updateConnections();
+  std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+  stats_.landmarks_fused += static_cast<uint64_t>(fused);
+}
+
+void LocalMapper::localBundleAdjustment(Keyframe* keyframe) {
+  BundleAdjustmentProblem problem;
+  problem.camera = StereoCameraModel{camera_.intrinsics.fx, camera_.intrinsics.fy,
+                                     camera_.intrinsics.cx, camera_.intrinsics.cy, camera_.bf()};
+  std::vector<Keyframe*> keyframes;
+  std::vector<std::shared_ptr<Landmark>> landmarks;
+  std::vector<std::pair<Keyframe*, uint32_t>> observation_of;  // per BA observation
+  int change_index = 0;
+  {
+    std::shared_lock<std::shared_mutex> lock(map_->mutex());
+    if (keyframe->bad() || map_->numKeyframes() <= 2) return;
+    change_index = map_->changeIndex();
+    // Window: the keyframe and all its covisible keyframes.
+    std::vector<Keyframe*> window{keyframe};
+    keyframe->ba_local_for_keyframe = keyframe->id;
+    for (Keyframe* k : keyframe->covisibleByWeight()) {
+      if (k->bad() || k->ba_local_for_keyframe == keyframe->id) continue;
+      k->ba_local_for_keyframe = keyframe->id;
+      window.push_back(k);
+    }
+    for (Keyframe* k : window) {
+      for (Landmark* l : k->landmarks()) {
+        if (l == nullptr || l->bad() || l->ba_local_for_keyframe == keyframe->id) continue;
+        l->ba_local_for_keyframe = keyframe->id;
+        landmarks.push_back(l->shared_from_this());
+      }
+    }
+    // Fixed keyframes: see window landmarks, outside the window.
+    std::vector<Keyframe*> fixed;
+    for (const auto& l : landmarks) {
+      for (const auto& [k, index] : l->observations()) {
+        if (k->bad() || k->ba_local_for_keyframe == keyframe->id ||
+            k->ba_fixed_for_keyframe == keyframe->id) {
+          continue;
+        }
+        k->ba_fixed_for_keyframe = keyframe->id;
+        fixed.push_back(k);
+      }
+    }
+    // The first keyframe is the gauge: held fixed if it is in the window.
+    std::map<const Keyframe*, int> keyframe_index;
+    for (Keyframe* k : window) {
+      keyframe_index[k] = static_cast<int>(keyframes.size());
+      keyframes.push_back(k);
+      problem.keyframes.push_back(BaKeyframe{static_cast<uint64_t>(k->id), k->T_C_G(), k->id == 0});
+    }
+    for (Keyframe* k : fixed) {
+      keyframe_index[k] = static_cast<int>(keyframes.size());
+      keyframes.push_back(k);
+      problem.keyframes.push_back(BaKeyframe{static_cast<uint64_t>(k->id), k->T_C_G(), true});
+    }
+    bool any_fixed = false;
+    for (const BaKeyframe& k : problem.keyframes) any_fixed = any_fixed || k.fixed;
+    if (!any_fixed) return;  // no gauge (cannot happen with > 2 keyframes, kept for safety)
+    for (size_t li = 0; li < landmarks.size(); ++li) {
+      const Landmark& l = *landmarks[li];
+      problem.landmarks.push_back(BaLandmark{l.id, l.position()});
+      for (const auto& [k, index] : l.observations()) {
+        const auto it = keyframe_index.find(k);
+        if (it == keyframe_index.end()) continue;
+        const FrameFeatures& f = k->features();
+        BaObservation o;
+        o.keyframe = it->second;
+        o.landmark = static_cast<int>(li);
+        o.u = f.keypoints[index].u;
+        o.v = f.keypoints[index].v;
+        o.u_right = f.right_u[index];
+        o.inv_sigma2 = pyramid_.invSigma2(f.keypoints[index].octave);
+        problem.observations.push_back(o);
+        observation_of.emplace_back(k, index);
+      }
+    }
+  }
+  if (problem.observations.empty()) return;
+  const BundleAdjustmentResult result =
+      bundleAdjust(problem, config_.bundle_adjustment, &abort_ba_);
+  KeyframePoseBatch changed;
+  {
+    std::unique_lock<std::shared_mutex> lock(map_->mutex());
+    if (map_->changeIndex() != change_index) {
+      // A loop correction moved the map meanwhile: this solution is stale.
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      ++stats_.bundle_adjustments_discarded;
+      return;
+    }
+    // Outlier observations leave the map (if they still exist).
+    for (size_t o = 0; o < problem.observations.size(); ++o) {
+      if (!result.outlier[o]) continue;
+      auto [k, index] = observation_of[o];
+      Landmark* l = landmarks[static_cast<size_t>(problem.observations[o].landmark)].get();
+      if (k->landmark(index) == l) SparseMap::eraseObservation(k, index);
+    }
+    for (size_t i = 0; i < keyframes.size(); ++i) {
+      if (problem.keyframes[i].fixed || keyframes[i]->bad()) continue;
+      keyframes[i]->setPose(result.T_C_G[i]);
+      changed.emplace_back(keyframes[i]->id, keyframes[i]->T_G_C());
+    }
+    for (size_t li = 0; li < landmarks.size(); ++li) {
+      Landmark* l = landmarks[li].get();
+      if (l->bad()) continue;
+      if (l->observations().empty()) {
+        map_->retireLandmark(l);
+        continue;
+      }
+      l->setPosition(result.p_G[li]);
+      l->updateNormalAndDepth(pyramid_);
+    }
+  }
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.bundle_adjustments;
+    if (result.aborted) ++stats_.bundle_adjustments_aborted;
+    stats_.last_ba_ms = result.time_ms;
+  }
+  if (on_poses_ && !changed.empty()) on_poses_(changed);
+}
+
+void LocalMapper::cullKeyframes(Keyframe* keyframe) {
+  std::unique_lock<std::shared_mutex> lock(map_->mutex());
+  uint64_t culled = 0;
+  for (Keyframe* k : keyframe->covisibleByWeight()) {
+    if (k->id == 0 || k->bad()) continue;
+    const FrameFeatures& f = k->features();
+    int valid = 0, redundant = 0;
+    for (size_t i = 0; i < f.size(); ++i) {
+      Landmark* l = k->landmark(i);
+      if (l == nullptr || l->bad()) continue;
+      if (!(f.depth[i] > 0.0f) || f.depth[i] > camera_.close_depth_m) continue;
+      ++valid;
+      if (l->observations().size() <= 3) continue;
+      const int level = f.keypoints[i].octave;
+      int seen = 0;
+      for (const auto& [other, index] : l->observations()) {
+        if (other == k) continue;
+        if (other->features().keypoints[index].octave <= level + 1 && ++seen >= 3) break;
+      }
+      if (seen >= 3) ++redundant;
+    }
+    if (valid > 0 && redundant > config_.redundant_ratio * valid) {
+      map_->cullKeyframe(k);
+      if (k->bad()) ++culled;
+    }
+  }
+  std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+  stats_.keyframes_culled += culled;
+}
+
+}  // namespace cblox

@@ -1,0 +1,134 @@
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/features/scale_pyramid.h"
+#include "core/optimization/bundle_adjustment.h"
+#include "core/tracking/keyframe_sink.h"
+#include "core/tracking/sparse_map.h"
+#include "core/tracking/tracking_camera.h"
+
+namespace cblox {
+
+/// Settings of local mapping (ORB-SLAM2's LocalMapping).
+struct LocalMapperConfig {
+  /// Recent landmarks are retired when found in fewer than this fraction of the frames
+  /// that should have seen them (0.25), or when seen by fewer than min_observations
+  /// keyframes two keyframes after their creation (3 for stereo).
+  double min_found_ratio = 0.25;
+  int min_observations = 3;
+  /// Duplicate fusion: best covisible keyframes searched (10 for stereo) and their best
+  /// neighbours (5); projection window radius in pixels times the level scale (3).
+  int fuse_neighbours = 10;
+  int fuse_second_neighbours = 5;
+  float fuse_radius = 3.0f;
+  /// Local BA over the new keyframe and its covisible keyframes (all of them); the
+  /// keyframes outside that see the window's landmarks are held fixed.
+  BundleAdjustmentConfig bundle_adjustment;
+  /// Keyframe culling: a keyframe whose close landmarks are >= this fraction seen by at
+  /// least 3 other keyframes at the same or a finer scale is culled (ORB-SLAM2: 0.9).
+  /// Off by default: the dense mapper anchors subvolumes on keyframes, and a culled
+  /// keyframe's pose would no longer follow bundle adjustment.
+  bool cull_keyframes = false;
+  double redundant_ratio = 0.9;
+
+  std::string validate() const;
+};
+
+/// Poses of keyframes (T_G_C) after they changed, for CBLOX_KEYFRAME_POSES.
+using KeyframePoseBatch = std::vector<std::pair<KeyframeId, Transformationd>>;
+
+/// Statistics (atomically readable from any thread).
+struct LocalMapperStats {
+  uint64_t keyframes_processed = 0;
+  uint64_t landmarks_culled = 0;
+  uint64_t landmarks_fused = 0;
+  uint64_t keyframes_culled = 0;
+  uint64_t bundle_adjustments = 0;
+  uint64_t bundle_adjustments_aborted = 0;
+  uint64_t bundle_adjustments_discarded = 0;  ///< stale after a loop correction
+  double last_ba_ms = 0.0;
+};
+
+/// ORB-SLAM2's local mapping for stereo / RGB-D: for every keyframe the tracker inserted,
+/// refresh its landmarks' descriptors and viewing ranges, cull recent landmarks that do not
+/// track well, fuse duplicate landmarks with the covisible keyframes, run a local bundle
+/// adjustment and (optionally) cull redundant keyframes, then hand the keyframe on (loop
+/// closing) and report the changed keyframe poses.
+///
+/// Threads: insertKeyframe / acceptsKeyframes / queuedKeyframes / interruptBundleAdjustment
+/// are called by the tracking thread; processOne() / run() by the local mapping thread (the
+/// owner, e.g. the tracker process, creates that thread). Map access follows SparseMap's
+/// rule: the BA is solved on a copy without any lock and written back under the exclusive
+/// lock, so tracking is blocked only for the short edits.
+class LocalMapper : public KeyframeSink {
+ public:
+  using KeyframeCallback = std::function<void(Keyframe*)>;
+  using PoseCallback = std::function<void(const KeyframePoseBatch&)>;
+
+  /// Throws std::invalid_argument for an invalid config or camera.
+  LocalMapper(SparseMap* map, const TrackingCamera& camera, const ScalePyramid& pyramid,
+              const LocalMapperConfig& config);
+
+  // KeyframeSink (tracking thread).
+  bool acceptsKeyframes() const override;
+  size_t queuedKeyframes() const override;
+  void insertKeyframe(Keyframe* keyframe) override;
+  void interruptBundleAdjustment() override { abort_ba_ = true; }
+
+  /// Called after each keyframe is processed (e.g. loop closing takes it), on the local
+  /// mapping thread, without locks held.
+  void setKeyframeCallback(KeyframeCallback callback) { on_keyframe_ = std::move(callback); }
+  /// Called with the keyframes whose poses local BA changed, on the local mapping thread,
+  /// without locks held.
+  void setPoseCallback(PoseCallback callback) { on_poses_ = std::move(callback); }
+
+  /// Processes the oldest queued keyframe; false when there was none. Local mapping thread.
+  bool processOne();
+  /// Processes keyframes until stop() (waits when idle). Local mapping thread.
+  void run();
+  /// Makes run() return after the keyframe in hand. Thread-safe.
+  void stop();
+  /// Waits until the queue is empty and no keyframe is in hand. Thread-safe.
+  void waitUntilIdle();
+
+  LocalMapperStats stats() const;
+
+ private:
+  void processNewKeyframe(Keyframe* keyframe);
+  void cullRecentLandmarks(Keyframe* keyframe);
+  void fuseWithNeighbours(Keyframe* keyframe);
+  void localBundleAdjustment(Keyframe* keyframe);
+  void cullKeyframes(Keyframe* keyframe);
+
+  SparseMap* map_;
+  TrackingCamera camera_;
+  ScalePyramid pyramid_;
+  LocalMapperConfig config_;
+  KeyframeCallback on_keyframe_;
+  PoseCallback on_poses_;
+
+  mutable std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  std::deque<Keyframe*> queue_;
+  bool busy_ = false;
+  bool stop_ = false;
+  std::atomic<bool> abort_ba_{false};
+
+  std::list<std::shared_ptr<Landmark>> recent_landmarks_;  // local mapping thread only
+
+  mutable std::mutex stats_mutex_;
+  LocalMapperStats stats_;
+};
+
+}  // namespace cblox

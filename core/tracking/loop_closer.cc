@@ -1,0 +1,559 @@
+#include "core/tracking/loop_closer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+
+#include "core/optimization/pose_optimizer.h"
+#include "core/tracking/feature_matcher.h"
+#include "core/tracking/frame.h"
+#include "core/tracking/landmark_fusion.h"
+
+namespace cblox {
+
+std::string LoopCloserConfig::validate() const {
+  std::ostringstream error;
+  if (min_keyframes_between_loops < 0) {
+    error << "min_keyframes_between_loops must be >= 0, got " << min_keyframes_between_loops;
+  } else if (consistency_threshold < 0) {
+    error << "consistency_threshold must be >= 0, got " << consistency_threshold;
+  } else if (min_bow_matches < 3 || min_ransac_inliers < 3 || min_projection_matches < 3) {
+    error << "min_bow_matches, min_ransac_inliers and min_projection_matches must be >= 3";
+  } else if (ransac_iterations < 1) {
+    error << "ransac_iterations must be >= 1, got " << ransac_iterations;
+  } else if (essential_graph_min_weight < 1) {
+    error << "essential_graph_min_weight must be >= 1, got " << essential_graph_min_weight;
+  } else if (std::string e = cblox::validate(pose_graph); !e.empty()) {
+    error << "pose_graph: " << e;
+  } else if (std::string e2 = cblox::validate(global_ba); !e2.empty()) {
+    error << "global_ba: " << e2;
+  }
+  return error.str();
+}
+
+LoopCloser::LoopCloser(SparseMap* map, KeyframeDatabase* database, const TrackingCamera& camera,
+                       const ScalePyramid& pyramid, const LoopCloserConfig& config)
+    : map_(map),
+      database_(database),
+      camera_(camera),
+      pyramid_(pyramid),
+      config_(config),
+      rng_state_(config.seed == 0 ? 1u : config.seed) {
+  if (map == nullptr || database == nullptr) {
+    throw std::invalid_argument("LoopCloser: map and database must not be null");
+  }
+  if (std::string e = camera.validate(); !e.empty()) {
+    throw std::invalid_argument("LoopCloser: camera: " + e);
+  }
+  if (std::string e = config.validate(); !e.empty()) {
+    throw std::invalid_argument("LoopCloser: " + e);
+  }
+}
+
+void LoopCloser::insertKeyframe(Keyframe* keyframe) {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    queue_.push_back(keyframe);
+  }
+  queue_cv_.notify_all();
+}
+
+void LoopCloser::stop() {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    stop_ = true;
+  }
+  queue_cv_.notify_all();
+}
+
+void LoopCloser::waitUntilIdle() {
+  std::unique_lock<std::mutex> lock(queue_mutex_);
+  queue_cv_.wait(lock, [this] { return stop_ || (queue_.empty() && !busy_); });
+}
+
+void LoopCloser::run() {
+  while (true) {
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
+      if (stop_) return;
+    }
+    processOne();
+  }
+}
+
+LoopCloserStats LoopCloser::stats() const {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  return stats_;
+}
+
+bool LoopCloser::processOne() {
+  Keyframe* keyframe = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    if (queue_.empty()) return false;
+    keyframe = queue_.front();
+    queue_.pop_front();
+    busy_ = true;
+  }
+  const std::vector<Keyframe*> candidates = detect(keyframe);
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.keyframes_checked;
+    stats_.candidates_detected += candidates.size();
+  }
+  if (!candidates.empty()) {
+    if (const std::optional<Verified> loop = verify(keyframe, candidates)) {
+      correct(keyframe, *loop);
+      if (config_.global_bundle_adjustment) globalBundleAdjustment(loop->candidate);
+    } else {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      ++stats_.loops_rejected;
+    }
+  }
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    busy_ = false;
+  }
+  queue_cv_.notify_all();
+  return true;
+}
+
+std::vector<Keyframe*> LoopCloser::detect(Keyframe* keyframe) {
+  std::shared_lock<std::shared_mutex> lock(map_->mutex());
+  if (keyframe->bad()) return {};
+  const BowVector& bow = keyframe->features().bow;
+  const bool too_early =
+      keyframe->id < last_loop_keyframe_ + config_.min_keyframes_between_loops ||
+      static_cast<int>(map_->numKeyframes()) <= config_.min_keyframes_between_loops;
+  if (too_early || bow.empty()) {
+    database_->add(keyframe->id, bow);
+    return {};
+  }
+  double min_score = 1.0;
+  std::vector<KeyframeId> exclude{keyframe->id};
+  for (const auto& [neighbour, weight] : keyframe->connections()) {
+    exclude.push_back(neighbour->id);
+    if (neighbour->bad()) continue;
+    min_score = std::min(min_score, scoreL1(bow, neighbour->features().bow));
+  }
+  // Neighbours of a candidate: its 10 best covisible keyframes (the map's shared lock is
+  // held by this thread for the whole query).
+  const auto neighbours = [this](KeyframeId id) {
+    std::vector<KeyframeId> ids;
+    if (const Keyframe* k = map_->keyframe(id); k != nullptr && !k->bad()) {
+      for (const Keyframe* n : k->bestCovisible(10)) ids.push_back(n->id);
+    }
+    return ids;
+  };
+  const std::vector<PlaceCandidate> places =
+      database_->queryLoopCandidates(bow, min_score, exclude, 0, neighbours);
+  database_->add(keyframe->id, bow);
+
+  // Consistency over consecutive keyframes (ORB-SLAM2's DetectLoop).
+  std::vector<ConsistentGroup> current;
+  std::vector<uint8_t> extended(groups_.size(), 0);
+  std::vector<Keyframe*> consistent;
+  for (const PlaceCandidate& place : places) {
+    Keyframe* candidate = map_->keyframe(place.id);
+    if (candidate == nullptr || candidate->bad()) continue;
+    std::vector<KeyframeId> group{candidate->id};
+    for (const auto& [k, w] : candidate->connections()) group.push_back(k->id);
+    std::sort(group.begin(), group.end());
+    bool enough = false, consistent_with_some = false;
+    for (size_t g = 0; g < groups_.size(); ++g) {
+      std::vector<KeyframeId> common;
+      std::set_intersection(group.begin(), group.end(), groups_[g].members.begin(),
+                            groups_[g].members.end(), std::back_inserter(common));
+      if (common.empty()) continue;
+      consistent_with_some = true;
+      const int consistency = groups_[g].consistency + 1;
+      if (!extended[g]) {
+        current.push_back({group, consistency});
+        extended[g] = 1;
+      }
+      if (consistency >= config_.consistency_threshold && !enough) {
+        consistent.push_back(candidate);
+        enough = true;
+      }
+    }
+    if (!consistent_with_some) current.push_back({group, 0});
+  }
+  groups_ = std::move(current);
+  return consistent;
+}
+
+namespace {
+uint32_t nextRandom(uint32_t* state) {  // xorshift32
+  uint32_t x = *state;
+  x ^= x << 13;
+  x ^= x >> 17;
+  x ^= x << 5;
+  return *state = x;
+}
+}  // namespace
+
+std::optional<LoopCloser::Verified> LoopCloser::verify(Keyframe* keyframe,
+                                                       const std::vector<Keyframe*>& candidates) {
+  std::shared_lock<std::shared_mutex> lock(map_->mutex());
+  if (keyframe->bad()) return std::nullopt;
+  const FrameFeatures& f = keyframe->features();
+  const StereoCameraModel model{camera_.intrinsics.fx, camera_.intrinsics.fy, camera_.intrinsics.cx,
+                                camera_.intrinsics.cy, camera_.bf()};
+  FeatureMatcherConfig matcher;
+  matcher.nn_ratio = 0.75f;
+  for (Keyframe* candidate : candidates) {
+    if (candidate->bad()) continue;
+    std::vector<Landmark*> matches;
+    if (searchByBow(*keyframe, *candidate, matcher, &matches) < config_.min_bow_matches) continue;
+    // 3D-3D pairs: the query feature's point in its camera (stereo depth, else its own
+    // landmark) and the candidate's landmark in G.
+    std::vector<size_t> index;
+    std::vector<Eigen::Vector3d> p_C, p_G;
+    for (size_t i = 0; i < matches.size(); ++i) {
+      if (matches[i] == nullptr) continue;
+      Eigen::Vector3d p;
+      if (f.hasDepth(i)) {
+        p = f.unproject(i, camera_);
+      } else if (const Landmark* own = keyframe->landmark(i); own != nullptr && !own->bad()) {
+        p = keyframe->T_C_G() * own->position();
+      } else {
+        continue;
+      }
+      index.push_back(i);
+      p_C.push_back(p);
+      p_G.push_back(matches[i]->position());
+    }
+    const int n = static_cast<int>(index.size());
+    if (n < config_.min_ransac_inliers) continue;
+    auto inliersOf = [&](const Transformationd& T_C_G, std::vector<uint8_t>* flags) {
+      int count = 0;
+      flags->assign(static_cast<size_t>(n), 0);
+      for (int k = 0; k < n; ++k) {
+        const Eigen::Vector3d q = T_C_G * p_G[static_cast<size_t>(k)];
+        if (!(q.z() > 0.0)) continue;
+        const Keypoint& kp = f.keypoints[index[static_cast<size_t>(k)]];
+        const double du = model.fx * q.x() / q.z() + model.cx - kp.u;
+        const double dv = model.fy * q.y() / q.z() + model.cy - kp.v;
+        if ((du * du + dv * dv) * pyramid_.invSigma2(kp.octave) < 9.21) {
+          (*flags)[static_cast<size_t>(k)] = 1;
+          ++count;
+        }
+      }
+      return count;
+    };
+    int best_count = 0;
+    Transformationd best_T_C_G;
+    std::vector<uint8_t> flags, best_flags;
+    for (int it = 0; it < config_.ransac_iterations; ++it) {
+      Eigen::Matrix3d src, dst;
+      int a = static_cast<int>(nextRandom(&rng_state_) % static_cast<uint32_t>(n));
+      int b = static_cast<int>(nextRandom(&rng_state_) % static_cast<uint32_t>(n));
+      int c = static_cast<int>(nextRandom(&rng_state_) % static_cast<uint32_t>(n));
+      if (a == b || b == c || a == c) continue;
+      src << p_C[static_cast<size_t>(a)], p_C[static_cast<size_t>(b)], p_C[static_cast<size_t>(c)];
+      dst << p_G[static_cast<size_t>(a)], p_G[static_cast<size_t>(b)], p_G[static_cast<size_t>(c)];
+      const Eigen::Matrix4d T_G_C = Eigen::umeyama(src, dst, false);
+      if (!T_G_C.allFinite()) continue;
+      const Transformationd T_C_G = Transformationd::fromMatrix(T_G_C).inverse();
+      const int count = inliersOf(T_C_G, &flags);
+      if (count > best_count) {
+        best_count = count;
+        best_T_C_G = T_C_G;
+        best_flags = flags;
+      }
+    }
+    if (best_count < config_.min_ransac_inliers) continue;
+    // Refine on the inliers with the motion-only optimiser.
+    std::vector<PoseObservation> observations;
+    std::vector<size_t> observed;
+    for (int k = 0; k < n; ++k) {
+      if (!best_flags[static_cast<size_t>(k)]) continue;
+      const size_t i = index[static_cast<size_t>(k)];
+      PoseObservation o;
+      o.u = f.keypoints[i].u;
+      o.v = f.keypoints[i].v;
+      o.u_right = f.right_u[i];
+      o.inv_sigma2 = pyramid_.invSigma2(f.keypoints[i].octave);
+      o.p_G = p_G[static_cast<size_t>(k)];
+      observations.push_back(o);
+      observed.push_back(i);
+    }
+    const PoseOptimizationResult refined = optimizePose(model, best_T_C_G, observations);
+    if (refined.num_inliers < config_.min_ransac_inliers) continue;
+    // More matches: the candidate's covisible landmarks projected at the refined pose.
+    Frame probe(keyframe->frame_id, keyframe->timestamp_ns, keyframe->sharedFeatures());
+    for (size_t k = 0; k < observed.size(); ++k) {
+      if (refined.inlier[k])
+        probe.landmarks[observed[k]] = matches[observed[k]]->shared_from_this();
+    }
+    std::vector<LandmarkProjection> projections;
+    std::set<const Landmark*> seen;
+    std::vector<Keyframe*> group = candidate->covisibleByWeight();
+    group.push_back(candidate);
+    for (const Keyframe* k : group) {
+      if (k->bad()) continue;
+      for (Landmark* l : k->landmarks()) {
+        if (l == nullptr || l->bad() || !seen.insert(l).second) continue;
+        if (const auto p = projectLandmark(l, refined.T_C_G, camera_, pyramid_)) {
+          projections.push_back(*p);
+        }
+      }
+    }
+    FeatureMatcherConfig projection_matcher;
+    projection_matcher.nn_ratio = 1.0f;
+    searchLocalLandmarks(&probe, projections, 10.0f, projection_matcher, pyramid_);
+    int total = 0;
+    Verified v;
+    v.matches.assign(f.size(), nullptr);
+    for (size_t i = 0; i < probe.size(); ++i) {
+      if (probe.landmarks[i] && !probe.landmarks[i]->bad()) {
+        v.matches[i] = probe.landmarks[i].get();
+        ++total;
+      }
+    }
+    if (total < config_.min_projection_matches) continue;
+    v.candidate = candidate;
+    v.T_C_G = refined.T_C_G;
+    v.inliers = total;
+    return v;
+  }
+  return std::nullopt;
+}
+
+void LoopCloser::correct(Keyframe* keyframe, const Verified& loop) {
+  const auto start = std::chrono::steady_clock::now();
+  LoopClosureEvent event;
+  KeyframePoseBatch batch;
+  {
+    std::unique_lock<std::shared_mutex> lock(map_->mutex());
+    if (keyframe->bad() || loop.candidate->bad()) return;
+    map_->bumpChangeIndex();
+    const std::vector<Keyframe*> all = map_->keyframes();
+    std::map<const Keyframe*, Transformationd> old_T_C_G;
+    for (const Keyframe* k : all) old_T_C_G[k] = k->T_C_G();
+
+    // 1. Move the query keyframe's covisible group rigidly with it.
+    std::vector<Keyframe*> group = keyframe->covisibleByWeight();
+    group.push_back(keyframe);
+    std::set<const Keyframe*> in_group(group.begin(), group.end());
+    const Transformationd T_G_Ckf_old = keyframe->T_G_C();
+    event.correction_m = (loop.T_C_G.inverse().translation() - T_G_Ckf_old.translation()).norm();
+    for (Keyframe* k : group) {
+      const Transformationd T_Ck_Ckf = k->T_C_G() * T_G_Ckf_old;
+      const Transformationd corrected = T_Ck_Ckf * loop.T_C_G;
+      const Transformationd T_G_Ck_new = corrected.inverse();
+      for (Landmark* l : k->landmarks()) {
+        if (l == nullptr || l->bad() || l->corrected_by_keyframe == keyframe->id) continue;
+        l->setPosition(T_G_Ck_new * (k->T_C_G() * l->position()));
+        l->corrected_by_keyframe = keyframe->id;
+      }
+      k->setPose(corrected);
+    }
+    // 2. Fuse the loop's landmarks into the group (duplicates merge).
+    for (size_t i = 0; i < loop.matches.size(); ++i) {
+      Landmark* loop_landmark = loop.matches[i];
+      if (loop_landmark == nullptr || loop_landmark->bad()) continue;
+      Landmark* current = keyframe->landmark(i);
+      if (current == loop_landmark) continue;
+      if (current != nullptr) {
+        map_->replaceLandmark(current, loop_landmark);
+      } else if (loop_landmark->indexIn(keyframe) < 0) {
+        SparseMap::addObservation(keyframe, static_cast<uint32_t>(i), loop_landmark);
+      }
+    }
+    std::vector<Landmark*> loop_landmarks;
+    {
+      std::set<const Landmark*> seen;
+      std::vector<Keyframe*> loop_group = loop.candidate->covisibleByWeight();
+      loop_group.push_back(loop.candidate);
+      for (const Keyframe* k : loop_group) {
+        for (Landmark* l : k->landmarks()) {
+          if (l != nullptr && !l->bad() && seen.insert(l).second) loop_landmarks.push_back(l);
+        }
+      }
+    }
+    for (Keyframe* k : group) {
+      if (!k->bad()) fuseLandmarks(map_, k, loop_landmarks, 4.0f, camera_, pyramid_);
+    }
+    // 3. New links made by the loop.
+    std::map<Keyframe*, std::set<Keyframe*, KeyframeIdLess>, KeyframeIdLess> loop_links;
+    for (Keyframe* k : group) {
+      if (k->bad()) continue;
+      std::set<Keyframe*, KeyframeIdLess> before(k->covisibleByWeight().begin(),
+                                                 k->covisibleByWeight().end());
+      k->updateConnections();
+      for (Keyframe* n : k->covisibleByWeight()) {
+        if (before.count(n) == 0 && in_group.count(n) == 0) loop_links[k].insert(n);
+      }
+    }
+    // 4. Essential graph.
+    std::vector<PoseGraphVertex> vertices;
+    std::map<const Keyframe*, int> vertex_of;
+    for (Keyframe* k : all) {
+      if (k->bad()) continue;
+      vertex_of[k] = static_cast<int>(vertices.size());
+      vertices.push_back(
+          PoseGraphVertex{static_cast<uint64_t>(k->id), k->T_C_G(), k == loop.candidate});
+    }
+    std::vector<PoseGraphEdge> edges;
+    std::set<std::pair<int, int>> added;
+    auto addEdge = [&](const Keyframe* a, const Keyframe* b, const Transformationd& T_a_b) {
+      const auto ia = vertex_of.find(a), ib = vertex_of.find(b);
+      if (ia == vertex_of.end() || ib == vertex_of.end() || a == b) return;
+      const std::pair<int, int> key{std::min(ia->second, ib->second),
+                                    std::max(ia->second, ib->second)};
+      if (!added.insert(key).second) return;
+      edges.push_back(
+          PoseGraphEdge{ia->second, ib->second, T_a_b, Eigen::Matrix<double, 6, 6>::Identity()});
+    };
+    // Measurements from the poses before the correction (they keep the local shape), except
+    // the loop links, measured at the corrected poses.
+    auto oldRelative = [&](const Keyframe* a, const Keyframe* b) {
+      return old_T_C_G.at(a) * old_T_C_G.at(b).inverse();
+    };
+    for (const auto& [k, links] : loop_links) {
+      for (Keyframe* n : links) addEdge(k, n, k->T_C_G() * n->T_G_C());
+    }
+    for (Keyframe* k : all) {
+      if (k->bad()) continue;
+      if (k->parent() != nullptr && !k->parent()->bad() && old_T_C_G.count(k->parent())) {
+        addEdge(k, k->parent(), oldRelative(k, k->parent()));
+      }
+      for (Keyframe* l : k->loopEdges()) {
+        if (old_T_C_G.count(l)) addEdge(k, l, oldRelative(k, l));
+      }
+      for (Keyframe* n : k->covisibleWithWeightAtLeast(config_.essential_graph_min_weight)) {
+        if (old_T_C_G.count(n) && !(loop_links.count(k) && loop_links[k].count(n))) {
+          addEdge(k, n, oldRelative(k, n));
+        }
+      }
+    }
+    std::map<const Keyframe*, Transformationd> before_graph;
+    for (Keyframe* k : all) before_graph[k] = k->T_C_G();
+    if (!edges.empty()) {
+      const PoseGraphResult graph = optimizePoseGraph(vertices, edges, config_.pose_graph);
+      for (Keyframe* k : all) {
+        if (k->bad()) continue;
+        k->setPose(graph.T_C_G[static_cast<size_t>(vertex_of.at(k))]);
+      }
+    }
+    // 5. Every landmark follows the keyframe that placed it.
+    for (Landmark* l : map_->landmarks()) {
+      Keyframe* ref = l->referenceKeyframe();
+      if (ref == nullptr || ref->bad() || before_graph.count(ref) == 0) continue;
+      l->setPosition(ref->T_G_C() * (before_graph.at(ref) * l->position()));
+      l->updateNormalAndDepth(pyramid_);
+    }
+    keyframe->addLoopEdge(loop.candidate);
+    loop.candidate->addLoopEdge(keyframe);
+    map_->bumpChangeIndex();
+    last_loop_keyframe_ = keyframe->id;
+    for (Keyframe* k : all) {
+      if (!k->bad()) batch.emplace_back(k->id, k->T_G_C());
+    }
+  }
+  event.query = keyframe->id;
+  event.candidate = loop.candidate->id;
+  event.inliers = loop.inliers;
+  event.correction_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.loops_closed;
+    stats_.last_correction_ms = event.correction_ms;
+  }
+  if (on_poses_) on_poses_(batch, false);
+  if (on_loop_) on_loop_(event);
+}
+
+void LoopCloser::globalBundleAdjustment(Keyframe* loop_keyframe) {
+  BundleAdjustmentProblem problem;
+  problem.camera = StereoCameraModel{camera_.intrinsics.fx, camera_.intrinsics.fy,
+                                     camera_.intrinsics.cx, camera_.intrinsics.cy, camera_.bf()};
+  std::vector<Keyframe*> keyframes;
+  std::vector<std::shared_ptr<Landmark>> landmarks;
+  int change_index = 0;
+  {
+    std::shared_lock<std::shared_mutex> lock(map_->mutex());
+    change_index = map_->changeIndex();
+    std::map<const Keyframe*, int> index_of;
+    for (Keyframe* k : map_->keyframes()) {
+      index_of[k] = static_cast<int>(keyframes.size());
+      keyframes.push_back(k);
+      // Gauge: the loop keyframe (fixed during the essential graph too).
+      problem.keyframes.push_back(
+          BaKeyframe{static_cast<uint64_t>(k->id), k->T_C_G(), k == loop_keyframe});
+    }
+    for (Landmark* l : map_->landmarks()) {
+      const int li = static_cast<int>(landmarks.size());
+      bool any = false;
+      for (const auto& [k, index] : l->observations()) {
+        const auto it = index_of.find(k);
+        if (it == index_of.end()) continue;
+        const FrameFeatures& f = k->features();
+        BaObservation o;
+        o.keyframe = it->second;
+        o.landmark = li;
+        o.u = f.keypoints[index].u;
+        o.v = f.keypoints[index].v;
+        o.u_right = f.right_u[index];
+        o.inv_sigma2 = pyramid_.invSigma2(f.keypoints[index].octave);
+        problem.observations.push_back(o);
+        any = true;
+      }
+      if (!any) continue;
+      landmarks.push_back(l->shared_from_this());
+      problem.landmarks.push_back(BaLandmark{l->id, l->position()});
+    }
+  }
+  if (problem.observations.empty()) return;
+  const BundleAdjustmentResult result = bundleAdjust(problem, config_.global_ba);
+  KeyframePoseBatch batch;
+  {
+    std::unique_lock<std::shared_mutex> lock(map_->mutex());
+    if (map_->changeIndex() != change_index || !result.success) return;  // stale
+    std::map<const Keyframe*, Transformationd> old_T_C_G;
+    for (size_t i = 0; i < keyframes.size(); ++i) {
+      old_T_C_G[keyframes[i]] = keyframes[i]->T_C_G();
+      if (!keyframes[i]->bad()) keyframes[i]->setPose(result.T_C_G[i]);
+    }
+    // Keyframes made during the BA follow their parent (ids increase along the tree).
+    for (Keyframe* k : map_->keyframes()) {
+      if (old_T_C_G.count(k) || k->parent() == nullptr || !old_T_C_G.count(k->parent())) continue;
+      const Transformationd T_Ck_Cp = k->T_C_G() * old_T_C_G.at(k->parent()).inverse();
+      old_T_C_G[k] = k->T_C_G();
+      k->setPose(T_Ck_Cp * k->parent()->T_C_G());
+    }
+    std::set<const Landmark*> optimised;
+    for (size_t li = 0; li < landmarks.size(); ++li) {
+      Landmark* l = landmarks[li].get();
+      if (l->bad()) continue;
+      l->setPosition(result.p_G[li]);
+      l->updateNormalAndDepth(pyramid_);
+      optimised.insert(l);
+    }
+    for (Landmark* l : map_->landmarks()) {
+      if (optimised.count(l)) continue;
+      Keyframe* ref = l->referenceKeyframe();
+      if (ref == nullptr || !old_T_C_G.count(ref)) continue;
+      l->setPosition(ref->T_G_C() * (old_T_C_G.at(ref) * l->position()));
+      l->updateNormalAndDepth(pyramid_);
+    }
+    map_->bumpChangeIndex();
+    for (Keyframe* k : map_->keyframes()) batch.emplace_back(k->id, k->T_G_C());
+  }
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.global_bundle_adjustments;
+    stats_.last_global_ba_ms = result.time_ms;
+  }
+  if (on_poses_) on_poses_(batch, true);
+}
+
+}  // namespace cblox

@@ -1,0 +1,139 @@
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/features/scale_pyramid.h"
+#include "core/optimization/bundle_adjustment.h"
+#include "core/optimization/pose_graph_optimizer.h"
+#include "core/tracking/local_mapper.h"
+#include "core/tracking/sparse_map.h"
+#include "core/tracking/tracking_camera.h"
+#include "core/vocabulary/keyframe_database.h"
+
+namespace cblox {
+
+/// Settings of loop closing (ORB-SLAM2's LoopClosing, SE(3) for stereo / RGB-D).
+struct LoopCloserConfig {
+  /// No loop is searched until the map has this many keyframes, nor within this many
+  /// keyframes of the last loop (ORB-SLAM2: 10).
+  int min_keyframes_between_loops = 10;
+  /// A candidate must be consistent (its covisibility group overlapping the previous
+  /// keyframes' candidate groups) over this many consecutive keyframes (ORB-SLAM2: 3).
+  int consistency_threshold = 3;
+  /// Geometric verification: BoW matches per candidate (20); RANSAC iterations of the
+  /// 3D-3D alignment (300) and the inliers it needs (20); matches after projecting the
+  /// candidate's covisible landmarks at the verified pose (40).
+  int min_bow_matches = 20;
+  int ransac_iterations = 300;
+  int min_ransac_inliers = 20;
+  int min_projection_matches = 40;
+  /// Essential graph: covisibility edges of at least this weight (100).
+  int essential_graph_min_weight = 100;
+  PoseGraphConfig pose_graph;
+  /// Global BA after each loop correction (on this thread, the map usable meanwhile).
+  bool global_bundle_adjustment = true;
+  BundleAdjustmentConfig global_ba = globalBundleAdjustmentConfig();
+  /// Random seed of RANSAC (deterministic runs).
+  uint32_t seed = 1;
+
+  std::string validate() const;
+};
+
+/// What one loop closure did.
+struct LoopClosureEvent {
+  KeyframeId query = 0;        ///< the new keyframe that closed the loop
+  KeyframeId candidate = 0;    ///< the old keyframe it matched
+  int inliers = 0;             ///< matches after verification
+  double correction_m = 0.0;   ///< how far the query keyframe moved, metres
+  double correction_ms = 0.0;  ///< time of the correction (pose graph included)
+};
+
+struct LoopCloserStats {
+  uint64_t keyframes_checked = 0;
+  uint64_t candidates_detected = 0;  ///< consistent candidates reaching verification
+  uint64_t loops_rejected = 0;       ///< failed geometric verification
+  uint64_t loops_closed = 0;
+  uint64_t global_bundle_adjustments = 0;
+  double last_correction_ms = 0.0;
+  double last_global_ba_ms = 0.0;
+};
+
+/// Loop closing: place recognition of each processed keyframe against the keyframe database
+/// (BoW, consistency over consecutive keyframes), geometric verification (BoW matches, 3D-3D
+/// RANSAC on the stereo landmarks, pose optimisation, projection search), then correction:
+/// the query keyframe's covisible group is moved, duplicate landmarks are fused, the
+/// essential graph (spanning tree, strong covisibility and loop edges) is optimised, every
+/// landmark follows its reference keyframe, and a global BA refines everything.
+///
+/// Threads: insertKeyframe from the local mapping thread; run() on the loop closing thread.
+/// The correction holds the map's exclusive lock (tracking waits, as in ORB-SLAM2) and bumps
+/// SparseMap::changeIndex(), which makes an in-flight local BA discard its result.
+class LoopCloser {
+ public:
+  using LoopCallback = std::function<void(const LoopClosureEvent&)>;
+  using PoseCallback = std::function<void(const KeyframePoseBatch&, bool global_ba)>;
+
+  /// Throws std::invalid_argument for an invalid config or camera.
+  LoopCloser(SparseMap* map, KeyframeDatabase* database, const TrackingCamera& camera,
+             const ScalePyramid& pyramid, const LoopCloserConfig& config);
+
+  void setLoopCallback(LoopCallback callback) { on_loop_ = std::move(callback); }
+  /// All keyframe poses after a correction (global_ba false) or after global BA (true).
+  void setPoseCallback(PoseCallback callback) { on_poses_ = std::move(callback); }
+
+  /// Queues a keyframe local mapping has finished. Thread-safe.
+  void insertKeyframe(Keyframe* keyframe);
+  /// Processes the oldest queued keyframe; false when there was none.
+  bool processOne();
+  void run();
+  void stop();
+  void waitUntilIdle();
+  LoopCloserStats stats() const;
+
+ private:
+  struct Verified {
+    Keyframe* candidate = nullptr;
+    Transformationd T_C_G;           // corrected pose of the query keyframe
+    std::vector<Landmark*> matches;  // per query feature: the loop landmark, or null
+    int inliers = 0;
+  };
+  std::vector<Keyframe*> detect(Keyframe* keyframe);
+  std::optional<Verified> verify(Keyframe* keyframe, const std::vector<Keyframe*>& candidates);
+  void correct(Keyframe* keyframe, const Verified& loop);
+  void globalBundleAdjustment(Keyframe* loop_keyframe);
+
+  SparseMap* map_;
+  KeyframeDatabase* database_;
+  TrackingCamera camera_;
+  ScalePyramid pyramid_;
+  LoopCloserConfig config_;
+  LoopCallback on_loop_;
+  PoseCallback on_poses_;
+
+  mutable std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  std::deque<Keyframe*> queue_;
+  bool busy_ = false, stop_ = false;
+
+  // Loop-closing thread only.
+  KeyframeId last_loop_keyframe_ = 0;
+  struct ConsistentGroup {
+    std::vector<KeyframeId> members;  // sorted
+    int consistency = 0;
+  };
+  std::vector<ConsistentGroup> groups_;
+  uint32_t rng_state_;
+
+  mutable std::mutex stats_mutex_;
+  LoopCloserStats stats_;
+};
+
+}  // namespace cblox

@@ -1,0 +1,108 @@
+#include "core/tracking/sparse_map.h"
+
+#include <algorithm>
+#include <utility>
+
+namespace cblox {
+
+Keyframe* SparseMap::addKeyframe(uint64_t frame_id, int64_t timestamp_ns,
+                                 std::shared_ptr<const FrameFeatures> features,
+                                 const Transformationd& T_C_G) {
+  keyframes_.push_back(std::make_unique<Keyframe>(static_cast<KeyframeId>(keyframes_.size()),
+                                                  frame_id, timestamp_ns, std::move(features),
+                                                  T_C_G));
+  ++num_good_keyframes_;
+  return keyframes_.back().get();
+}
+
+std::shared_ptr<Landmark> SparseMap::addLandmark(const Eigen::Vector3d& p_G, Keyframe* reference) {
+  auto landmark = std::make_shared<Landmark>(next_landmark_id_++, p_G, reference);
+  landmark->first_keyframe_id = reference != nullptr ? reference->id : 0;
+  landmarks_.emplace(landmark->id, landmark);
+  return landmark;
+}
+
+void SparseMap::addObservation(Keyframe* keyframe, uint32_t index, Landmark* landmark) {
+  keyframe->setLandmark(index, landmark);
+  landmark->addObservation(keyframe, index, keyframe->features().hasDepth(index));
+}
+
+void SparseMap::eraseObservation(Keyframe* keyframe, uint32_t index) {
+  Landmark* landmark = keyframe->landmark(index);
+  if (landmark == nullptr) return;
+  keyframe->setLandmark(index, nullptr);
+  landmark->eraseObservation(keyframe, keyframe->features().hasDepth(index));
+}
+
+void SparseMap::retireLandmark(Landmark* landmark) {
+  if (landmark == nullptr || landmark->bad()) return;
+  landmark->setBad();
+  const auto observations = landmark->observations();  // copy: erased below
+  for (const auto& [keyframe, index] : observations) {
+    if (keyframe->landmark(index) == landmark) keyframe->setLandmark(index, nullptr);
+    landmark->eraseObservation(keyframe, keyframe->features().hasDepth(index));
+  }
+  landmarks_.erase(landmark->id);  // may free it, unless a frame still holds it
+}
+
+void SparseMap::replaceLandmark(Landmark* landmark, Landmark* by) {
+  if (landmark == nullptr || by == nullptr || landmark == by || landmark->bad()) return;
+  const auto it = landmarks_.find(by->id);
+  if (it == landmarks_.end()) return;  // `by` is not (or no longer) in the map
+  std::shared_ptr<Landmark> by_shared = it->second;
+  const auto observations = landmark->observations();
+  for (const auto& [keyframe, index] : observations) {
+    landmark->eraseObservation(keyframe, keyframe->features().hasDepth(index));
+    if (by->indexIn(keyframe) < 0) {
+      keyframe->setLandmark(index, by);
+      by->addObservation(keyframe, index, keyframe->features().hasDepth(index));
+    } else {
+      keyframe->setLandmark(index, nullptr);
+    }
+  }
+  by->increaseVisible(landmark->visible());
+  by->increaseFound(landmark->found());
+  by->updateDescriptor();
+  landmark->setBad();
+  landmark->setReplacement(std::move(by_shared));
+  landmarks_.erase(landmark->id);
+}
+
+void SparseMap::cullKeyframe(Keyframe* keyframe) {
+  if (keyframe == nullptr || keyframe->bad()) return;
+  const std::vector<Landmark*> orphans = keyframe->cull();
+  if (!keyframe->bad()) return;  // first keyframe or a loop keyframe: kept
+  --num_good_keyframes_;
+  for (Landmark* l : orphans) retireLandmark(l);
+}
+
+Keyframe* SparseMap::keyframe(KeyframeId id) const {
+  return id >= 0 && static_cast<size_t>(id) < keyframes_.size()
+             ? keyframes_[static_cast<size_t>(id)].get()
+             : nullptr;
+}
+
+std::shared_ptr<Landmark> SparseMap::landmark(LandmarkId id) const {
+  const auto it = landmarks_.find(id);
+  return it == landmarks_.end() ? nullptr : it->second;
+}
+
+std::vector<Keyframe*> SparseMap::keyframes() const {
+  std::vector<Keyframe*> result;
+  result.reserve(num_good_keyframes_);
+  for (const auto& k : keyframes_) {
+    if (!k->bad()) result.push_back(k.get());
+  }
+  return result;
+}
+
+std::vector<Landmark*> SparseMap::landmarks() const {
+  std::vector<Landmark*> result;
+  result.reserve(landmarks_.size());
+  for (const auto& [id, l] : landmarks_) result.push_back(l.get());
+  std::sort(result.begin(), result.end(),
+            [](const Landmark* a, const Landmark* b) { return a->id < b->id; });
+  return result;
+}
+
+}  // namespace cblox

@@ -1,0 +1,87 @@
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
+#include <vector>
+
+#include <absl/container/flat_hash_map.h>
+#include <Eigen/Core>
+
+#include "core/tracking/keyframe.h"
+#include "core/tracking/landmark.h"
+
+namespace cblox {
+
+/// The sparse SLAM map: keyframes and landmarks, owned here.
+///
+/// Concurrency (the one rule of core/tracking): every Keyframe and Landmark field that can
+/// change, and this map's containers, are guarded by mutex(). The tracking thread reads under
+/// a shared lock; local mapping and loop closing modify under an exclusive lock and do their
+/// long computations (bundle adjustment, pose-graph optimisation) on copies taken under a
+/// shared lock, writing results back under an exclusive lock. Methods of this class do not
+/// lock: the caller holds the lock the method's comment names.
+///
+/// Lifetimes: keyframes are never freed while the map lives (culling marks them bad), so raw
+/// Keyframe pointers stay valid. A retired landmark is removed from every keyframe and from
+/// this map under the exclusive lock; frames of the tracker hold std::shared_ptr<Landmark>
+/// and may keep one alive after it is retired (they check bad()).
+class SparseMap {
+ public:
+  SparseMap() = default;
+  SparseMap(const SparseMap&) = delete;
+  SparseMap& operator=(const SparseMap&) = delete;
+
+  std::shared_mutex& mutex() const { return mutex_; }
+
+  /// Adds a keyframe with the next keyframe id (0, 1, 2, ...). Exclusive lock.
+  Keyframe* addKeyframe(uint64_t frame_id, int64_t timestamp_ns,
+                        std::shared_ptr<const FrameFeatures> features,
+                        const Transformationd& T_C_G);
+  /// Adds a landmark with the next landmark id. Exclusive lock.
+  std::shared_ptr<Landmark> addLandmark(const Eigen::Vector3d& p_G, Keyframe* reference);
+
+  /// Makes `keyframe`'s feature `index` observe `landmark` (both directions). Exclusive lock.
+  static void addObservation(Keyframe* keyframe, uint32_t index, Landmark* landmark);
+  /// Removes that observation (both directions). Exclusive lock.
+  static void eraseObservation(Keyframe* keyframe, uint32_t index);
+
+  /// Retires a landmark: removed from every observing keyframe and from the map, marked bad.
+  /// The map's reference is dropped, so `landmark` may be freed by the call unless a frame
+  /// holds a shared_ptr to it: do not use the pointer afterwards. Exclusive lock.
+  void retireLandmark(Landmark* landmark);
+  /// Replaces `landmark` by `by` everywhere (ORB-SLAM2's MapPoint::Replace): observations
+  /// move to `by` unless that keyframe already observes `by`; visible/found counters add up;
+  /// `landmark` is retired with replacement() = by. Exclusive lock.
+  void replaceLandmark(Landmark* landmark, Landmark* by);
+  /// Culls a keyframe (Keyframe::cull) and retires the landmarks it orphaned. Exclusive lock.
+  void cullKeyframe(Keyframe* keyframe);
+
+  /// Shared lock for all of these.
+  Keyframe* keyframe(KeyframeId id) const;
+  std::shared_ptr<Landmark> landmark(LandmarkId id) const;
+  /// Good keyframes by increasing id.
+  std::vector<Keyframe*> keyframes() const;
+  /// Every keyframe ever added, bad ones included, by id (index = id).
+  const std::vector<std::unique_ptr<Keyframe>>& allKeyframes() const { return keyframes_; }
+  /// Good landmarks by increasing id.
+  std::vector<Landmark*> landmarks() const;
+  size_t numKeyframes() const { return num_good_keyframes_; }
+  size_t numLandmarks() const { return landmarks_.size(); }
+
+  /// The map's "big change" counter, bumped by loop closure and global BA so the tracker
+  /// knows poses jumped. Shared lock to read, exclusive to bump.
+  int changeIndex() const { return change_index_; }
+  void bumpChangeIndex() { ++change_index_; }
+
+ private:
+  mutable std::shared_mutex mutex_;
+  std::vector<std::unique_ptr<Keyframe>> keyframes_;
+  size_t num_good_keyframes_ = 0;
+  absl::flat_hash_map<LandmarkId, std::shared_ptr<Landmark>> landmarks_;
+  LandmarkId next_landmark_id_ = 0;
+  int change_index_ = 0;
+};
+
+}  // namespace cblox

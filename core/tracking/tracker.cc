@@ -1,0 +1,526 @@
+#include "core/tracking/tracker.h"
+
+#include <algorithm>
+#include <chrono>
+#include <set>
+#include <stdexcept>
+#include <utility>
+
+#include <opencv2/calib3d.hpp>
+
+#include "core/optimization/pose_optimizer.h"
+#include "core/tracking/feature_matcher.h"
+
+namespace cblox {
+
+const char* trackingStateName(TrackingState state) {
+  switch (state) {
+    case TrackingState::kNotInitialized:
+      return "NOT_INITIALIZED";
+    case TrackingState::kOk:
+      return "OK";
+    case TrackingState::kLost:
+      return "LOST";
+  }
+  return "?";
+}
+
+Tracker::Tracker(SparseMap* map, const TrackingCamera& camera, const ScalePyramid& pyramid,
+                 const TrackerConfig& config, const KeyframeDatabase* database, KeyframeSink* sink)
+    : map_(map),
+      camera_(camera),
+      pyramid_(pyramid),
+      config_(config),
+      database_(database),
+      sink_(sink) {
+  if (map == nullptr) throw std::invalid_argument("Tracker: map is null");
+  if (std::string e = camera.validate(); !e.empty()) {
+    throw std::invalid_argument("Tracker: camera: " + e);
+  }
+  if (std::string e = config.validate(); !e.empty()) throw std::invalid_argument("Tracker: " + e);
+  model_ = StereoCameraModel{camera.intrinsics.fx, camera.intrinsics.fy, camera.intrinsics.cx,
+                             camera.intrinsics.cy, camera.bf()};
+}
+
+TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
+                              std::shared_ptr<const FrameFeatures> features,
+                              const std::optional<Transformationd>& T_C_G_initial) {
+  const auto start = std::chrono::steady_clock::now();
+  TrackingResult result;
+  current_ = Frame(frame_id, timestamp_ns, std::move(features));
+  current_index_ = ++frames_processed_;
+  bool create_keyframe = false;
+  {
+    std::shared_lock<std::shared_mutex> lock(map_->mutex());
+    if (map_->changeIndex() != map_change_index_) {
+      map_change_index_ = map_->changeIndex();
+      result.map_corrected = state_ != TrackingState::kNotInitialized;
+    }
+    if (state_ == TrackingState::kNotInitialized) {
+      if (current_.features->size() == 0) {
+        result.reason = "no features";
+      } else {
+        // Initialisation needs the exclusive lock: done below.
+      }
+    } else {
+      bool ok = false;
+      bool relocalized = false;
+      if (state_ == TrackingState::kOk) {
+        replaceRetiredInLastFrame();
+        updateLastFramePose();
+        const bool just_relocalized =
+            ever_relocalized_ && current_index_ < last_relocalization_index_ + 2;
+        if (velocity_ && !just_relocalized) {
+          ok = trackWithMotionModel();
+          if (!ok) ok = trackReferenceKeyframe();
+        } else {
+          ok = trackReferenceKeyframe();
+        }
+        if (!ok) result.reason = "too few matches with the last frame and the reference keyframe";
+      } else {
+        ok = relocalize();
+        relocalized = ok;
+        if (!ok) result.reason = "lost: relocalization found no consistent keyframe";
+      }
+      current_.reference_keyframe = reference_keyframe_;
+      if (ok) {
+        ok = trackLocalMap(&result);
+        if (!ok && result.reason.empty()) result.reason = "too few inliers in the local map";
+      }
+      state_ = ok ? TrackingState::kOk : TrackingState::kLost;
+      result.state = state_;
+      result.relocalized = relocalized;
+      if (ok) {
+        result.T_C_G = current_.T_C_G;
+        if (last_frame_.T_C_G) velocity_ = *current_.T_C_G * last_frame_.T_C_G->inverse();
+        create_keyframe = needNewKeyframe(result.inliers);
+      } else {
+        velocity_.reset();
+      }
+    }
+  }
+  if (state_ == TrackingState::kNotInitialized && result.reason.empty()) {
+    std::unique_lock<std::shared_mutex> lock(map_->mutex());
+    if (initialize(T_C_G_initial, &result)) {
+      state_ = TrackingState::kOk;
+      result.state = state_;
+      result.initialized = true;
+      result.T_C_G = current_.T_C_G;
+    }
+  } else if (create_keyframe) {
+    std::unique_lock<std::shared_mutex> lock(map_->mutex());
+    result.new_keyframe = createKeyframe();
+  }
+  if (result.new_keyframe != nullptr && sink_ != nullptr)
+    sink_->insertKeyframe(result.new_keyframe);
+  // Outliers do not carry over to the next frame's motion-model search.
+  for (size_t i = 0; i < current_.size(); ++i) {
+    if (current_.outlier[i]) current_.landmarks[i] = nullptr;
+  }
+  last_frame_ = current_;
+  if (current_.T_C_G && reference_keyframe_ != nullptr) {
+    std::shared_lock<std::shared_mutex> lock(map_->mutex());
+    last_reference_ = reference_keyframe_;
+    T_last_reference_ = *current_.T_C_G * reference_keyframe_->T_G_C();
+  } else {
+    last_reference_ = nullptr;
+  }
+  result.time_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+bool Tracker::initialize(const std::optional<Transformationd>& T_C_G_initial,
+                         TrackingResult* result) {
+  const FrameFeatures& f = *current_.features;
+  size_t with_depth = 0;
+  for (size_t i = 0; i < f.size(); ++i) with_depth += f.hasDepth(i) ? 1 : 0;
+  if (static_cast<int>(with_depth) < config_.min_features_to_initialize) {
+    result->reason = "initialisation needs " + std::to_string(config_.min_features_to_initialize) +
+                     " features with depth, the frame has " + std::to_string(with_depth);
+    return false;
+  }
+  const Transformationd T_C_G = T_C_G_initial.value_or(Transformationd());
+  current_.T_C_G = T_C_G;
+  Keyframe* keyframe =
+      map_->addKeyframe(current_.id, current_.timestamp_ns, current_.features, T_C_G);
+  const Transformationd T_G_C = T_C_G.inverse();
+  for (size_t i = 0; i < f.size(); ++i) {
+    if (!f.hasDepth(i)) continue;
+    std::shared_ptr<Landmark> landmark =
+        map_->addLandmark(T_G_C * f.unproject(i, camera_), keyframe);
+    SparseMap::addObservation(keyframe, static_cast<uint32_t>(i), landmark.get());
+    landmark->updateDescriptor();
+    landmark->updateNormalAndDepth(pyramid_);
+    current_.landmarks[i] = std::move(landmark);
+  }
+  reference_keyframe_ = keyframe;
+  last_keyframe_index_ = current_index_;
+  local_keyframes_ = {keyframe};
+  result->new_keyframe = keyframe;
+  result->inliers = current_.numInlierMatches();
+  return true;
+}
+
+void Tracker::replaceRetiredInLastFrame() {
+  for (auto& landmark : last_frame_.landmarks) {
+    if (landmark && landmark->bad() && landmark->replacement()) {
+      std::shared_ptr<Landmark> by = landmark->replacement();
+      while (by->bad() && by->replacement()) by = by->replacement();
+      landmark = by->bad() ? nullptr : by;
+    }
+  }
+}
+
+int Tracker::optimizeCurrentPose() {
+  std::vector<PoseObservation> observations;
+  std::vector<size_t> index;
+  const FrameFeatures& f = *current_.features;
+  for (size_t i = 0; i < current_.size(); ++i) {
+    const std::shared_ptr<Landmark>& landmark = current_.landmarks[i];
+    if (!landmark) continue;
+    PoseObservation o;
+    o.u = f.keypoints[i].u;
+    o.v = f.keypoints[i].v;
+    o.u_right = f.right_u[i];
+    o.inv_sigma2 = pyramid_.invSigma2(f.keypoints[i].octave);
+    o.p_G = landmark->position();
+    observations.push_back(o);
+    index.push_back(i);
+  }
+  if (observations.size() < 3) return 0;
+  const PoseOptimizationResult r = optimizePose(model_, *current_.T_C_G, observations);
+  current_.T_C_G = r.T_C_G;
+  for (size_t k = 0; k < index.size(); ++k) current_.outlier[index[k]] = r.inlier[k] ? 0 : 1;
+  return r.num_inliers;
+}
+
+// Drops outlier matches (they are not used again for this frame).
+namespace {
+int discardOutliers(Frame* frame) {
+  int inliers = 0;
+  for (size_t i = 0; i < frame->size(); ++i) {
+    if (!frame->landmarks[i]) continue;
+    if (frame->outlier[i]) {
+      frame->landmarks[i] = nullptr;
+      frame->outlier[i] = 0;
+    } else if (frame->landmarks[i]->numObservations() > 0) {
+      ++inliers;
+    }
+  }
+  return inliers;
+}
+}  // namespace
+
+bool Tracker::trackWithMotionModel() {
+  current_.T_C_G = *velocity_ * *last_frame_.T_C_G;
+  current_.clearMatches();
+  FeatureMatcherConfig matcher;
+  matcher.nn_ratio = 0.9f;
+  int matches = searchLastFrame(&current_, last_frame_, config_.last_frame_search_radius, camera_,
+                                pyramid_, matcher);
+  if (matches < config_.min_motion_model_matches) {
+    current_.clearMatches();
+    matches = searchLastFrame(&current_, last_frame_, 2.0f * config_.last_frame_search_radius,
+                              camera_, pyramid_, matcher);
+  }
+  if (matches < config_.min_motion_model_matches) return false;
+  optimizeCurrentPose();
+  return discardOutliers(&current_) >= config_.min_pose_inliers;
+}
+
+bool Tracker::trackReferenceKeyframe() {
+  if (reference_keyframe_ == nullptr) return false;
+  current_.clearMatches();
+  current_.T_C_G = last_frame_.T_C_G ? *last_frame_.T_C_G : reference_keyframe_->T_C_G();
+  int n = 0;
+  if (!current_.features->feature_vector.empty() &&
+      !reference_keyframe_->features().feature_vector.empty()) {
+    FeatureMatcherConfig matcher;
+    matcher.nn_ratio = 0.7f;
+    std::vector<Landmark*> matches;
+    n = searchByBow(*reference_keyframe_, *current_.features, matcher, &matches);
+    for (size_t i = 0; i < matches.size(); ++i) {
+      if (matches[i] != nullptr) current_.landmarks[i] = matches[i]->shared_from_this();
+    }
+  } else {
+    // No vocabulary: the reference keyframe's landmarks projected at the last pose, in a
+    // wide window.
+    std::vector<LandmarkProjection> projections;
+    for (Landmark* l : reference_keyframe_->landmarks()) {
+      if (l == nullptr || l->bad()) continue;
+      if (const auto p = projectLandmark(l, *current_.T_C_G, camera_, pyramid_)) {
+        projections.push_back(*p);
+      }
+    }
+    FeatureMatcherConfig matcher;
+    matcher.nn_ratio = 0.7f;
+    n = searchLocalLandmarks(&current_, projections, 2.0f * config_.last_frame_search_radius,
+                             matcher, pyramid_);
+  }
+  if (n < config_.min_reference_matches) return false;
+  optimizeCurrentPose();
+  return discardOutliers(&current_) >= config_.min_pose_inliers;
+}
+
+void Tracker::updateLocalMap() {
+  // Keyframes that observe the frame's landmarks, by number of shared landmarks.
+  std::map<Keyframe*, int, KeyframeIdLess> counter;
+  for (size_t i = 0; i < current_.size(); ++i) {
+    const std::shared_ptr<Landmark>& landmark = current_.landmarks[i];
+    if (!landmark) continue;
+    if (landmark->bad()) {
+      current_.landmarks[i] = nullptr;
+      continue;
+    }
+    for (const auto& [keyframe, index] : landmark->observations()) ++counter[keyframe];
+  }
+  local_keyframes_.clear();
+  Keyframe* best = nullptr;
+  int best_count = 0;
+  const uint64_t stamp = current_index_;
+  for (const auto& [keyframe, count] : counter) {
+    if (keyframe->bad()) continue;
+    if (count > best_count) {
+      best_count = count;
+      best = keyframe;
+    }
+    local_keyframes_.push_back(keyframe);
+    keyframe->track_reference_frame = stamp;
+  }
+  const size_t first_ring = local_keyframes_.size();
+  auto addKeyframe = [&](Keyframe* k) {
+    if (k == nullptr || k->bad() || k->track_reference_frame == stamp) return false;
+    k->track_reference_frame = stamp;
+    local_keyframes_.push_back(k);
+    return true;
+  };
+  for (size_t i = 0; i < first_ring; ++i) {
+    if (static_cast<int>(local_keyframes_.size()) >= config_.max_local_keyframes) break;
+    Keyframe* k = local_keyframes_[i];
+    for (Keyframe* neighbour : k->bestCovisible(10)) {
+      if (addKeyframe(neighbour)) break;
+    }
+    for (Keyframe* child : k->children()) {
+      if (addKeyframe(child)) break;
+    }
+    addKeyframe(k->parent());
+  }
+  if (best != nullptr) {
+    reference_keyframe_ = best;
+    current_.reference_keyframe = best;
+  }
+  // Their landmarks.
+  local_landmarks_.clear();
+  for (Keyframe* k : local_keyframes_) {
+    for (Landmark* l : k->landmarks()) {
+      if (l == nullptr || l->bad() || l->track_reference_frame == stamp) continue;
+      l->track_reference_frame = stamp;
+      local_landmarks_.push_back(l->shared_from_this());
+    }
+  }
+}
+
+int Tracker::searchLocalMap() {
+  const uint64_t stamp = current_index_;
+  for (const auto& landmark : current_.landmarks) {
+    if (!landmark || landmark->bad()) continue;
+    landmark->increaseVisible();
+    landmark->last_seen_frame = stamp;
+  }
+  std::vector<LandmarkProjection> projections;
+  for (const auto& landmark : local_landmarks_) {
+    if (landmark->last_seen_frame == stamp || landmark->bad()) continue;
+    if (const auto p = projectLandmark(landmark.get(), *current_.T_C_G, camera_, pyramid_)) {
+      landmark->increaseVisible();
+      projections.push_back(*p);
+    }
+  }
+  if (projections.empty()) return 0;
+  const bool just_relocalized =
+      ever_relocalized_ && current_index_ < last_relocalization_index_ + 2;
+  const float radius =
+      just_relocalized ? config_.relocalized_search_radius : config_.local_map_search_radius;
+  FeatureMatcherConfig matcher;
+  matcher.nn_ratio = 0.8f;
+  return searchLocalLandmarks(&current_, projections, radius, matcher, pyramid_);
+}
+
+bool Tracker::trackLocalMap(TrackingResult* result) {
+  updateLocalMap();
+  searchLocalMap();
+  optimizeCurrentPose();
+  int inliers = 0;
+  for (size_t i = 0; i < current_.size(); ++i) {
+    const std::shared_ptr<Landmark>& landmark = current_.landmarks[i];
+    if (!landmark || current_.outlier[i]) continue;
+    landmark->increaseFound();
+    if (landmark->numObservations() > 0) ++inliers;
+  }
+  result->inliers = inliers;
+  const bool recent_relocalization =
+      ever_relocalized_ &&
+      current_index_ <
+          last_relocalization_index_ + static_cast<uint64_t>(config_.max_frames_between_keyframes);
+  if (recent_relocalization && inliers < config_.min_local_map_inliers_after_relocalization) {
+    result->reason = "too few inliers after relocalization: " + std::to_string(inliers);
+    return false;
+  }
+  if (inliers < config_.min_local_map_inliers) {
+    result->reason = "too few inliers in the local map: " + std::to_string(inliers);
+    return false;
+  }
+  return true;
+}
+
+bool Tracker::needNewKeyframe(int inliers) const {
+  const size_t num_keyframes = map_->numKeyframes();
+  const uint64_t max_frames = static_cast<uint64_t>(config_.max_frames_between_keyframes);
+  if (ever_relocalized_ && current_index_ < last_relocalization_index_ + max_frames &&
+      num_keyframes > max_frames) {
+    return false;
+  }
+  const int min_observations = num_keyframes <= 2 ? 2 : 3;
+  const int reference_matches = reference_keyframe_ != nullptr
+                                    ? reference_keyframe_->numTrackedLandmarks(min_observations)
+                                    : 0;
+  const bool idle = sink_ == nullptr || sink_->acceptsKeyframes();
+  const FrameFeatures& f = *current_.features;
+  int tracked_close = 0, untracked_close = 0;
+  for (size_t i = 0; i < f.size(); ++i) {
+    if (!(f.depth[i] > 0.0f) || f.depth[i] >= camera_.close_depth_m) continue;
+    if (current_.landmarks[i] && !current_.outlier[i]) {
+      ++tracked_close;
+    } else {
+      ++untracked_close;
+    }
+  }
+  const bool need_close =
+      tracked_close < config_.tracked_close_min && untracked_close > config_.untracked_close_min;
+  const double ratio = num_keyframes < 2 ? 0.4 : config_.reference_ratio;
+  const bool c1a = current_index_ >= last_keyframe_index_ + max_frames;
+  const bool c1b =
+      current_index_ >=
+          last_keyframe_index_ + static_cast<uint64_t>(config_.min_frames_between_keyframes) &&
+      idle;
+  const bool c1c = inliers < reference_matches * 0.25 || need_close;
+  const bool c2 = (inliers < reference_matches * ratio || need_close) && inliers > 15;
+  if (!((c1a || c1b || c1c) && c2)) return false;
+  if (idle) return true;
+  if (sink_ != nullptr) {
+    sink_->interruptBundleAdjustment();
+    return sink_->queuedKeyframes() < 3;
+  }
+  return true;
+}
+
+Keyframe* Tracker::createKeyframe() {
+  const FrameFeatures& f = *current_.features;
+  Keyframe* keyframe =
+      map_->addKeyframe(current_.id, current_.timestamp_ns, current_.features, *current_.T_C_G);
+  for (size_t i = 0; i < current_.size(); ++i) {
+    const std::shared_ptr<Landmark>& landmark = current_.landmarks[i];
+    if (!landmark || current_.outlier[i] || landmark->bad()) continue;
+    if (landmark->indexIn(keyframe) >= 0) continue;
+    SparseMap::addObservation(keyframe, static_cast<uint32_t>(i), landmark.get());
+  }
+  // New landmarks from the closest unmatched features with depth.
+  std::vector<std::pair<float, size_t>> by_depth;
+  for (size_t i = 0; i < f.size(); ++i) {
+    if (f.hasDepth(i)) by_depth.emplace_back(f.depth[i], i);
+  }
+  std::sort(by_depth.begin(), by_depth.end());
+  const Transformationd T_G_C = current_.T_C_G->inverse();
+  int points = 0;
+  for (const auto& [depth, i] : by_depth) {
+    const bool matched =
+        current_.landmarks[i] && !current_.outlier[i] && !current_.landmarks[i]->bad();
+    if (!matched) {
+      std::shared_ptr<Landmark> landmark =
+          map_->addLandmark(T_G_C * f.unproject(i, camera_), keyframe);
+      SparseMap::addObservation(keyframe, static_cast<uint32_t>(i), landmark.get());
+      landmark->updateDescriptor();
+      landmark->updateNormalAndDepth(pyramid_);
+      current_.landmarks[i] = std::move(landmark);
+      current_.outlier[i] = 0;
+    }
+    ++points;
+    if (depth > camera_.close_depth_m && points > config_.min_new_landmarks_per_keyframe) break;
+  }
+  keyframe->updateConnections();
+  reference_keyframe_ = keyframe;
+  current_.reference_keyframe = keyframe;
+  last_keyframe_index_ = current_index_;
+  return keyframe;
+}
+
+bool Tracker::relocalize() {
+  if (database_ == nullptr || current_.features->bow.empty()) return false;
+  const std::vector<PlaceCandidate> candidates = database_->queryRelocalizationCandidates(
+      current_.features->bow, static_cast<size_t>(config_.max_relocalization_candidates));
+  const FrameFeatures& f = *current_.features;
+  FeatureMatcherConfig matcher;
+  matcher.nn_ratio = 0.75f;
+  const PinholeIntrinsics& k = camera_.intrinsics;
+  const cv::Matx33d K(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
+  for (const PlaceCandidate& candidate : candidates) {
+    Keyframe* keyframe = map_->keyframe(candidate.id);
+    if (keyframe == nullptr || keyframe->bad()) continue;
+    std::vector<Landmark*> matches;
+    if (searchByBow(*keyframe, f, matcher, &matches) < config_.min_relocalization_matches) {
+      continue;
+    }
+    std::vector<cv::Point3d> object;
+    std::vector<cv::Point2d> image;
+    std::vector<size_t> index;
+    for (size_t i = 0; i < matches.size(); ++i) {
+      if (matches[i] == nullptr) continue;
+      const Eigen::Vector3d& p = matches[i]->position();
+      object.emplace_back(p.x(), p.y(), p.z());
+      image.emplace_back(f.keypoints[i].u, f.keypoints[i].v);
+      index.push_back(i);
+    }
+    cv::Mat rvec, tvec;
+    std::vector<int> inliers;
+    if (!cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false,
+                            config_.pnp_iterations,
+                            static_cast<float>(config_.pnp_reprojection_error_px), 0.99, inliers,
+                            cv::SOLVEPNP_EPNP) ||
+        static_cast<int>(inliers.size()) < config_.min_pose_inliers) {
+      continue;
+    }
+    cv::Matx33d R;
+    cv::Rodrigues(rvec, R);
+    Eigen::Matrix3d R_C_G;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) R_C_G(r, c) = R(r, c);
+    }
+    current_.clearMatches();
+    for (const int i : inliers) {
+      current_.landmarks[index[static_cast<size_t>(i)]] =
+          matches[index[static_cast<size_t>(i)]]->shared_from_this();
+    }
+    current_.T_C_G = Transformationd::fromMatrix([&] {
+      Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+      T.topLeftCorner<3, 3>() = R_C_G;
+      T.topRightCorner<3, 1>() =
+          Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
+      return T;
+    }());
+    optimizeCurrentPose();
+    if (discardOutliers(&current_) < config_.min_pose_inliers) continue;
+    reference_keyframe_ = keyframe;
+    last_relocalization_index_ = current_index_;
+    ever_relocalized_ = true;
+    velocity_.reset();
+    return true;
+  }
+  return false;
+}
+
+void Tracker::updateLastFramePose() {
+  if (last_reference_ == nullptr || !last_frame_.T_C_G) return;
+  last_frame_.T_C_G = T_last_reference_ * last_reference_->T_C_G();
+}
+
+}  // namespace cblox

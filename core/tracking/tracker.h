@@ -1,0 +1,117 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/features/scale_pyramid.h"
+#include "core/optimization/stereo_camera_model.h"
+#include "core/tracking/frame.h"
+#include "core/tracking/keyframe_sink.h"
+#include "core/tracking/sparse_map.h"
+#include "core/tracking/tracker_config.h"
+#include "core/tracking/tracking_camera.h"
+#include "core/vocabulary/keyframe_database.h"
+
+namespace cblox {
+
+enum class TrackingState {
+  kNotInitialized,  ///< no map yet: waiting for a frame with enough features with depth
+  kOk,              ///< pose tracked against the map
+  kLost,            ///< tracking failed; relocalization is tried on every frame
+};
+
+const char* trackingStateName(TrackingState state);
+
+/// What tracking one frame gave.
+struct TrackingResult {
+  TrackingState state = TrackingState::kNotInitialized;
+  /// The frame's pose (world to camera) when state is kOk.
+  std::optional<Transformationd> T_C_G;
+  /// The frame was relocalized (its pose jumped relative to the motion before it).
+  bool relocalized = false;
+  /// The frame initialised the map.
+  bool initialized = false;
+  /// Loop closure or global BA moved the map since the previous frame (poses jumped).
+  bool map_corrected = false;
+  /// A keyframe made from this frame (already in the map and handed to the sink).
+  Keyframe* new_keyframe = nullptr;
+  /// Inlier matches after the last pose optimisation.
+  int inliers = 0;
+  /// Why tracking failed (empty when state is kOk).
+  std::string reason;
+  /// Milliseconds spent in track() (features excluded: they are built before).
+  double time_ms = 0.0;
+};
+
+/// ORB-SLAM2's tracking thread logic for stereo and RGB-D (no threads of its own): stereo
+/// initialisation, tracking with a constant-velocity motion model or against the reference
+/// keyframe, tracking the local map, keyframe decision and creation, relocalization with
+/// BoW candidates + PnP RANSAC when lost.
+///
+/// Thread-safety: not thread-safe; one tracking thread calls track(). It takes the map's
+/// shared lock while reading the map and the exclusive lock to insert a keyframe.
+class Tracker {
+ public:
+  /// `map` must outlive the tracker; `database` (may be null: no relocalization) and `sink`
+  /// (may be null: keyframes are only added to the map) too. Throws std::invalid_argument
+  /// for an invalid camera or config.
+  Tracker(SparseMap* map, const TrackingCamera& camera, const ScalePyramid& pyramid,
+          const TrackerConfig& config, const KeyframeDatabase* database, KeyframeSink* sink);
+
+  /// Tracks one frame (features from a FrameBuilder; bow needed for relocalization and
+  /// reference-keyframe tracking). `frame_id` and `timestamp_ns` must increase.
+  /// `T_C_G_initial`: the pose of the first keyframe when this frame initialises the map
+  /// (identity when absent).
+  TrackingResult track(uint64_t frame_id, int64_t timestamp_ns,
+                       std::shared_ptr<const FrameFeatures> features,
+                       const std::optional<Transformationd>& T_C_G_initial = std::nullopt);
+
+  TrackingState state() const { return state_; }
+  /// The last tracked frame (its pose is set when the state is kOk).
+  const Frame& lastFrame() const { return last_frame_; }
+
+ private:
+  bool initialize(const std::optional<Transformationd>& T_C_G_initial, TrackingResult* result);
+  bool trackWithMotionModel();
+  bool trackReferenceKeyframe();
+  bool relocalize();
+  bool trackLocalMap(TrackingResult* result);
+  int optimizeCurrentPose();
+  void updateLocalMap();
+  int searchLocalMap();
+  bool needNewKeyframe(int inliers) const;
+  Keyframe* createKeyframe();
+  void replaceRetiredInLastFrame();
+  // The last frame's pose follows its reference keyframe's (moved by local BA or loop
+  // closure since): ORB-SLAM2's UpdateLastFrame.
+  void updateLastFramePose();
+
+  SparseMap* map_;
+  TrackingCamera camera_;
+  StereoCameraModel model_;
+  ScalePyramid pyramid_;
+  TrackerConfig config_;
+  const KeyframeDatabase* database_;
+  KeyframeSink* sink_;
+
+  TrackingState state_ = TrackingState::kNotInitialized;
+  uint64_t frames_processed_ = 0;  // counter behind the keyframe decision
+  uint64_t current_index_ = 0;     // frames_processed_ of the current frame
+  uint64_t last_keyframe_index_ = 0;
+  uint64_t last_relocalization_index_ = 0;
+  bool ever_relocalized_ = false;
+  int map_change_index_ = 0;
+  Frame current_;
+  Frame last_frame_;
+  std::optional<Transformationd> velocity_;  // T_Ccur_Clast
+  Keyframe* reference_keyframe_ = nullptr;
+  Keyframe* last_reference_ = nullptr;  // last frame's reference keyframe
+  Transformationd T_last_reference_;    // T_Clast_Kref
+  std::vector<Keyframe*> local_keyframes_;
+  std::vector<std::shared_ptr<Landmark>> local_landmarks_;
+};
+
+}  // namespace cblox

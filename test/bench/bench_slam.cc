@@ -1,0 +1,292 @@
+// Sparse SLAM benchmark and evaluation on the simulator: runs the whole system (tracking on
+// this thread, local mapping and loop closing on theirs) over a built-in scene's trajectory
+// and reports what issue 4 asks for: tracking time per frame (features + tracking, median
+// and p95), local BA and loop-correction times, CPU use of the process, loops detected /
+// false loops, and ATE (Umeyama SE(3)) of the frame poses as published and of the final
+// keyframe poses, before the first loop closure and at the end.
+//
+//   cblox-bench-slam [--scene room|hall|town] [--trajectory loop] [--laps 2] [--frames N]
+//                    [--rate HZ] [--one-core] [--vocabulary FILE] [--out DIR]
+//
+// Frames are rendered first (progress printed), then fed at --rate (default: the source's
+// rate, so local mapping gets real-time slack; 0 = as fast as possible). --one-core
+// extracts the left and right images on the tracking thread (the "one core" figure).
+// --out writes DIR/slam_<scene>.json and DIR/slam_<scene>_trajectory.png.
+// A loop is "false" when the two keyframes' true camera centres are more than 2 m apart or
+// their true viewing directions differ by more than 60 degrees.
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/eval/json_writer.h"
+#include "core/eval/trajectory_metrics.h"
+#include "core/eval/trajectory_plot.h"
+#include "core/tracking/slam_system.h"
+#include "drivers/open_frame_source.h"
+
+namespace cblox {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
+}
+
+double cpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+struct Ate {
+  double rmse = 0.0, max = 0.0;
+  size_t count = 0;
+};
+
+Ate ate(const StampedTrajectory& truth, const StampedTrajectory& estimate) {
+  Ate result;
+  if (estimate.size() < 3) return result;
+  std::string error;
+  const auto pairs = associateTrajectories(truth, estimate, AssociationOptions{});
+  const auto a = computeAte(pairs, AlignmentType::kSE3, &error);
+  if (!a) return result;
+  result.rmse = a->translation_m.rmse;
+  result.max = a->translation_m.max;
+  result.count = a->translation_m.count;
+  return result;
+}
+
+int run(int argc, char** argv) {
+  std::string scene = "room", trajectory = "loop", vocabulary_path, out_dir;
+  int laps = 2;
+  size_t max_frames = 0;
+  double rate = -1.0;
+  bool one_core = false;
+#ifdef CBLOX_DEFAULT_VOCABULARY
+  vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
+#endif
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", flag.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (flag == "--scene") scene = value();
+    else if (flag == "--trajectory") trajectory = value();
+    else if (flag == "--laps") laps = std::atoi(value().c_str());
+    else if (flag == "--frames") max_frames = static_cast<size_t>(std::atol(value().c_str()));
+    else if (flag == "--rate") rate = std::atof(value().c_str());
+    else if (flag == "--one-core") one_core = true;
+    else if (flag == "--vocabulary") vocabulary_path = value();
+    else if (flag == "--out") out_dir = value();
+    else {
+      std::fprintf(stderr, "unknown flag %s\n", flag.c_str());
+      return 2;
+    }
+  }
+  std::string error;
+  const auto vocabulary = BinaryVocabulary::load(vocabulary_path, &error);
+  if (!vocabulary) {
+    std::fprintf(stderr, "vocabulary: %s\n", error.c_str());
+    return 2;
+  }
+  SourceOptions options;
+  options.trajectory = trajectory;
+  options.laps = laps;
+  options.max_frames = max_frames;
+  auto source = openFrameSource("sim:" + scene, options, &error);
+  if (!source) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return 2;
+  }
+  const SourceInfo info = source->info();
+  if (rate < 0.0) rate = info.rate_hz;
+  // Render everything first, so that rendering does not compete with SLAM for the cores.
+  std::vector<CaptureFrame> frames;
+  const auto render_start = Clock::now();
+  CaptureFrame frame;
+  while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+    frames.push_back(std::move(frame));
+    if (frames.size() % 100 == 0) {
+      std::fprintf(stderr, "\rrendered %zu frames (%.1f s)", frames.size(),
+                   std::chrono::duration<double>(Clock::now() - render_start).count());
+    }
+  }
+  std::fprintf(stderr, "\rrendered %zu frames\n", frames.size());
+
+  const RectifiedStereoCalibration& calibration = *info.stereo;
+  TrackingCamera camera;
+  camera.intrinsics = calibration.intrinsics;
+  camera.baseline_m = calibration.baseline_m;
+  camera.close_depth_m = 40.0 * calibration.baseline_m;
+  SlamSystemConfig config;
+  config.frames.parallel_stereo_extraction = !one_core;
+  SlamSystem slam(camera, config, &*vocabulary);
+  std::mutex mutex;
+  std::vector<LoopClosureEvent> loops;
+  std::vector<double> ba_ms;
+  slam.setLoopCallback([&](const LoopClosureEvent& e) {
+    std::lock_guard<std::mutex> lock(mutex);
+    loops.push_back(e);
+  });
+
+  StampedTrajectory truth, online, before_loop;
+  std::map<uint64_t, Transformationd> truth_by_frame;
+  std::vector<double> frame_ms, track_ms;
+  size_t lost = 0;
+  const double cpu_start = cpuSeconds();
+  const auto start = Clock::now();
+  uint64_t last_ba = 0;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const CaptureFrame& f = frames[i];
+    if (rate > 0.0) {
+      std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(
+                                                std::chrono::duration<double>(i / rate)));
+    }
+    const double t = static_cast<double>(f.timestamp_ns) * 1e-9;
+    truth.push_back({t, *f.T_G_C});
+    truth_by_frame[static_cast<uint64_t>(f.frame_id)] = *f.T_G_C;
+    const auto frame_start = Clock::now();
+    const TrackingResult r = slam.trackStereo(static_cast<uint64_t>(f.frame_id), f.timestamp_ns,
+                                              f.left, f.right, f.T_G_C->inverse());
+    frame_ms.push_back(
+        std::chrono::duration<double, std::milli>(Clock::now() - frame_start).count());
+    track_ms.push_back(r.time_ms);
+    if (r.state != TrackingState::kOk) {
+      ++lost;
+    } else {
+      online.push_back({t, r.T_C_G->inverse()});
+      bool looped;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        looped = !loops.empty();
+      }
+      if (!looped) before_loop.push_back({t, r.T_C_G->inverse()});
+    }
+    const LocalMapperStats ls = slam.localMappingStats();
+    if (ls.bundle_adjustments != last_ba) {
+      last_ba = ls.bundle_adjustments;
+      ba_ms.push_back(ls.last_ba_ms);
+    }
+    if ((i + 1) % 100 == 0 || i + 1 == frames.size()) {
+      const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+      std::fprintf(stderr, "\rframe %zu/%zu (%.1f Hz), %zu keyframes, %zu loops, ETA %.0f s   ",
+                   i + 1, frames.size(), (i + 1) / elapsed, slam.map().numKeyframes(),
+                   loops.size(), elapsed / (i + 1) * (frames.size() - i - 1));
+    }
+  }
+  slam.waitUntilIdle();
+  const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+  const double cpu_s = cpuSeconds() - cpu_start;
+  slam.stop();
+  std::fprintf(stderr, "\n");
+
+  // Final keyframe trajectory and path length.
+  StampedTrajectory keyframes_truth, keyframes_final;
+  for (const Keyframe* k : slam.map().keyframes()) {
+    const double t = static_cast<double>(k->timestamp_ns) * 1e-9;
+    keyframes_final.push_back({t, k->T_G_C()});
+  }
+  double path = 0.0;
+  for (size_t i = 1; i < truth.size(); ++i) {
+    path += (truth[i].T_G_C.translation() - truth[i - 1].T_G_C.translation()).norm();
+  }
+  size_t false_loops = 0;
+  for (const LoopClosureEvent& e : loops) {
+    const Keyframe* q = slam.map().keyframe(e.query);
+    const Keyframe* c = slam.map().keyframe(e.candidate);
+    const Transformationd& tq = truth_by_frame.at(q->frame_id);
+    const Transformationd& tc = truth_by_frame.at(c->frame_id);
+    const double distance = (tq.translation() - tc.translation()).norm();
+    const double angle = std::acos(std::clamp(
+        (tq.rotationMatrix().col(2)).dot(tc.rotationMatrix().col(2)), -1.0, 1.0));
+    if (distance > 2.0 || angle > M_PI / 3.0) ++false_loops;
+  }
+  const Ate ate_online = ate(truth, online), ate_before = ate(truth, before_loop),
+            ate_keyframes = ate(truth, keyframes_final);
+  const LoopCloserStats lc = slam.loopClosingStats();
+  std::vector<double> correction_ms;
+  for (const auto& e : loops) correction_ms.push_back(e.correction_ms);
+
+  std::printf("scene %s/%s x%d: %zu frames (%.1f m), %zu lost, %zu keyframes\n", scene.c_str(),
+              trajectory.c_str(), laps, frames.size(), path, lost, slam.map().numKeyframes());
+  std::printf("  per frame (features + tracking): median %.1f ms, p95 %.1f ms; tracking alone "
+              "median %.1f ms%s\n",
+              percentile(frame_ms, 0.5), percentile(frame_ms, 0.95), percentile(track_ms, 0.5),
+              one_core ? " (one core)" : " (left/right extraction on 2 threads)");
+  std::printf("  local BA: %zu runs, median %.1f ms, p95 %.1f ms\n", ba_ms.size(),
+              percentile(ba_ms, 0.5), percentile(ba_ms, 0.95));
+  std::printf("  loops: %zu closed (%zu false), %lu rejected after verification; correction "
+              "median %.1f ms; global BA %lu (last %.0f ms)\n",
+              loops.size(), false_loops, static_cast<unsigned long>(lc.loops_rejected),
+              percentile(correction_ms, 0.5),
+              static_cast<unsigned long>(lc.global_bundle_adjustments), lc.last_global_ba_ms);
+  std::printf("  CPU: %.2f cores over %.1f s\n", cpu_s / wall_s, wall_s);
+  std::printf("  ATE RMSE: frames before the first loop %.4f m (%.2f %% of path), all frames as "
+              "published %.4f m, final keyframes %.4f m (%.3f %% of path)\n",
+              ate_before.rmse, 100.0 * ate_before.rmse / path, ate_online.rmse,
+              ate_keyframes.rmse, 100.0 * ate_keyframes.rmse / path);
+
+  if (!out_dir.empty()) {
+    std::filesystem::create_directories(out_dir);
+    JsonObject json("");
+    json.str("scene", scene);
+    json.str("trajectory", trajectory);
+    json.count("laps", static_cast<size_t>(laps));
+    json.count("frames", frames.size());
+    json.num("path_m", path);
+    json.count("lost", lost);
+    json.count("keyframes", slam.map().numKeyframes());
+    json.boolean("one_core", one_core);
+    json.num("frame_ms_median", percentile(frame_ms, 0.5));
+    json.num("frame_ms_p95", percentile(frame_ms, 0.95));
+    json.num("track_ms_median", percentile(track_ms, 0.5));
+    json.num("local_ba_ms_median", percentile(ba_ms, 0.5));
+    json.num("local_ba_ms_p95", percentile(ba_ms, 0.95));
+    json.count("loops", loops.size());
+    json.count("false_loops", false_loops);
+    json.num("loop_correction_ms_median", percentile(correction_ms, 0.5));
+    json.num("global_ba_ms_last", lc.last_global_ba_ms);
+    json.num("cpu_cores", cpu_s / wall_s);
+    json.num("ate_before_loop_m", ate_before.rmse);
+    json.num("ate_frames_m", ate_online.rmse);
+    json.num("ate_keyframes_m", ate_keyframes.rmse);
+    std::ofstream(out_dir + "/slam_" + scene + ".json") << json.close() << "\n";
+    TrajectoryPlotOptions plot;
+    char title[160];
+    std::snprintf(title, sizeof(title), "%s: keyframe ATE %.3f m (%.2f %% of %.0f m), %zu loops",
+                  scene.c_str(), ate_keyframes.rmse, 100.0 * ate_keyframes.rmse / path, path,
+                  loops.size());
+    plot.title = title;
+    plot.estimate_label = "keyframes (final)";
+    if (!writeTrajectoryPlotPng(out_dir + "/slam_" + scene + "_trajectory.png", truth,
+                                keyframes_final, plot, &error)) {
+      std::fprintf(stderr, "plot: %s\n", error.c_str());
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace cblox
+
+int main(int argc, char** argv) { return cblox::run(argc, argv); }

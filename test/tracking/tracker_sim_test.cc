@@ -1,0 +1,109 @@
+// The tracker on simulated stereo: it initialises on the first frame, tracks every frame of a
+// known trajectory, and stays close to the exact poses (no local BA here: the tracker alone).
+
+#include "core/tracking/tracker.h"
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/tracking/frame_builder.h"
+#include "core/tracking/local_mapper.h"
+#include <thread>
+#include "drivers/open_frame_source.h"
+
+namespace cblox {
+namespace {
+
+struct RunStats {
+  int frames = 0, ok = 0, keyframes = 0;
+  double max_translation_error = 0.0, max_rotation_error_deg = 0.0, path_length = 0.0;
+  std::vector<double> track_ms;
+};
+
+RunStats runTracker(const std::string& spec, const std::string& trajectory, size_t frames,
+                   bool local_mapping) {
+  SourceOptions options;
+  options.trajectory = trajectory;
+  options.max_frames = frames;
+  std::string error;
+  std::unique_ptr<FrameSource> source = openFrameSource(spec, options, &error);
+  EXPECT_NE(source, nullptr) << error;
+  RunStats stats;
+  if (!source) return stats;
+  const RectifiedStereoCalibration& calibration = *source->info().stereo;
+  TrackingCamera camera;
+  camera.intrinsics = calibration.intrinsics;
+  camera.baseline_m = calibration.baseline_m;
+  camera.close_depth_m = 40.0 * calibration.baseline_m;
+  FrameBuilder builder(camera, FrameBuilderConfig{}, nullptr);
+  SparseMap map;
+  LocalMapper mapper(&map, camera, builder.pyramid(), LocalMapperConfig{});
+  std::thread mapping_thread;
+  if (local_mapping) mapping_thread = std::thread([&] { mapper.run(); });
+  Tracker tracker(&map, camera, builder.pyramid(), TrackerConfig{}, nullptr,
+                  local_mapping ? &mapper : nullptr);
+  CaptureFrame frame;
+  std::optional<Eigen::Vector3d> last_position;
+  while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+    const Transformationd T_C_G_true = frame.T_G_C->inverse();
+    auto features = builder.fromStereo(frame.left, frame.right);
+    const TrackingResult r = tracker.track(static_cast<uint64_t>(frame.frame_id),
+                                           frame.timestamp_ns, features, T_C_G_true);
+    ++stats.frames;
+    stats.track_ms.push_back(r.time_ms);
+    if (r.new_keyframe != nullptr) ++stats.keyframes;
+    if (last_position) stats.path_length += (frame.T_G_C->translation() - *last_position).norm();
+    last_position = frame.T_G_C->translation();
+    if (r.state != TrackingState::kOk) {
+      ADD_FAILURE() << "frame " << frame.frame_id << ": " << trackingStateName(r.state) << " "
+                    << r.reason;
+      continue;
+    }
+    ++stats.ok;
+    const Transformationd error_pose = r.T_C_G->inverse() * T_C_G_true;  // T_Gest_Gtrue-ish
+    const Transformationd T_G_C_est = r.T_C_G->inverse();
+    stats.max_translation_error =
+        std::max(stats.max_translation_error,
+                 (T_G_C_est.translation() - frame.T_G_C->translation()).norm());
+    stats.max_rotation_error_deg = std::max(
+        stats.max_rotation_error_deg,
+        T_G_C_est.rotation().angularDistance(frame.T_G_C->rotation()) * 180.0 / M_PI);
+    (void)error_pose;
+  }
+  if (local_mapping) {
+    mapper.waitUntilIdle();
+    mapper.stop();
+    mapping_thread.join();
+    const LocalMapperStats ms = mapper.stats();
+    std::printf("local mapping: %lu keyframes, %lu BAs (%lu aborted, last %.1f ms), %lu landmarks "
+                "culled, %lu fused\n",
+                static_cast<unsigned long>(ms.keyframes_processed),
+                static_cast<unsigned long>(ms.bundle_adjustments),
+                static_cast<unsigned long>(ms.bundle_adjustments_aborted), ms.last_ba_ms,
+                static_cast<unsigned long>(ms.landmarks_culled),
+                static_cast<unsigned long>(ms.landmarks_fused));
+  }
+  return stats;
+}
+
+TEST(TrackerSimTest, TracksTheRoomLoopCloseToTheExactPoses) {
+  const RunStats s = runTracker("sim:room", "loop", 120, false);
+  ASSERT_EQ(s.frames, 120);
+  EXPECT_EQ(s.ok, 120);
+  std::sort(const_cast<std::vector<double>&>(s.track_ms).begin(),
+            const_cast<std::vector<double>&>(s.track_ms).end());
+  std::printf("room: %d frames, %d keyframes, path %.2f m, max error %.4f m %.3f deg, track "
+              "median %.2f ms\n",
+              s.frames, s.keyframes, s.path_length, s.max_translation_error,
+              s.max_rotation_error_deg, s.track_ms[s.track_ms.size() / 2]);
+  EXPECT_LT(s.max_translation_error, 0.02 * s.path_length);
+  EXPECT_LT(s.max_rotation_error_deg, 1.0);
+  EXPECT_GT(s.keyframes, 2);
+}
+
+}  // namespace
+}  // namespace cblox

@@ -13,13 +13,18 @@ void setError(std::string* error, std::string message) {
 
 int bytesPerPixel(int8_t format) {
   switch (format) {
-    case image_t::GRAY8: return 1;
+    case image_t::GRAY8:
+      return 1;
     case image_t::RGB8:
-    case image_t::BGR8: return 3;
+    case image_t::BGR8:
+      return 3;
     case image_t::RGBA8:
-    case image_t::DEPTH_F32: return 4;
-    case image_t::DEPTH_U16: return 2;
-    default: return 0;
+    case image_t::DEPTH_F32:
+      return 4;
+    case image_t::DEPTH_U16:
+      return 2;
+    default:
+      return 0;
   }
 }
 
@@ -114,8 +119,8 @@ camera_calibration_t toCalibrationMsg(const std::string& camera_id,
 std::optional<PinholeIntrinsics> fromCalibrationMsg(const camera_calibration_t& msg,
                                                     std::string* error) {
   if (msg.distortion_model != "none") {
-    setError(error, "calibration " + msg.camera_id + ": distortion_model '" +
-                        msg.distortion_model + "' (only 'none' is accepted here)");
+    setError(error, "calibration " + msg.camera_id + ": distortion_model '" + msg.distortion_model +
+                        "' (only 'none' is accepted here)");
     return std::nullopt;
   }
   const PinholeIntrinsics intrinsics{msg.fx, msg.fy, msg.cx, msg.cy, msg.width, msg.height};
@@ -142,8 +147,7 @@ image_t toImageMsg(const ColorImage& image, int64_t utime, const std::string& ca
 image_t toDepthImageMsg(const DepthImage& depth, int64_t utime, const std::string& camera_id,
                         DepthEncoding encoding) {
   if (encoding == DepthEncoding::kFloat32Metres) {
-    image_t msg =
-        emptyImage(utime, camera_id, depth.width, depth.height, image_t::DEPTH_F32, 1.0);
+    image_t msg = emptyImage(utime, camera_id, depth.width, depth.height, image_t::DEPTH_F32, 1.0);
     for (size_t i = 0; i < depth.data.size(); ++i) {
       const float d = std::isfinite(depth.data[i]) && depth.data[i] > 0.0f ? depth.data[i] : 0.0f;
       std::memcpy(msg.data.data() + 4 * i, &d, 4);  // little-endian host
@@ -200,8 +204,8 @@ bool fromImageMsg(const image_t& msg, ColorImage* image, std::string* error) {
     const uint8_t* row = msg.data.data() + static_cast<size_t>(v) * msg.row_stride;
     for (int u = 0; u < msg.width; ++u) {
       const uint8_t* p = row + static_cast<size_t>(u) * bpp;
-      (*image)(u, v) = bpp == 1 ? Color{p[0], p[0], p[0]}
-                                : Color{bgr ? p[2] : p[0], p[1], bgr ? p[0] : p[2]};
+      (*image)(u, v) =
+          bpp == 1 ? Color{p[0], p[0], p[0]} : Color{bgr ? p[2] : p[0], p[1], bgr ? p[0] : p[2]};
     }
   }
   return true;
@@ -277,6 +281,96 @@ pose_stamped_t toGroundTruthMsg(const CaptureFrame& frame, int64_t utime) {
   msg.frame_id = frame.frame_id;
   msg.frame.assign(1, 'G');  // not = "G": GCC 12 -Wrestrict false positive at -O3
   msg.T_G_C = toPoseMsg(*frame.T_G_C);
+  return msg;
+}
+
+std::optional<RectifiedStereoCalibration> fromStereoCalibrationMsg(const stereo_pair_t& msg,
+                                                                   std::string* error) {
+  if (!msg.rectified) {
+    setError(error, "stereo pair: not rectified (rectified = false)");
+    return std::nullopt;
+  }
+  const std::optional<PinholeIntrinsics> left = fromCalibrationMsg(msg.left_calibration, error);
+  if (!left) return std::nullopt;
+  const std::optional<PinholeIntrinsics> right = fromCalibrationMsg(msg.right_calibration, error);
+  if (!right) return std::nullopt;
+  constexpr double kPixelTolerance = 1e-6;
+  if (left->width != right->width || left->height != right->height ||
+      std::abs(left->fx - right->fx) > kPixelTolerance ||
+      std::abs(left->fy - right->fy) > kPixelTolerance ||
+      std::abs(left->cx - right->cx) > kPixelTolerance ||
+      std::abs(left->cy - right->cy) > kPixelTolerance) {
+    setError(error,
+             "stereo pair: left and right calibrations differ (a rectified pair shares "
+             "its intrinsics and image size)");
+    return std::nullopt;
+  }
+  const std::optional<Transformationd> T_B_L = fromPoseMsg(msg.left_calibration.T_B_C, error);
+  if (!T_B_L) {
+    if (error != nullptr) *error = "stereo pair: left_calibration.T_B_C: " + *error;
+    return std::nullopt;
+  }
+  const std::optional<Transformationd> T_L_R = fromPoseMsg(msg.T_L_R, error);
+  if (!T_L_R) {
+    if (error != nullptr) *error = "stereo pair: T_L_R: " + *error;
+    return std::nullopt;
+  }
+  constexpr double kGeometryTolerance = 1e-6;
+  const Eigen::Vector3d& t = T_L_R->translation();
+  if (T_L_R->rotation().angularDistance(Eigen::Quaterniond::Identity()) > kGeometryTolerance ||
+      std::abs(t.y()) > kGeometryTolerance || std::abs(t.z()) > kGeometryTolerance ||
+      !(t.x() > 0.0)) {
+    setError(error,
+             "stereo pair: T_L_R must be a translation (baseline > 0, 0, 0) without "
+             "rotation for a rectified pair, got position (" +
+                 std::to_string(t.x()) + ", " + std::to_string(t.y()) + ", " +
+                 std::to_string(t.z()) + ")");
+    return std::nullopt;
+  }
+  RectifiedStereoCalibration calibration;
+  calibration.intrinsics = *left;
+  calibration.baseline_m = t.x();
+  calibration.T_B_L = *T_B_L;
+  return calibration;
+}
+
+frame_pose_t toFramePoseMsg(int64_t utime, int64_t frame_id,
+                            const std::optional<Transformationd>& T_G_C, int8_t tracking_state,
+                            bool tracking_jump, int32_t map_epoch) {
+  frame_pose_t msg;
+  msg.utime = utime;
+  msg.frame_id = frame_id;
+  msg.T_G_C = toPoseMsg(T_G_C.value_or(Transformationd::Identity()));
+  msg.tracking_state = tracking_state;
+  msg.tracking_jump = tracking_jump;
+  msg.map_epoch = map_epoch;
+  return msg;
+}
+
+keyframe_t toKeyframeMsg(int64_t utime, int64_t keyframe_id, int64_t frame_id,
+                         const Transformationd& T_G_K, const std::vector<uint64_t>& landmark_ids) {
+  keyframe_t msg;
+  msg.utime = utime;
+  msg.keyframe_id = keyframe_id;
+  msg.frame_id = frame_id;
+  msg.T_G_K = toPoseMsg(T_G_K);
+  msg.landmark_ids.assign(landmark_ids.begin(), landmark_ids.end());
+  msg.num_landmarks = static_cast<int32_t>(msg.landmark_ids.size());
+  return msg;
+}
+
+keyframe_pose_batch_t toKeyframePoseBatchMsg(
+    int64_t utime, int8_t reason, const std::vector<std::pair<int64_t, Transformationd>>& T_G_K) {
+  keyframe_pose_batch_t msg;
+  msg.utime = utime;
+  msg.reason = reason;
+  msg.keyframe_ids.reserve(T_G_K.size());
+  msg.poses.reserve(T_G_K.size());
+  for (const auto& [id, T] : T_G_K) {
+    msg.keyframe_ids.push_back(id);
+    msg.poses.push_back(toPoseMsg(T));
+  }
+  msg.num_keyframes = static_cast<int32_t>(msg.keyframe_ids.size());
   return msg;
 }
 

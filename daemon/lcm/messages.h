@@ -3,10 +3,15 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <cblox/camera_calibration_t.hpp>
 #include <cblox/depth_frame_t.hpp>
+#include <cblox/frame_pose_t.hpp>
 #include <cblox/image_t.hpp>
+#include <cblox/keyframe_pose_batch_t.hpp>
+#include <cblox/keyframe_t.hpp>
 #include <cblox/pose_stamped_t.hpp>
 #include <cblox/pose_t.hpp>
 #include <cblox/stereo_pair_t.hpp>
@@ -14,6 +19,7 @@
 #include "core/geometry/image.h"
 #include "core/geometry/pinhole_camera.h"
 #include "core/geometry/se3.h"
+#include "core/geometry/stereo_rig.h"
 #include "drivers/frame_source.h"
 
 namespace cblox {
@@ -56,5 +62,25 @@ depth_frame_t toDepthFrameMsg(const CaptureFrame& frame, const SourceInfo& info,
                               DepthEncoding encoding);
 /// CBLOX_GT_POSE message (frame.T_G_C must be set).
 pose_stamped_t toGroundTruthMsg(const CaptureFrame& frame, int64_t utime);
+
+/// The rectified calibration of a CBLOX_STEREO message: `rectified` must be true, both
+/// calibrations distortion-free ("none") with the same intrinsics and image size (within
+/// 1e-6 px), and T_L_R a pure translation (baseline_m, 0, 0) with baseline_m > 0 (rotation
+/// and y, z within 1e-6). T_B_L is left_calibration.T_B_C. The images are not looked at.
+std::optional<RectifiedStereoCalibration> fromStereoCalibrationMsg(const stereo_pair_t& msg,
+                                                                   std::string* error);
+
+/// CBLOX_FRAME_POSE message (tracker). `T_G_C` is absent for NOT_INITIALIZED / LOST frames:
+/// the identity is sent (consumers ignore the pose of such states).
+frame_pose_t toFramePoseMsg(int64_t utime, int64_t frame_id,
+                            const std::optional<Transformationd>& T_G_C, int8_t tracking_state,
+                            bool tracking_jump, int32_t map_epoch);
+/// CBLOX_KEYFRAME message (tracker): a new keyframe and the landmarks it observes.
+keyframe_t toKeyframeMsg(int64_t utime, int64_t keyframe_id, int64_t frame_id,
+                         const Transformationd& T_G_K, const std::vector<uint64_t>& landmark_ids);
+/// CBLOX_KEYFRAME_POSES message (tracker): `reason` is one of keyframe_pose_batch_t's
+/// constants; T_G_K holds (keyframe id, new pose) pairs.
+keyframe_pose_batch_t toKeyframePoseBatchMsg(
+    int64_t utime, int8_t reason, const std::vector<std::pair<int64_t, Transformationd>>& T_G_K);
 
 }  // namespace cblox

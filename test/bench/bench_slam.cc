@@ -125,6 +125,8 @@ int run(int argc, char** argv) {
   const auto render_start = Clock::now();
   CaptureFrame frame;
   while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+    frame.depth = DepthImage();  // stereo SLAM: only the grey pair is kept
+    frame.color = ColorImage();
     frames.push_back(std::move(frame));
     if (frames.size() % 100 == 0) {
       std::fprintf(stderr, "\rrendered %zu frames (%.1f s)", frames.size(),

@@ -107,7 +107,8 @@ TEST(LcmMessagesTest, RejectsMalformedImages) {
   EXPECT_FALSE(fromImageMsg(bad_stride, &gray, &error));
   EXPECT_FALSE(fromDepthImageMsg(msg, &depth, &error));  // grey is not depth
   EXPECT_NE(error.find("not DEPTH_U16"), std::string::npos) << error;
-  image_t zero_scale = toDepthImageMsg(DepthImage(2, 2, 1.0f), 0, "d", DepthEncoding::kUint16Millimetres);
+  image_t zero_scale =
+      toDepthImageMsg(DepthImage(2, 2, 1.0f), 0, "d", DepthEncoding::kUint16Millimetres);
   zero_scale.depth_scale = 0.0;
   EXPECT_FALSE(fromDepthImageMsg(zero_scale, &depth, &error));
 }
@@ -131,7 +132,8 @@ TEST(LcmMessagesTest, FrameMessagesCarryCalibrationIdsAndPoses) {
   EXPECT_DOUBLE_EQ(stereo.T_L_R.position[0], 0.11);
   EXPECT_DOUBLE_EQ(stereo.right_calibration.T_B_C.position[0], 0.11);
   EXPECT_EQ(stereo.right.data[0], 2);
-  const depth_frame_t depth = wireRoundTrip(toDepthFrameMsg(frame, info, 1000, DepthEncoding::kFloat32Metres));
+  const depth_frame_t depth =
+      wireRoundTrip(toDepthFrameMsg(frame, info, 1000, DepthEncoding::kFloat32Metres));
   EXPECT_FALSE(depth.has_color);
   EXPECT_EQ(depth.color.width, 0);
   EXPECT_EQ(depth.max_depth_m, 8.0f);
@@ -139,6 +141,90 @@ TEST(LcmMessagesTest, FrameMessagesCarryCalibrationIdsAndPoses) {
   EXPECT_EQ(gt.frame, "G");
   EXPECT_EQ(gt.frame_id, 7);
   EXPECT_EQ(gt.T_G_C.position[2], 3.0);
+}
+
+TEST(LcmMessagesTest, StereoCalibrationOfARectifiedPairAndWhatIsWrongWithOthers) {
+  SourceInfo info;
+  const Transformationd T_B_L(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.0, 0.1, 0.0));
+  info.stereo =
+      RectifiedStereoCalibration{PinholeIntrinsics{400, 401, 79.5, 59.5, 160, 120}, 0.12, T_B_L};
+  CaptureFrame frame;
+  frame.left = GrayImage(160, 120, 1);
+  frame.right = GrayImage(160, 120, 2);
+  const stereo_pair_t msg = wireRoundTrip(toStereoPairMsg(frame, info, 1000));
+  std::string error;
+  const auto calibration = fromStereoCalibrationMsg(msg, &error);
+  ASSERT_TRUE(calibration.has_value()) << error;
+  EXPECT_EQ(calibration->intrinsics.fy, 401.0);
+  EXPECT_EQ(calibration->intrinsics.height, 120);
+  EXPECT_EQ(calibration->baseline_m, 0.12);
+  EXPECT_TRUE(calibration->T_B_L.isApprox(T_B_L, 0.0));
+
+  struct Case {
+    void (*spoil)(stereo_pair_t*);
+    const char* message;
+  };
+  const Case cases[] = {
+      {[](stereo_pair_t* m) { m->rectified = false; }, "not rectified"},
+      {[](stereo_pair_t* m) { m->right_calibration.distortion_model = "radtan"; }, "radtan"},
+      {[](stereo_pair_t* m) { m->right_calibration.cx += 0.5; }, "calibrations differ"},
+      {[](stereo_pair_t* m) { m->left_calibration.fx = -1.0; }, "calibration left"},
+      {[](stereo_pair_t* m) { m->T_L_R.position[0] = -0.12; }, "T_L_R must be a translation"},
+      {[](stereo_pair_t* m) { m->T_L_R.position[2] = 0.01; }, "T_L_R must be a translation"},
+      {[](stereo_pair_t* m) {
+         m->T_L_R.orientation[0] = std::cos(0.005);
+         m->T_L_R.orientation[2] = std::sin(0.005);
+       },
+       "T_L_R must be a translation"},
+      {[](stereo_pair_t* m) { m->T_L_R.orientation[0] = 3.0; }, "T_L_R: pose quaternion norm"},
+      {[](stereo_pair_t* m) { m->left_calibration.T_B_C.position[0] = std::nan(""); },
+       "left_calibration.T_B_C"},
+  };
+  for (const Case& c : cases) {
+    stereo_pair_t bad = msg;
+    c.spoil(&bad);
+    error.clear();
+    EXPECT_FALSE(fromStereoCalibrationMsg(bad, &error).has_value()) << c.message;
+    EXPECT_NE(error.find(c.message), std::string::npos) << error;
+  }
+}
+
+TEST(LcmMessagesTest, TrackerMessagesRoundTrip) {
+  Eigen::Matrix<double, 6, 1> xi;
+  xi << 0.5, -1.0, 2.0, 0.1, -0.2, 0.3;
+  const Transformationd T = Transformationd::exp(xi);
+  std::string error;
+
+  const frame_pose_t pose =
+      wireRoundTrip(toFramePoseMsg(1234, 56, T, frame_pose_t::RELOCALIZED, true, 2));
+  EXPECT_EQ(pose.utime, 1234);
+  EXPECT_EQ(pose.frame_id, 56);
+  EXPECT_EQ(pose.tracking_state, frame_pose_t::RELOCALIZED);
+  EXPECT_TRUE(pose.tracking_jump);
+  EXPECT_EQ(pose.map_epoch, 2);
+  EXPECT_TRUE(fromPoseMsg(pose.T_G_C, &error)->isApprox(T, 1e-12));
+  const frame_pose_t lost =
+      wireRoundTrip(toFramePoseMsg(1, 2, std::nullopt, frame_pose_t::LOST, false, 0));
+  EXPECT_TRUE(fromPoseMsg(lost.T_G_C, &error)->isApprox(Transformationd::Identity(), 0.0));
+
+  const keyframe_t keyframe = wireRoundTrip(toKeyframeMsg(99, 3, 56, T, {4, 8, 15, 16, 23, 42}));
+  EXPECT_EQ(keyframe.utime, 99);
+  EXPECT_EQ(keyframe.keyframe_id, 3);
+  EXPECT_EQ(keyframe.frame_id, 56);
+  EXPECT_EQ(keyframe.num_landmarks, 6);
+  EXPECT_EQ(keyframe.landmark_ids, (std::vector<int64_t>{4, 8, 15, 16, 23, 42}));
+  EXPECT_TRUE(fromPoseMsg(keyframe.T_G_K, &error)->isApprox(T, 1e-12));
+
+  const keyframe_pose_batch_t batch = wireRoundTrip(toKeyframePoseBatchMsg(
+      77, keyframe_pose_batch_t::GLOBAL_BA, {{0, Transformationd::Identity()}, {3, T}}));
+  EXPECT_EQ(batch.utime, 77);
+  EXPECT_EQ(batch.reason, keyframe_pose_batch_t::GLOBAL_BA);
+  EXPECT_EQ(batch.num_keyframes, 2);
+  EXPECT_EQ(batch.keyframe_ids, (std::vector<int64_t>{0, 3}));
+  EXPECT_TRUE(fromPoseMsg(batch.poses[1], &error)->isApprox(T, 1e-12));
+  EXPECT_EQ(
+      wireRoundTrip(toKeyframePoseBatchMsg(1, keyframe_pose_batch_t::LOCAL_BA, {})).num_keyframes,
+      0);
 }
 
 }  // namespace

@@ -1,0 +1,394 @@
+#include "daemon/tracker/tracker_node.h"
+
+#include <cmath>
+#include <cstdio>
+#include <shared_mutex>
+#include <stdexcept>
+#include <utility>
+
+namespace cblox {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+const TrackerNodeConfig& validated(const TrackerNodeConfig& config) {
+  if (std::string e = config.validate(); !e.empty()) {
+    throw std::invalid_argument("TrackerNode: " + e);
+  }
+  return config;
+}
+
+std::string describeCamera(const PinholeIntrinsics& K) {
+  char text[128];
+  std::snprintf(text, sizeof(text), "%dx%d fx %.3f fy %.3f cx %.3f cy %.3f", K.width, K.height,
+                K.fx, K.fy, K.cx, K.cy);
+  return text;
+}
+
+// The same camera for tracking purposes: intrinsics and size, and the stereo baseline.
+bool sameCamera(const RectifiedStereoCalibration& a, const RectifiedStereoCalibration& b) {
+  constexpr double kPixels = 1e-6, kMetres = 1e-9;
+  const PinholeIntrinsics &p = a.intrinsics, &q = b.intrinsics;
+  return p.width == q.width && p.height == q.height && std::abs(p.fx - q.fx) <= kPixels &&
+         std::abs(p.fy - q.fy) <= kPixels && std::abs(p.cx - q.cx) <= kPixels &&
+         std::abs(p.cy - q.cy) <= kPixels && std::abs(a.baseline_m - b.baseline_m) <= kMetres;
+}
+
+std::string frameName(const TrackerFrame& frame) {
+  return "frame " + std::to_string(frame.frame_id) + " (" + std::to_string(frame.utime) + " us)";
+}
+
+}  // namespace
+
+const char* trackerModeName(TrackerMode mode) {
+  return mode == TrackerMode::kStereo ? "stereo" : "rgbd";
+}
+
+const char* initialPoseName(InitialPose initial_pose) {
+  return initial_pose == InitialPose::kIdentity ? "identity" : "ground_truth";
+}
+
+std::string TrackerNodeConfig::validate() const {
+  if (std::string e = slam.validate(); !e.empty()) return e;
+  if (calibration) {
+    if (std::string e = cblox::validate(calibration->intrinsics); !e.empty()) {
+      return "calibration: " + e;
+    }
+    if (mode == TrackerMode::kStereo &&
+        (!(calibration->baseline_m > 0.0) || !std::isfinite(calibration->baseline_m))) {
+      return "calibration: baseline_m must be finite and > 0";
+    }
+  }
+  if (!(close_depth_baselines > 0.0) || !std::isfinite(close_depth_baselines)) {
+    return "close_depth_baselines must be finite and > 0";
+  }
+  if (!(rgbd_baseline_m > 0.0) || !std::isfinite(rgbd_baseline_m)) {
+    return "rgbd_baseline_m must be finite and > 0";
+  }
+  if (!(ground_truth_wait_s >= 0.0) || !std::isfinite(ground_truth_wait_s)) {
+    return "ground_truth_wait_s must be finite and >= 0";
+  }
+  if (queue_capacity < 1 || queue_capacity > 16) return "queue_capacity must be in [1, 16]";
+  if (std::string e = image_check.validate(); !e.empty()) return "image_check." + e;
+  if (timing_window < 1) return "timing_window must be >= 1";
+  if (!(log_interval_s > 0.0) || !std::isfinite(log_interval_s)) {
+    return "log_interval_s must be finite and > 0";
+  }
+  return {};
+}
+
+TrackerNode::TrackerNode(const TrackerNodeConfig& config, const BinaryVocabulary* vocabulary,
+                         Outputs outputs)
+    : config_(validated(config)),
+      vocabulary_(vocabulary),
+      outputs_(std::move(outputs)),
+      queue_(config.queue_capacity),
+      problem_log_(kNumTrackerProblems,
+                   std::chrono::duration_cast<RateLimitedLog::Clock::duration>(
+                       std::chrono::duration<double>(config.log_interval_s)),
+                   [this](const std::string& line) { log(line); }),
+      tracking_ms_(config.timing_window),
+      frame_ms_(config.timing_window) {}
+
+TrackerNode::~TrackerNode() { stop(); }
+
+void TrackerNode::start() {
+  std::lock_guard<std::mutex> lock(lifecycle_mutex_);
+  if (started_ || stopped_) return;
+  started_ = true;
+  tracking_thread_ = std::thread([this] { trackingLoop(); });
+}
+
+void TrackerNode::stop() {
+  std::lock_guard<std::mutex> lock(lifecycle_mutex_);
+  if (stopped_) return;
+  stopped_ = true;
+  stop_ = true;
+  ground_truth_.interrupt();
+  queue_.notify();
+  if (tracking_thread_.joinable()) tracking_thread_.join();
+  SlamSystem* system = nullptr;
+  {
+    std::lock_guard<std::mutex> system_lock(system_mutex_);
+    system = system_.get();
+  }
+  // Kept (not destroyed) so that status() still reads the final map; callbacks may still
+  // report the last pose batches while it stops.
+  if (system != nullptr) system->stop();
+}
+
+bool TrackerNode::onFrame(TrackerFrame frame) {
+  frames_received_.fetch_add(1, std::memory_order_relaxed);
+  const std::string what = frameName(frame) + ": ";
+  std::lock_guard<std::mutex> lock(input_mutex_);
+  if (config_.calibration) {
+    frame.calibration = config_.calibration;  // the message's calibration is not used
+  } else if (!frame.calibration) {
+    count(TrackerProblem::kBadCalibration, what + frame.calibration_error);
+    return false;
+  }
+  const PinholeIntrinsics& K = frame.calibration->intrinsics;
+  if (frame.image.width != K.width || frame.image.height != K.height) {
+    count(TrackerProblem::kWrongSize, what + "image " + std::to_string(frame.image.width) + "x" +
+                                          std::to_string(frame.image.height) +
+                                          ", the calibration is " + std::to_string(K.width) + "x" +
+                                          std::to_string(K.height));
+    return false;
+  }
+  if (!config_.calibration && camera_ && !sameCamera(*camera_, *frame.calibration)) {
+    count(TrackerProblem::kCalibrationChanged,
+          what + "calibration " + describeCamera(K) + " baseline " +
+              std::to_string(frame.calibration->baseline_m) + " m differs from the one in use, " +
+              describeCamera(camera_->intrinsics) + " baseline " +
+              std::to_string(camera_->baseline_m) + " m");
+    return false;
+  }
+  if (frame.frame_id <= last_frame_id_ || frame.utime <= last_utime_) {
+    count(TrackerProblem::kOutOfOrder, what + "not after the previous frame " +
+                                           std::to_string(last_frame_id_) + " (" +
+                                           std::to_string(last_utime_) + " us)");
+    return false;
+  }
+  if (!camera_) camera_ = frame.calibration;
+  last_frame_id_ = frame.frame_id;
+  last_utime_ = frame.utime;
+  queue_.push(std::move(frame));
+  return true;
+}
+
+void TrackerNode::onGroundTruth(int64_t frame_id, int64_t utime, const Transformationd& T_G_C) {
+  if (config_.initial_pose == InitialPose::kGroundTruth) ground_truth_.add(frame_id, utime, T_G_C);
+}
+
+void TrackerNode::reportProblem(TrackerProblem problem, const std::string& detail) {
+  if (isRejection(problem)) frames_received_.fetch_add(1, std::memory_order_relaxed);
+  count(problem, detail);
+}
+
+void TrackerNode::count(TrackerProblem problem, const std::string& message) {
+  const size_t kind = static_cast<size_t>(problem);
+  if (kind < kNumTrackerProblems) problems_[kind].fetch_add(1, std::memory_order_relaxed);
+  problem_log_.report(kind, std::string(trackerProblemName(problem)) + ": " + message);
+}
+
+void TrackerNode::log(const std::string& line) const {
+  if (outputs_.log) {
+    outputs_.log(line);
+  } else {
+    std::fprintf(stderr, "cblox-tracker: %s\n", line.c_str());
+  }
+}
+
+void TrackerNode::setState(std::string state) {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  state_ = std::move(state);
+}
+
+void TrackerNode::trackingLoop() {
+  while (!stop_) {
+    queue_.waitForWork(std::chrono::milliseconds(100));
+    if (stop_) break;
+    std::optional<TrackerFrame> frame = queue_.takeNewestReady([this](const TrackerFrame&) {
+      // Set under the queue's lock: waitUntilIdle never sees an empty queue and an idle
+      // thread while a frame is being handed over.
+      busy_ = true;
+      return FrameReadiness::kReady;
+    });
+    if (!frame) continue;
+    processFrame(*frame);
+    busy_ = false;
+  }
+}
+
+bool TrackerNode::ensureSystem(const RectifiedStereoCalibration& calibration, std::string* error) {
+  if (system_) return true;
+  TrackingCamera camera;
+  camera.intrinsics = calibration.intrinsics;
+  camera.baseline_m =
+      config_.mode == TrackerMode::kStereo ? calibration.baseline_m : config_.rgbd_baseline_m;
+  camera.close_depth_m = config_.close_depth_baselines * camera.baseline_m;
+  std::unique_ptr<SlamSystem> system;
+  try {
+    system = std::make_unique<SlamSystem>(camera, config_.slam, vocabulary_);
+  } catch (const std::exception& e) {
+    *error = std::string("cannot start the SLAM system: ") + e.what();
+    return false;
+  }
+  system->setKeyframeCallback([this](const KeyframeInfo& info) {
+    keyframes_.fetch_add(1, std::memory_order_relaxed);
+    if (outputs_.keyframe) outputs_.keyframe(info);
+  });
+  system->setPoseCallback([this](const KeyframePoseBatch& batch, PoseUpdateReason reason) {
+    if (batch.empty()) return;
+    pose_batches_.fetch_add(1, std::memory_order_relaxed);
+    if (outputs_.keyframe_poses) outputs_.keyframe_poses(batch, reason);
+  });
+  system->setLoopCallback([this](const LoopClosureEvent& event) {
+    char text[192];
+    std::snprintf(text, sizeof(text),
+                  "loop closed: keyframe %lld matches keyframe %lld (%d inliers); corrected by "
+                  "%.3f m in %.1f ms",
+                  static_cast<long long>(event.query), static_cast<long long>(event.candidate),
+                  event.inliers, event.correction_m, event.correction_ms);
+    log(text);
+  });
+  log(std::string(trackerModeName(config_.mode)) + " camera " + describeCamera(camera.intrinsics) +
+      ", baseline " + std::to_string(camera.baseline_m) + " m" +
+      (config_.mode == TrackerMode::kRgbd ? " (virtual)" : "") +
+      (vocabulary_ != nullptr ? "" : "; no vocabulary: no relocalization, no loop closing"));
+  std::lock_guard<std::mutex> lock(system_mutex_);
+  system_ = std::move(system);
+  return true;
+}
+
+void TrackerNode::publish(const FramePoseReport& report) {
+  frames_processed_.fetch_add(1, std::memory_order_relaxed);
+  pose_published_ = report.T_G_C.has_value();
+  if (outputs_.frame_pose) outputs_.frame_pose(report);
+}
+
+void TrackerNode::reportUntracked(const TrackerFrame& frame, TrackerProblem problem,
+                                  const std::string& reason) {
+  const bool started = map_started_;
+  FramePoseReport report;
+  report.utime = frame.utime;
+  report.frame_id = frame.frame_id;
+  report.state = started ? FramePoseState::kLost : FramePoseState::kNotInitialized;
+  report.reason = reason;
+  (started ? frames_lost_ : frames_not_initialized_).fetch_add(1, std::memory_order_relaxed);
+  count(problem, frameName(frame) + ": " + reason);
+  setState(std::string(started ? "lost: " : "not initialized: ") + reason);
+  publish(report);
+}
+
+void TrackerNode::processFrame(TrackerFrame& frame) {
+  std::string error;
+  if (!ensureSystem(*frame.calibration, &error)) {
+    reportUntracked(frame, TrackerProblem::kTrackingFailed, error);
+    return;
+  }
+  SlamSystem& system = *system_;  // only this thread replaces it (it never does)
+  const bool stereo = config_.mode == TrackerMode::kStereo;
+
+  // Nothing to track at all: say so without disturbing the tracker's motion model.
+  std::optional<ImageCheckResult> defect =
+      checkImage(frame.image, config_.image_check, stereo ? "left image" : "image");
+  if (!defect && stereo) defect = checkImage(frame.right, config_.image_check, "right image");
+  if (defect) {
+    const TrackerProblem problem = defect->defect == ImageDefect::kDark ? TrackerProblem::kDarkImage
+                                   : defect->defect == ImageDefect::kSaturated
+                                       ? TrackerProblem::kSaturatedImage
+                                       : TrackerProblem::kTexturelessImage;
+    reportUntracked(frame, problem, defect->description);
+    return;
+  }
+
+  std::optional<Transformationd> T_C_G_initial;
+  if (!map_started_ && config_.initial_pose == InitialPose::kGroundTruth) {
+    const auto wait = std::chrono::milliseconds(
+        static_cast<int64_t>(std::llround(config_.ground_truth_wait_s * 1000.0)));
+    const std::optional<Transformationd> T_G_C =
+        ground_truth_.waitFor(frame.frame_id, frame.utime, wait);
+    if (!T_G_C) {
+      reportUntracked(frame, TrackerProblem::kNoGroundTruth,
+                      "no ground-truth pose (CBLOX_GT_POSE) of this frame within " +
+                          std::to_string(config_.ground_truth_wait_s) +
+                          " s; initial_pose ground_truth needs it to start the map");
+      return;
+    }
+    T_C_G_initial = T_G_C->inverse();
+  }
+
+  TrackingResult result;
+  const Clock::time_point start = Clock::now();
+  try {
+    const int64_t timestamp_ns = frame.utime * 1000;
+    const uint64_t id = static_cast<uint64_t>(frame.frame_id);
+    result = stereo ? system.trackStereo(id, timestamp_ns, frame.image, frame.right, T_C_G_initial)
+                    : system.trackRgbd(id, timestamp_ns, frame.image, frame.depth, T_C_G_initial);
+  } catch (const std::exception& e) {
+    reportUntracked(frame, TrackerProblem::kTrackingFailed, e.what());
+    return;
+  }
+  frame_ms_.add(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+  tracking_ms_.add(result.time_ms);
+  map_started_ = map_started_ || result.state != TrackingState::kNotInitialized;
+
+  if (result.state == TrackingState::kNotInitialized) {
+    reportUntracked(frame, TrackerProblem::kNotInitialized, result.reason);
+    return;
+  }
+  if (result.state != TrackingState::kOk || !result.T_C_G) {
+    reportUntracked(frame, TrackerProblem::kTrackingLost,
+                    result.reason.empty() ? "tracking lost" : result.reason);
+    return;
+  }
+  FramePoseReport report;
+  report.utime = frame.utime;
+  report.frame_id = frame.frame_id;
+  report.T_G_C = result.T_C_G->inverse();
+  if (result.relocalized) {
+    report.state = FramePoseState::kRelocalized;
+    relocalizations_.fetch_add(1, std::memory_order_relaxed);
+  } else if (result.map_corrected) {
+    report.state = FramePoseState::kLoopCorrected;
+    loop_corrected_frames_.fetch_add(1, std::memory_order_relaxed);
+  } else {
+    report.state = FramePoseState::kOk;
+  }
+  report.jump = report.state != FramePoseState::kOk || (!pose_published_ && !result.initialized);
+  frames_tracked_.fetch_add(1, std::memory_order_relaxed);
+  setState("tracking");
+  publish(report);
+}
+
+TrackerStatus TrackerNode::status() const {
+  TrackerStatus s;
+  s.frames_received = frames_received_.load();
+  s.frames_dropped = queue_.counters().dropped;
+  s.frames_processed = frames_processed_.load();
+  s.frames_tracked = frames_tracked_.load();
+  s.frames_lost = frames_lost_.load();
+  s.frames_not_initialized = frames_not_initialized_.load();
+  s.relocalizations = relocalizations_.load();
+  s.loop_corrected_frames = loop_corrected_frames_.load();
+  s.keyframes = keyframes_.load();
+  s.pose_batches = pose_batches_.load();
+  for (size_t i = 0; i < kNumTrackerProblems; ++i) {
+    s.problems[i] = problems_[i].load(std::memory_order_relaxed);
+    if (isRejection(static_cast<TrackerProblem>(i))) s.frames_rejected += s.problems[i];
+  }
+  {
+    std::lock_guard<std::mutex> lock(system_mutex_);
+    if (system_) {
+      {
+        std::shared_lock<std::shared_mutex> map_lock(system_->map().mutex());
+        s.landmarks = system_->map().numLandmarks();
+      }
+      const LoopCloserStats loops = system_->loopClosingStats();
+      s.loops_closed = loops.loops_closed;
+      s.global_bundle_adjustments = loops.global_bundle_adjustments;
+      s.local_bundle_adjustments = system_->localMappingStats().bundle_adjustments;
+    }
+  }
+  s.tracking_ms_median = tracking_ms_.quantile(0.5);
+  s.tracking_ms_p95 = tracking_ms_.quantile(0.95);
+  s.frame_ms_median = frame_ms_.quantile(0.5);
+  s.frame_ms_p95 = frame_ms_.quantile(0.95);
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    s.state = state_;
+  }
+  return s;
+}
+
+bool TrackerNode::waitUntilIdle(std::chrono::milliseconds timeout) const {
+  const Clock::time_point deadline = Clock::now() + timeout;
+  while (queue_.size() > 0 || busy_) {
+    if (Clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return true;
+}
+
+}  // namespace cblox

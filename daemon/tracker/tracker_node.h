@@ -1,0 +1,232 @@
+#pragma once
+
+// The tracker of cblox-tracker without LCM: decoded frames in, frame poses, keyframes and
+// keyframe pose batches out through callbacks, with its own tracking thread around the sparse
+// SLAM system of core/tracking. daemon/cblox_tracker.cc only converts LCM messages into
+// these calls and the callbacks into messages.
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "core/geometry/se3.h"
+#include "core/geometry/stereo_rig.h"
+#include "core/tracking/slam_system.h"
+#include "core/vocabulary/binary_vocabulary.h"
+#include "daemon/mapper/pending_frames.h"
+#include "daemon/mapper/rate_limited_log.h"
+#include "daemon/tracker/ground_truth_buffer.h"
+#include "daemon/tracker/image_check.h"
+#include "daemon/tracker/timing_window.h"
+#include "daemon/tracker/tracker_input.h"
+
+namespace cblox {
+
+/// Which frames the tracker takes.
+enum class TrackerMode {
+  kStereo,  ///< rectified stereo pairs (CBLOX_STEREO)
+  kRgbd,    ///< depth with registered colour (CBLOX_DEPTH), ORB-SLAM2's RGB-D mode
+};
+const char* trackerModeName(TrackerMode mode);
+
+/// Where the pose of the first keyframe (and so the tracker's frame G) comes from.
+enum class InitialPose {
+  kIdentity,     ///< G is the camera frame of the first keyframe
+  kGroundTruth,  ///< G is the ground truth's frame: the first keyframe gets its pose there
+};
+const char* initialPoseName(InitialPose initial_pose);
+
+/// Settings of a TrackerNode (the tracking part of config/tracker.yaml). Plain value type.
+struct TrackerNodeConfig {
+  TrackerMode mode = TrackerMode::kStereo;
+  /// The sparse SLAM system (features, tracking, local mapping, loop closing).
+  SlamSystemConfig slam;
+  /// The camera, fixed by configuration (a calibration file); absent: each frame's message
+  /// carries it, and the first valid frame fixes it for the run.
+  std::optional<RectifiedStereoCalibration> calibration;
+  /// Features closer than this many baselines have trusted depth (ORB-SLAM2's ThDepth:
+  /// 35-40), > 0.
+  double close_depth_baselines = 40.0;
+  /// RGB-D mode: the virtual stereo baseline, metres (> 0). ORB-SLAM2 configures bf = 40 px m
+  /// for the TUM/7-Scenes cameras (fx ~ 520-585 px), i.e. 0.07-0.08 m.
+  double rgbd_baseline_m = 0.08;
+  InitialPose initial_pose = InitialPose::kIdentity;
+  /// initial_pose ground_truth: how long a frame waits for its ground-truth pose, seconds
+  /// (>= 0); without it the frame is published NOT_INITIALIZED.
+  double ground_truth_wait_s = 1.0;
+  /// Frames waiting for the tracking thread, [1, 16]: the newest wins, older ones are
+  /// dropped (counted) when the tracker falls behind.
+  size_t queue_capacity = 1;
+  /// Frames that cannot be tracked at all are published LOST without tracking them.
+  ImageCheckConfig image_check;
+  /// Tracking times kept for the median / p95 in status, >= 1.
+  size_t timing_window = 200;
+  /// Minimum interval between two log lines of the same problem kind, seconds (> 0).
+  double log_interval_s = 10.0;
+
+  /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
+  std::string validate() const;
+};
+
+/// The published state of a frame (frame_pose_t's tracking states).
+enum class FramePoseState { kNotInitialized, kOk, kLost, kRelocalized, kLoopCorrected };
+
+/// What the tracker says about one frame (CBLOX_FRAME_POSE). Plain value type.
+struct FramePoseReport {
+  int64_t utime = 0;
+  int64_t frame_id = 0;
+  FramePoseState state = FramePoseState::kNotInitialized;
+  /// The pose jumped relative to the previous published pose: relocalized, loop corrected,
+  /// or the first pose after frames without one.
+  bool jump = false;
+  /// The camera (rectified left / RGB-D) pose T_G_C; set for kOk, kRelocalized and
+  /// kLoopCorrected.
+  std::optional<Transformationd> T_G_C;
+  /// Why there is no pose (empty when there is one).
+  std::string reason;
+};
+
+/// A snapshot of the tracker's counters since start. Plain value type.
+struct TrackerStatus {
+  uint64_t frames_received = 0;   ///< frames offered, bad ones included
+  uint64_t frames_rejected = 0;   ///< sum of the rejection kinds
+  uint64_t frames_dropped = 0;    ///< superseded in the queue (the tracker was behind)
+  uint64_t frames_processed = 0;  ///< frames the tracking thread published a pose for
+  uint64_t frames_tracked = 0;    ///< published with a pose (OK, RELOCALIZED, LOOP_CORRECTED)
+  uint64_t frames_lost = 0;       ///< published LOST
+  uint64_t frames_not_initialized = 0;
+  uint64_t relocalizations = 0;  ///< frames published RELOCALIZED
+  uint64_t loop_corrected_frames = 0;
+  uint64_t keyframes = 0;     ///< CBLOX_KEYFRAME messages
+  uint64_t pose_batches = 0;  ///< CBLOX_KEYFRAME_POSES messages
+  uint64_t landmarks = 0;     ///< landmarks in the map now
+  uint64_t loops_closed = 0;
+  uint64_t local_bundle_adjustments = 0;
+  uint64_t global_bundle_adjustments = 0;
+  /// Tracking time of a frame (TrackingResult::time_ms) and the whole frame (features,
+  /// stereo matching and tracking), milliseconds, over the last timing_window frames.
+  double tracking_ms_median = 0.0, tracking_ms_p95 = 0.0;
+  double frame_ms_median = 0.0, frame_ms_p95 = 0.0;
+  std::array<uint64_t, kNumTrackerProblems> problems{};  ///< indexed by TrackerProblem
+  /// "waiting for frames", "tracking", "lost: <why>", "not initialized: <why>".
+  std::string state = "waiting for frames";
+  uint64_t problem(TrackerProblem p) const { return problems[static_cast<size_t>(p)]; }
+};
+
+/// The tracker process's core: validates decoded frames, keeps a bounded in-tray (newest
+/// wins), and runs the SlamSystem on its tracking thread.
+///
+/// Threads (owned; start() starts, stop() joins):
+/// - Callers (the LCM thread of cblox-tracker, or a test) call onFrame(), onGroundTruth()
+///   and reportProblem(). They validate, count and hand over; they never wait for tracking.
+/// - The tracking thread takes the newest waiting frame, checks that its images can be
+///   tracked at all (ImageCheckConfig), waits for its ground-truth pose while the map is not
+///   started (initial_pose ground_truth), runs SlamSystem::trackStereo / trackRgbd and
+///   reports the frame (Outputs::frame_pose). The SlamSystem is created on the first frame
+///   (with the configured camera, or the one of that frame's message).
+/// - The SlamSystem's local mapping and loop closing threads call Outputs::keyframe_poses.
+///
+/// Thread-safety: every public member function is thread-safe unless noted.
+class TrackerNode {
+ public:
+  /// Where the results go. Each callback may be empty. frame_pose and keyframe run on the
+  /// tracking thread, keyframe_poses on the SlamSystem's threads, log on any thread: they
+  /// must be thread-safe with respect to each other (e.g. one publish mutex).
+  struct Outputs {
+    std::function<void(const FramePoseReport&)> frame_pose;
+    std::function<void(const KeyframeInfo&)> keyframe;
+    std::function<void(const KeyframePoseBatch&, PoseUpdateReason)> keyframe_poses;
+    /// Human-readable lines (problems, loop closures); default: stderr.
+    std::function<void(const std::string&)> log;
+  };
+
+  /// Throws std::invalid_argument with TrackerNodeConfig::validate()'s message. `vocabulary`
+  /// may be null (no relocalization, no loop closing) and must outlive the node.
+  TrackerNode(const TrackerNodeConfig& config, const BinaryVocabulary* vocabulary, Outputs outputs);
+  /// Calls stop().
+  ~TrackerNode();
+  TrackerNode(const TrackerNode&) = delete;
+  TrackerNode& operator=(const TrackerNode&) = delete;
+
+  /// Starts the tracking thread. Call once.
+  void start();
+  /// The tracking thread finishes the frame in hand (waiting frames are dropped), then the
+  /// SlamSystem stops (local mapping and loop closing finish what they hold; their last pose
+  /// batches are still reported). Idempotent; not from a callback.
+  void stop();
+
+  /// A decoded frame arrived: checks its calibration against the one in use (or the
+  /// configured one), its image size and its order (frame_id and utime must increase), then
+  /// queues it. Returns false when it was rejected (counted and logged).
+  bool onFrame(TrackerFrame frame);
+  /// A ground-truth pose T_G_C of a frame (CBLOX_GT_POSE), used only with initial_pose
+  /// ground_truth.
+  void onGroundTruth(int64_t frame_id, int64_t utime, const Transformationd& T_G_C);
+  /// Counts and logs a problem found outside the node (e.g. a message that did not decode).
+  /// A rejection kind also counts as a received frame.
+  void reportProblem(TrackerProblem problem, const std::string& detail);
+
+  TrackerStatus status() const;
+  /// Waits until no frame is waiting or in hand (or `timeout` passes); true when idle. Local
+  /// mapping may still be busy. For tests.
+  bool waitUntilIdle(std::chrono::milliseconds timeout) const;
+
+  const TrackerNodeConfig& config() const { return config_; }
+
+ private:
+  void trackingLoop();
+  void processFrame(TrackerFrame& frame);
+  // Tracking thread: the SlamSystem for the camera in use (created on first use).
+  bool ensureSystem(const RectifiedStereoCalibration& calibration, std::string* error);
+  // Tracking thread: publishes a frame without a pose (LOST, or NOT_INITIALIZED before the
+  // map exists), counts `problem` and records the state.
+  void reportUntracked(const TrackerFrame& frame, TrackerProblem problem,
+                       const std::string& reason);
+  void publish(const FramePoseReport& report);
+  void count(TrackerProblem problem, const std::string& message);
+  void setState(std::string state);
+  void log(const std::string& line) const;
+
+  const TrackerNodeConfig config_;
+  const BinaryVocabulary* const vocabulary_;
+  const Outputs outputs_;
+  PendingFrames<TrackerFrame> queue_;
+  GroundTruthBuffer ground_truth_;
+  RateLimitedLog problem_log_;
+  TimingWindow tracking_ms_, frame_ms_;
+
+  // Input checks (callers' threads).
+  std::mutex input_mutex_;
+  std::optional<RectifiedStereoCalibration> camera_;  // the calibration in use
+  int64_t last_frame_id_ = INT64_MIN, last_utime_ = INT64_MIN;
+
+  // The SLAM system: created and destroyed on the tracking thread / in stop(), read by
+  // status(); system_mutex_ guards the pointer, not the system.
+  mutable std::mutex system_mutex_;
+  std::unique_ptr<SlamSystem> system_;
+  // Tracking thread only.
+  bool pose_published_ = false;  // the last published frame had a pose
+  bool map_started_ = false;     // the tracker has initialised its map
+
+  std::atomic<uint64_t> frames_received_{0}, frames_processed_{0}, frames_tracked_{0},
+      frames_lost_{0}, frames_not_initialized_{0}, relocalizations_{0}, loop_corrected_frames_{0},
+      keyframes_{0}, pose_batches_{0};
+  std::array<std::atomic<uint64_t>, kNumTrackerProblems> problems_{};
+  mutable std::mutex state_mutex_;
+  std::string state_ = "waiting for frames";
+
+  std::atomic<bool> stop_{false}, busy_{false};
+  bool started_ = false, stopped_ = false;
+  std::mutex lifecycle_mutex_;
+  std::thread tracking_thread_;
+};
+
+}  // namespace cblox

@@ -1,18 +1,24 @@
 #!/usr/bin/env bash
 # Runs the live pipeline on a simulated scene in a private network namespace (so it needs
-# no multicast route and disturbs nothing else): cblox-mapper in ground-truth pose mode,
-# cblox-capture playing the simulator in real time, then cblox-ctl asks for the mesh, and
-# cblox-eval measures it against the scene's exact mesh.
+# no multicast route and disturbs nothing else): cblox-capture plays the simulator in real
+# time, cblox-tracker tracks the stereo pair (its first keyframe takes the first frame's
+# exact pose, so its frame G is the scene's), cblox-mapper integrates the depth frames at the
+# tracker's poses (or, with --poses ground_truth, at the simulator's exact poses, no
+# tracker), then cblox-ctl asks for the mesh and cblox-eval measures it against the scene's
+# exact mesh.
 #
 # Usage: scripts/run_pipeline.sh [--scene room|hall|town] [--trajectory orbit|loop|...]
 #                                [--rate HZ] [--frames N] [--out DIR] [--name NAME]
+#                                [--poses tracker|ground_truth]   (default tracker)
 #                                [--mapper-config FILE]   (default config/mapper.yaml)
+#                                [--tracker-config FILE]  (default config/tracker.yaml)
 # Writes DIR/NAME.ply (the mapper's mesh), DIR/NAME_gt.ply (exact scene), DIR/NAME_eval.json
 # and DIR/NAME_error.png. Needs a build (scripts/build.sh); BUILD_DIR selects it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 scene=room trajectory=orbit rate=20 frames=0 out=out name="" mapper_config=config/mapper.yaml
+poses=tracker tracker_config=config/tracker.yaml
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --scene) scene=$2; shift 2 ;;
@@ -22,9 +28,15 @@ while [[ $# -gt 0 ]]; do
     --out) out=$2; shift 2 ;;
     --name) name=$2; shift 2 ;;
     --mapper-config) mapper_config=$2; shift 2 ;;
+    --tracker-config) tracker_config=$2; shift 2 ;;
+    --poses) poses=$2; shift 2 ;;
     *) echo "run_pipeline: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
+case "$poses" in
+  tracker|ground_truth) ;;
+  *) echo "run_pipeline: --poses must be tracker or ground_truth, got '$poses'" >&2; exit 2 ;;
+esac
 name=${name:-pipeline_$scene}
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
@@ -33,32 +45,49 @@ bin=$(cd "$BUILD_DIR/daemon" && pwd)
 if [[ "${CBLOX_IN_NETNS:-}" != "1" ]]; then
   CBLOX_IN_NETNS=1 exec scripts/netns-run.sh "$0" --scene "$scene" --trajectory "$trajectory" \
     --rate "$rate" --frames "$frames" --out "$out" --name "$name" \
-    --mapper-config "$mapper_config"
+    --mapper-config "$mapper_config" --tracker-config "$tracker_config" --poses "$poses"
 fi
 
 url="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
-"$bin/cblox-mapper" --config "$mapper_config" --pose-source ground_truth --output-dir "$out" \
+"$bin/cblox-mapper" --config "$mapper_config" --pose-source "$poses" --output-dir "$out" \
   --lcm-url "$url" > "$out/${name}_mapper.log" 2>&1 &
 mapper=$!
-trap 'kill -TERM $mapper 2>/dev/null || true' EXIT
+tracker=""
+if [[ "$poses" == tracker ]]; then
+  "$bin/cblox-tracker" --config "$tracker_config" --initial-pose-from-gt --lcm-url "$url" \
+    > "$out/${name}_tracker.log" 2>&1 &
+  tracker=$!
+fi
+trap 'kill -TERM $mapper $tracker 2>/dev/null || true' EXIT
 start_ns=$(date +%s%N)
 sleep 1
-echo "pipeline: capture sim:$scene ($trajectory) at $rate Hz -> cblox-mapper (ground-truth poses)"
+echo "pipeline: capture sim:$scene ($trajectory) at $rate Hz ->" \
+  "$([[ -n $tracker ]] && echo "cblox-tracker -> ")cblox-mapper ($poses poses)"
 "$bin/cblox-capture" --source "sim:$scene" --trajectory "$trajectory" --rate "$rate" \
   --frames "$frames" --lcm-url "$url"
-sleep 1  # let the mapper integrate the last frames
+sleep 2  # let the tracker and the mapper finish the last frames
 "$bin/cblox-ctl" --lcm-url "$url" --timeout 30 status
 "$bin/cblox-ctl" --lcm-url "$url" --timeout 120 export-mesh "$name.ply"
-# The mapper's CPU share and peak memory over the run (from /proc, before it exits).
-ticks=$(awk '{print $14 + $15}' "/proc/$mapper/stat")
+# CPU share and peak memory of each process over the run (from /proc, before it exits).
 hz=$(getconf CLK_TCK)
 wall=$(( ($(date +%s%N) - start_ns) / 1000000 ))
-rss=$(awk '/^VmHWM:/ {print $2}' "/proc/$mapper/status")
-awk -v t="$ticks" -v hz="$hz" -v w="$wall" -v r="$rss" 'BEGIN {
-  printf "pipeline: cblox-mapper used %.1f s CPU over %.1f s (%.0f %% of one core), peak RSS %.1f MiB\n",
-         t / hz, w / 1000, 100 * (t / hz) / (w / 1000), r / 1024 }'
+usage() {  # usage NAME PID
+  local ticks rss
+  ticks=$(awk '{print $14 + $15}' "/proc/$2/stat")
+  rss=$(awk '/^VmHWM:/ {print $2}' "/proc/$2/status")
+  awk -v n="$1" -v t="$ticks" -v hz="$hz" -v w="$wall" -v r="$rss" 'BEGIN {
+    printf "pipeline: %s used %.1f s CPU over %.1f s (%.0f %% of one core), peak RSS %.1f MiB\n",
+           n, t / hz, w / 1000, 100 * (t / hz) / (w / 1000), r / 1024 }'
+}
+[[ -n $tracker ]] && usage cblox-tracker "$tracker"
+usage cblox-mapper "$mapper"
 kill -TERM $mapper
 wait $mapper || { echo "pipeline: cblox-mapper exited with $?" >&2; exit 1; }
+if [[ -n $tracker ]]; then
+  kill -TERM "$tracker"
+  wait "$tracker" || { echo "pipeline: cblox-tracker exited with $?" >&2; exit 1; }
+  grep -E "^cblox-tracker: (stopped|tracked|loop)" "$out/${name}_tracker.log" | tail -3 || true
+fi
 trap - EXIT
 "$bin/cblox-capture" --source "sim:$scene" --write-scene "$out/${name}_gt.ply" > /dev/null
 "$bin/cblox-eval" --gt-mesh "$out/${name}_gt.ply" --mesh "$out/$name.ply" --max-error 0.04 \

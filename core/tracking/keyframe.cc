@@ -29,7 +29,7 @@ int Keyframe::numTrackedLandmarks(int min_observations) const {
   int n = 0;
   for (const Landmark* l : landmarks_) {
     if (l == nullptr || l->bad()) continue;
-    if (min_observations > 0 && static_cast<int>(l->observations().size()) < min_observations) {
+    if (min_observations > 0 && l->numObservations() < min_observations) {
       continue;
     }
     ++n;

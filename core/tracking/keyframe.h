@@ -46,8 +46,9 @@ class Keyframe {
   Landmark* landmark(size_t i) const { return landmarks_[i]; }
   const std::vector<Landmark*>& landmarks() const { return landmarks_; }
   void setLandmark(size_t i, Landmark* landmark) { landmarks_[i] = landmark; }
-  /// Good (not bad) landmarks observed; with min_observations > 0 only those seen by at
-  /// least that many keyframes (ORB-SLAM2's TrackedMapPoints).
+  /// Good (not bad) landmarks observed; with min_observations > 0 only those with at least
+  /// that many observations, a stereo observation counting 2 (ORB-SLAM2's
+  /// TrackedMapPoints and MapPoint::Observations).
   int numTrackedLandmarks(int min_observations = 0) const;
 
   /// Covisibility: rebuilds this keyframe's edges from its landmarks' observations (weight =

@@ -152,7 +152,7 @@ void LocalMapper::cullRecentLandmarks(Keyframe* keyframe) {
       it = recent_landmarks_.erase(it);
     } else if (l->foundRatio() < config_.min_found_ratio ||
                (age >= 2 &&
-                static_cast<int>(l->observations().size()) < config_.min_observations)) {
+                l->numObservations() <= config_.min_observations)) {
       map_->retireLandmark(l);
       ++culled;
       it = recent_landmarks_.erase(it);
@@ -342,7 +342,7 @@ void LocalMapper::cullKeyframes(Keyframe* keyframe) {
       if (l == nullptr || l->bad()) continue;
       if (!(f.depth[i] > 0.0f) || f.depth[i] > camera_.close_depth_m) continue;
       ++valid;
-      if (l->observations().size() <= 3) continue;
+      if (l->numObservations() <= 3) continue;
       const int level = f.keypoints[i].octave;
       int seen = 0;
       for (const auto& [other, index] : l->observations()) {

@@ -23,8 +23,9 @@ namespace cblox {
 /// Settings of local mapping (ORB-SLAM2's LocalMapping).
 struct LocalMapperConfig {
   /// Recent landmarks are retired when found in fewer than this fraction of the frames
-  /// that should have seen them (0.25), or when seen by fewer than min_observations
-  /// keyframes two keyframes after their creation (3 for stereo).
+  /// that should have seen them (0.25), or when they have at most min_observations
+  /// observations (a stereo observation counting 2) two keyframes after their creation
+  /// (ORB-SLAM2: 3 for stereo).
   double min_found_ratio = 0.25;
   int min_observations = 3;
   /// Duplicate fusion: best covisible keyframes searched (10 for stereo) and their best

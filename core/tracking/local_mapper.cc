@@ -40,48 +40,24 @@ LocalMapper::LocalMapper(SparseMap* map, const TrackingCamera& camera, const Sca
   }
 }
 
-bool LocalMapper::acceptsKeyframes() const {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
-  return !busy_ && queue_.empty();
-}
+bool LocalMapper::acceptsKeyframes() const { return queue_.idle(); }
 
-size_t LocalMapper::queuedKeyframes() const {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
-  return queue_.size();
-}
+size_t LocalMapper::queuedKeyframes() const { return queue_.size(); }
 
 void LocalMapper::insertKeyframe(Keyframe* keyframe) {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    queue_.push_back(keyframe);
-  }
+  queue_.push(keyframe);
   abort_ba_ = true;  // a new keyframe is more useful than finishing the current BA
-  queue_cv_.notify_all();
 }
 
 void LocalMapper::stop() {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    stop_ = true;
-  }
+  queue_.stop();
   abort_ba_ = true;
-  queue_cv_.notify_all();
 }
 
-void LocalMapper::waitUntilIdle() {
-  std::unique_lock<std::mutex> lock(queue_mutex_);
-  queue_cv_.wait(lock, [this] { return stop_ || (queue_.empty() && !busy_); });
-}
+void LocalMapper::waitUntilIdle() { queue_.waitUntilIdle(); }
 
 void LocalMapper::run() {
-  while (true) {
-    {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
-      if (stop_) return;
-    }
-    processOne();
-  }
+  while (queue_.waitForWork()) processOne();
 }
 
 LocalMapperStats LocalMapper::stats() const {
@@ -90,28 +66,13 @@ LocalMapperStats LocalMapper::stats() const {
 }
 
 bool LocalMapper::processOne() {
-  Keyframe* keyframe = nullptr;
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    if (queue_.empty()) return false;
-    keyframe = queue_.front();
-    queue_.pop_front();
-    busy_ = true;
-  }
+  Keyframe* keyframe = queue_.tryPop();
+  if (keyframe == nullptr) return false;
   processNewKeyframe(keyframe);
   cullRecentLandmarks(keyframe);
-  bool more_waiting;
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    more_waiting = !queue_.empty();
-  }
-  if (!more_waiting) fuseWithNeighbours(keyframe);
+  if (!queue_.moreWorkOrStopping()) fuseWithNeighbours(keyframe);
   abort_ba_ = false;
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    more_waiting = !queue_.empty() || stop_;
-  }
-  if (!more_waiting) {
+  if (!queue_.moreWorkOrStopping()) {
     localBundleAdjustment(keyframe);
     if (config_.cull_keyframes) cullKeyframes(keyframe);
   }
@@ -120,11 +81,7 @@ bool LocalMapper::processOne() {
     ++stats_.keyframes_processed;
   }
   if (on_keyframe_) on_keyframe_(keyframe);
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    busy_ = false;
-  }
-  queue_cv_.notify_all();
+  queue_.done();
   return true;
 }
 
@@ -151,8 +108,7 @@ void LocalMapper::cullRecentLandmarks(Keyframe* keyframe) {
     if (l->bad()) {
       it = recent_landmarks_.erase(it);
     } else if (l->foundRatio() < config_.min_found_ratio ||
-               (age >= 2 &&
-                l->numObservations() <= config_.min_observations)) {
+               (age >= 2 && l->numObservations() <= config_.min_observations)) {
       map_->retireLandmark(l);
       ++culled;
       it = recent_landmarks_.erase(it);

@@ -15,6 +15,7 @@
 #include "core/features/scale_pyramid.h"
 #include "core/optimization/bundle_adjustment.h"
 #include "core/tracking/keyframe_sink.h"
+#include "core/tracking/keyframe_work_queue.h"
 #include "core/tracking/sparse_map.h"
 #include "core/tracking/tracking_camera.h"
 
@@ -119,11 +120,7 @@ class LocalMapper : public KeyframeSink {
   KeyframeCallback on_keyframe_;
   PoseCallback on_poses_;
 
-  mutable std::mutex queue_mutex_;
-  std::condition_variable queue_cv_;
-  std::deque<Keyframe*> queue_;
-  bool busy_ = false;
-  bool stop_ = false;
+  KeyframeWorkQueue queue_;
   std::atomic<bool> abort_ba_{false};
 
   std::list<std::shared_ptr<Landmark>> recent_landmarks_;  // local mapping thread only

@@ -55,36 +55,14 @@ LoopCloser::LoopCloser(SparseMap* map, KeyframeDatabase* database, const Trackin
   }
 }
 
-void LoopCloser::insertKeyframe(Keyframe* keyframe) {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    queue_.push_back(keyframe);
-  }
-  queue_cv_.notify_all();
-}
+void LoopCloser::insertKeyframe(Keyframe* keyframe) { queue_.push(keyframe); }
 
-void LoopCloser::stop() {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    stop_ = true;
-  }
-  queue_cv_.notify_all();
-}
+void LoopCloser::stop() { queue_.stop(); }
 
-void LoopCloser::waitUntilIdle() {
-  std::unique_lock<std::mutex> lock(queue_mutex_);
-  queue_cv_.wait(lock, [this] { return stop_ || (queue_.empty() && !busy_); });
-}
+void LoopCloser::waitUntilIdle() { queue_.waitUntilIdle(); }
 
 void LoopCloser::run() {
-  while (true) {
-    {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
-      if (stop_) return;
-    }
-    processOne();
-  }
+  while (queue_.waitForWork()) processOne();
 }
 
 LoopCloserStats LoopCloser::stats() const {
@@ -93,14 +71,8 @@ LoopCloserStats LoopCloser::stats() const {
 }
 
 bool LoopCloser::processOne() {
-  Keyframe* keyframe = nullptr;
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    if (queue_.empty()) return false;
-    keyframe = queue_.front();
-    queue_.pop_front();
-    busy_ = true;
-  }
+  Keyframe* keyframe = queue_.tryPop();
+  if (keyframe == nullptr) return false;
   const std::vector<Keyframe*> candidates = detect(keyframe);
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
@@ -116,11 +88,7 @@ bool LoopCloser::processOne() {
       ++stats_.loops_rejected;
     }
   }
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    busy_ = false;
-  }
-  queue_cv_.notify_all();
+  queue_.done();
   return true;
 }
 

@@ -13,6 +13,7 @@
 #include "core/features/scale_pyramid.h"
 #include "core/optimization/bundle_adjustment.h"
 #include "core/optimization/pose_graph_optimizer.h"
+#include "core/tracking/keyframe_work_queue.h"
 #include "core/tracking/local_mapper.h"
 #include "core/tracking/sparse_map.h"
 #include "core/tracking/tracking_camera.h"
@@ -118,10 +119,7 @@ class LoopCloser {
   LoopCallback on_loop_;
   PoseCallback on_poses_;
 
-  mutable std::mutex queue_mutex_;
-  std::condition_variable queue_cv_;
-  std::deque<Keyframe*> queue_;
-  bool busy_ = false, stop_ = false;
+  KeyframeWorkQueue queue_;
 
   // Loop-closing thread only.
   KeyframeId last_loop_keyframe_ = 0;

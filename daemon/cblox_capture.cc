@@ -27,6 +27,7 @@
 #include "core/io/ply_io.h"
 #include "daemon/config/capture_config.h"
 #include "daemon/config/command_line.h"
+#include "daemon/config/process_main.h"
 #include "daemon/config/yaml_config.h"
 #include "daemon/lcm/messages.h"
 #include "drivers/frame_folder_writer.h"
@@ -42,21 +43,22 @@ std::atomic<bool> g_stop{false};
 void onSignal(int) { g_stop = true; }
 
 void printUsage() {
-  std::cout <<
-      "usage: cblox-capture [--config FILE] [--source SPEC] [--trajectory KIND|FILE] [--laps N]\n"
-      "                     [--rate source|max|HZ] [--frames N] [--noise none|realistic]\n"
-      "                     [--lcm-url URL] [--depth-encoding u16_mm|f32]\n"
-      "                     [--render-to DIR] [--write-scene FILE.ply] [--quiet]\n"
-      "  SPEC: sim:room | sim:hall | sim:town | sim:MESH.ply|.obj | euroc:DIR | tum:DIR |\n"
-      "        7scenes:DIR\n"
-      "  KIND (sim): loop | orbit | lawnmower | figure-eight, or a TUM trajectory file\n"
-      "  --render-to DIR  writes images + lists + groundtruth.txt instead of publishing\n"
-      "  --write-scene    writes the simulator's ground-truth mesh (sim sources) and exits\n";
+  std::cout
+      << "usage: cblox-capture [--config FILE] [--source SPEC] [--trajectory KIND|FILE] [--laps "
+         "N]\n"
+         "                     [--rate source|max|HZ] [--frames N] [--noise none|realistic]\n"
+         "                     [--lcm-url URL] [--depth-encoding u16_mm|f32]\n"
+         "                     [--render-to DIR] [--write-scene FILE.ply] [--quiet]\n"
+         "  SPEC: sim:room | sim:hall | sim:town | sim:MESH.ply|.obj | euroc:DIR | tum:DIR |\n"
+         "        7scenes:DIR\n"
+         "  KIND (sim): loop | orbit | lawnmower | figure-eight, or a TUM trajectory file\n"
+         "  --render-to DIR  writes images + lists + groundtruth.txt instead of publishing\n"
+         "  --write-scene    writes the simulator's ground-truth mesh (sim sources) and exits\n";
 }
 
 struct Args {
-  std::optional<std::string> config_file, source, trajectory, rate, noise, lcm_url,
-      depth_encoding, render_to, write_scene;
+  std::optional<std::string> config_file, source, trajectory, rate, noise, lcm_url, depth_encoding,
+      render_to, write_scene;
   std::optional<int> laps, frames;
   bool quiet = false;
 };
@@ -75,18 +77,30 @@ Args parseArgs(int argc, char** argv) {
   parseFlags(
       argc, argv, printUsage, {"--quiet"}, [&](const std::string&) { args.quiet = true; },
       [&](const std::string& flag, const std::string& value) {
-        if (flag == "--config") args.config_file = value;
-        else if (flag == "--source") args.source = value;
-        else if (flag == "--trajectory") args.trajectory = value;
-        else if (flag == "--laps") args.laps = static_cast<int>(toInt(flag, value));
-        else if (flag == "--rate") args.rate = value;
-        else if (flag == "--frames") args.frames = static_cast<int>(toInt(flag, value));
-        else if (flag == "--noise") args.noise = value;
-        else if (flag == "--lcm-url") args.lcm_url = value;
-        else if (flag == "--depth-encoding") args.depth_encoding = value;
-        else if (flag == "--render-to") args.render_to = value;
-        else if (flag == "--write-scene") args.write_scene = value;
-        else return false;
+        if (flag == "--config")
+          args.config_file = value;
+        else if (flag == "--source")
+          args.source = value;
+        else if (flag == "--trajectory")
+          args.trajectory = value;
+        else if (flag == "--laps")
+          args.laps = static_cast<int>(toInt(flag, value));
+        else if (flag == "--rate")
+          args.rate = value;
+        else if (flag == "--frames")
+          args.frames = static_cast<int>(toInt(flag, value));
+        else if (flag == "--noise")
+          args.noise = value;
+        else if (flag == "--lcm-url")
+          args.lcm_url = value;
+        else if (flag == "--depth-encoding")
+          args.depth_encoding = value;
+        else if (flag == "--render-to")
+          args.render_to = value;
+        else if (flag == "--write-scene")
+          args.write_scene = value;
+        else
+          return false;
         return true;
       });
   return args;
@@ -114,7 +128,8 @@ CaptureConfig buildConfig(const Args& args) {
     } else if (*args.depth_encoding == "f32") {
       config.depth_encoding = DepthEncoding::kFloat32Metres;
     } else {
-      throw ConfigError("--depth-encoding must be u16_mm or f32, got '" + *args.depth_encoding + "'");
+      throw ConfigError("--depth-encoding must be u16_mm or f32, got '" + *args.depth_encoding +
+                        "'");
     }
   }
   return config;
@@ -176,7 +191,8 @@ int run(const Args& args) {
   std::string error;
   if (args.write_scene) {
     std::shared_ptr<const Mesh> mesh = loadSimSceneMesh(config.source, &error);
-    if (mesh == nullptr || !writePly(*args.write_scene, *mesh, PlyFormat::kBinaryLittleEndian, &error)) {
+    if (mesh == nullptr ||
+        !writePly(*args.write_scene, *mesh, PlyFormat::kBinaryLittleEndian, &error)) {
       std::fprintf(stderr, "cblox-capture: --write-scene: %s\n", error.c_str());
       return 2;
     }
@@ -247,10 +263,9 @@ int run(const Args& args) {
 
     // Pacing: wait until this frame's time relative to the first one.
     if (!writer && config.pacing != CapturePacing::kMax) {
-      const double offset_s =
-          config.pacing == CapturePacing::kSource
-              ? static_cast<double>(frame.timestamp_ns - *first_stamp_ns) * 1e-9
-              : static_cast<double>(delivered) / config.fixed_rate_hz;
+      const double offset_s = config.pacing == CapturePacing::kSource
+                                  ? static_cast<double>(frame.timestamp_ns - *first_stamp_ns) * 1e-9
+                                  : static_cast<double>(delivered) / config.fixed_rate_hz;
       std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(
                                                 std::chrono::duration<double>(offset_s)));
     }
@@ -288,11 +303,11 @@ int run(const Args& args) {
     return 1;
   }
   const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
-  std::printf("capture: %s %zu frames in %.1f s (%.1f frames/s); source gaps %zu, skipped %zu, "
-              "publish failures %zu%s\n",
-              writer ? "wrote" : "published", delivered, elapsed,
-              elapsed > 0 ? delivered / elapsed : 0.0, gaps, errors, publish_failures,
-              g_stop ? " (stopped by signal)" : "");
+  std::printf(
+      "capture: %s %zu frames in %.1f s (%.1f frames/s); source gaps %zu, skipped %zu, "
+      "publish failures %zu%s\n",
+      writer ? "wrote" : "published", delivered, elapsed, elapsed > 0 ? delivered / elapsed : 0.0,
+      gaps, errors, publish_failures, g_stop ? " (stopped by signal)" : "");
   if (writer) std::printf("capture: folder %s\n", args.render_to->c_str());
   return 0;
 }
@@ -301,13 +316,6 @@ int run(const Args& args) {
 }  // namespace cblox
 
 int main(int argc, char** argv) {
-  try {
-    return cblox::run(cblox::parseArgs(argc, argv));
-  } catch (const cblox::ConfigError& e) {
-    std::fprintf(stderr, "cblox-capture: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "cblox-capture: error: %s\n", e.what());
-    return 1;
-  }
+  return cblox::runProcess("cblox-capture",
+                           [&] { return cblox::run(cblox::parseArgs(argc, argv)); });
 }

@@ -36,8 +36,9 @@
 #include <cblox/pose_stamped_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 
-#include "daemon/config/mapper_config.h"
 #include "daemon/config/command_line.h"
+#include "daemon/config/mapper_config.h"
+#include "daemon/config/process_main.h"
 #include "daemon/config/yaml_config.h"
 #include "daemon/lcm/messages.h"
 #include "daemon/mapper/mapper.h"
@@ -65,21 +66,22 @@ struct Args {
 
 Args parseArgs(int argc, char** argv) {
   Args args;
-  parseFlags(argc, argv, printUsage, {"--quiet"}, [&](const std::string&) { args.quiet = true; },
-             [&](const std::string& flag, const std::string& value) {
-               if (flag == "--config") {
-                 args.config_file = value;
-               } else if (flag == "--pose-source") {
-                 args.pose_source = value;
-               } else if (flag == "--output-dir") {
-                 args.output_dir = value;
-               } else if (flag == "--lcm-url") {
-                 args.lcm_url = value;
-               } else {
-                 return false;
-               }
-               return true;
-             });
+  parseFlags(
+      argc, argv, printUsage, {"--quiet"}, [&](const std::string&) { args.quiet = true; },
+      [&](const std::string& flag, const std::string& value) {
+        if (flag == "--config") {
+          args.config_file = value;
+        } else if (flag == "--pose-source") {
+          args.pose_source = value;
+        } else if (flag == "--output-dir") {
+          args.output_dir = value;
+        } else if (flag == "--lcm-url") {
+          args.lcm_url = value;
+        } else {
+          return false;
+        }
+        return true;
+      });
   return args;
 }
 
@@ -436,13 +438,6 @@ int run(const Args& args) {
 }  // namespace cblox
 
 int main(int argc, char** argv) {
-  try {
-    return cblox::run(cblox::parseArgs(argc, argv));
-  } catch (const cblox::ConfigError& e) {
-    std::fprintf(stderr, "cblox-mapper: configuration error: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "cblox-mapper: error: %s\n", e.what());
-    return 1;
-  }
+  return cblox::runProcess("cblox-mapper",
+                           [&] { return cblox::run(cblox::parseArgs(argc, argv)); });
 }

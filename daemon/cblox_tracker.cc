@@ -40,6 +40,7 @@
 
 #include "core/vocabulary/binary_vocabulary.h"
 #include "daemon/config/command_line.h"
+#include "daemon/config/process_main.h"
 #include "daemon/config/tracker_config.h"
 #include "daemon/config/yaml_config.h"
 #include "daemon/lcm/messages.h"
@@ -390,13 +391,6 @@ int run(const Args& args) {
 }  // namespace cblox
 
 int main(int argc, char** argv) {
-  try {
-    return cblox::run(cblox::parseArgs(argc, argv));
-  } catch (const cblox::ConfigError& e) {
-    std::fprintf(stderr, "cblox-tracker: configuration error: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "cblox-tracker: error: %s\n", e.what());
-    return 1;
-  }
+  return cblox::runProcess("cblox-tracker",
+                           [&] { return cblox::run(cblox::parseArgs(argc, argv)); });
 }

@@ -14,8 +14,8 @@
 namespace cblox {
 namespace {
 
-/// A tree grown below one node: local node 0 is that node (its entries are placeholders);
-/// every other node's parent is a local id.
+/// A tree grown below one node: local node 0 is that node (its entries here are unused: the node
+/// itself lives in the parent tree); every other node's parent is a local id.
 struct Subtree {
   std::vector<uint32_t> parents{0};
   std::vector<OrbDescriptor> descriptors{OrbDescriptor{}};

@@ -311,6 +311,10 @@ void LoopCloser::correct(Keyframe* keyframe, const Verified& loop) {
     group.push_back(keyframe);
     std::set<const Keyframe*> in_group(group.begin(), group.end());
     const Transformationd T_G_Ckf_old = keyframe->T_G_C();
+    // Landmarks moved with a group keyframe here follow that keyframe in the essential
+    // graph's propagation below, not their reference keyframe (ORB-SLAM2's
+    // mnCorrectedReference): else they would be corrected twice.
+    std::map<const Landmark*, const Keyframe*> corrected_with;
     event.correction_m = (loop.T_C_G.inverse().translation() - T_G_Ckf_old.translation()).norm();
     for (Keyframe* k : group) {
       const Transformationd T_Ck_Ckf = k->T_C_G() * T_G_Ckf_old;
@@ -320,6 +324,7 @@ void LoopCloser::correct(Keyframe* keyframe, const Verified& loop) {
         if (l == nullptr || l->bad() || l->corrected_by_keyframe == keyframe->id) continue;
         l->setPosition(T_G_Ck_new * (k->T_C_G() * l->position()));
         l->corrected_by_keyframe = keyframe->id;
+        corrected_with[l] = k;
       }
       k->setPose(corrected);
     }
@@ -403,7 +408,7 @@ void LoopCloser::correct(Keyframe* keyframe, const Verified& loop) {
       }
     }
     std::map<const Keyframe*, Transformationd> before_graph;
-    for (Keyframe* k : all) before_graph[k] = k->T_C_G();
+    for (const Keyframe* k : all) before_graph[k] = k->T_C_G();
     if (!edges.empty()) {
       const PoseGraphResult graph = optimizePoseGraph(vertices, edges, config_.pose_graph);
       for (Keyframe* k : all) {
@@ -411,9 +416,10 @@ void LoopCloser::correct(Keyframe* keyframe, const Verified& loop) {
         k->setPose(graph.T_C_G[static_cast<size_t>(vertex_of.at(k))]);
       }
     }
-    // 5. Every landmark follows the keyframe that placed it.
+    // 5. Every landmark follows the keyframe that placed it (or that moved it in step 1).
     for (Landmark* l : map_->landmarks()) {
-      Keyframe* ref = l->referenceKeyframe();
+      const auto moved = corrected_with.find(l);
+      const Keyframe* ref = moved != corrected_with.end() ? moved->second : l->referenceKeyframe();
       if (ref == nullptr || ref->bad() || before_graph.count(ref) == 0) continue;
       l->setPosition(ref->T_G_C() * (before_graph.at(ref) * l->position()));
       l->updateNormalAndDepth(pyramid_);

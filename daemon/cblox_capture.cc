@@ -38,10 +38,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::atomic<bool> g_stop{false};
-
-void onSignal(int) { g_stop = true; }
-
 void printUsage() {
   std::cout
       << "usage: cblox-capture [--config FILE] [--source SPEC] [--trajectory KIND|FILE] [--laps "
@@ -180,12 +176,6 @@ class Progress {
   Clock::time_point last_ = Clock::now();
 };
 
-int64_t wallUtime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
 int run(const Args& args) {
   const CaptureConfig config = buildConfig(args);
   std::string error;
@@ -209,8 +199,7 @@ int run(const Args& args) {
   const SourceInfo& info = source->info();
   if (!args.quiet) printInfo(info);
 
-  std::signal(SIGINT, onSignal);
-  std::signal(SIGTERM, onSignal);
+  installStopHandlers();
 
   std::optional<FrameFolderWriter> writer;
   std::optional<lcm::LCM> lcm;
@@ -249,7 +238,7 @@ int run(const Args& args) {
     lcm->publish(config.heartbeat_channel, &hb);
   };
 
-  while (!g_stop) {
+  while (!g_stop_requested) {
     const FrameSource::Status status = source->next(&frame, &error);
     if (status == FrameSource::Status::kEnd) break;
     if (status == FrameSource::Status::kError) {
@@ -297,7 +286,7 @@ int run(const Args& args) {
     ++delivered;
     progress.update(delivered);
   }
-  send_heartbeat(g_stop ? "stopped" : "finished");
+  send_heartbeat(g_stop_requested ? "stopped" : "finished");
   if (writer && !writer->close(&error)) {
     std::fprintf(stderr, "cblox-capture: %s\n", error.c_str());
     return 1;
@@ -307,7 +296,7 @@ int run(const Args& args) {
       "capture: %s %zu frames in %.1f s (%.1f frames/s); source gaps %zu, skipped %zu, "
       "publish failures %zu%s\n",
       writer ? "wrote" : "published", delivered, elapsed, elapsed > 0 ? delivered / elapsed : 0.0,
-      gaps, errors, publish_failures, g_stop ? " (stopped by signal)" : "");
+      gaps, errors, publish_failures, g_stop_requested ? " (stopped by signal)" : "");
   if (writer) std::printf("capture: folder %s\n", args.render_to->c_str());
   return 0;
 }

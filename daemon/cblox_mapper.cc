@@ -48,10 +48,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::atomic<bool> g_stop{false};
-
-void onSignal(int) { g_stop = true; }
-
 void printUsage() {
   std::cout << "usage: cblox-mapper [--config FILE] [--pose-source ground_truth|tracker]\n"
                "                    [--output-dir DIR] [--lcm-url URL] [--quiet]\n"
@@ -93,12 +89,6 @@ MapperProcessConfig buildConfig(const Args& args) {
   if (args.lcm_url) config.lcm_url = *args.lcm_url;
   if (const std::string e = config.validate(); !e.empty()) throw ConfigError(e);
   return config;
-}
-
-int64_t wallUtime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
 }
 
 /// LCM <-> Mapper adapter: the handlers run on the LCM (main) thread; replies may be
@@ -362,8 +352,7 @@ int run(const Args& args) {
     std::fprintf(stderr, "cblox-mapper: %s\n", error.c_str());
     return 1;
   }
-  std::signal(SIGINT, onSignal);
-  std::signal(SIGTERM, onSignal);
+  installStopHandlers();
   if (!args.quiet) {
     std::printf(
         "mapper: %s poses, %s integrator, voxel %.3f m, truncation %.3f m, %d thread(s); "
@@ -408,8 +397,8 @@ int run(const Args& args) {
   };
 
   int exit_code = 0;
-  while (!g_stop) {
-    if (lcm.handleTimeout(50) < 0 && !g_stop) {
+  while (!g_stop_requested) {
+    if (lcm.handleTimeout(50) < 0 && !g_stop_requested) {
       std::fprintf(stderr, "cblox-mapper: LCM receive failed\n");
       exit_code = 1;
       break;

@@ -51,10 +51,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::atomic<bool> g_stop{false};
-
-void onSignal(int) { g_stop = true; }
-
 void printUsage() {
   std::cout
       << "usage: cblox-tracker [--config FILE] [--mode stereo|rgbd] [--initial-pose-from-gt]\n"
@@ -129,12 +125,6 @@ std::unique_ptr<BinaryVocabulary> loadVocabulary(const std::string& configured) 
                                           : ""));
   }
   return std::make_unique<BinaryVocabulary>(std::move(*vocabulary));
-}
-
-int64_t wallUtime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
 }
 
 int8_t toStateConstant(FramePoseState state) {
@@ -303,8 +293,7 @@ class TrackerLcmNode {
 };
 
 int run(const Args& args) {
-  std::signal(SIGINT, onSignal);  // before the vocabulary loads: a stop then still exits 0
-  std::signal(SIGTERM, onSignal);
+  installStopHandlers();  // before the vocabulary loads: a stop then still exits 0
   const TrackerProcessConfig config = buildConfig(args);
   const TrackerNodeConfig& t = config.tracker;
   const std::unique_ptr<BinaryVocabulary> vocabulary = loadVocabulary(config.vocabulary);
@@ -363,8 +352,8 @@ int run(const Args& args) {
   };
 
   int exit_code = 0;
-  while (!g_stop) {
-    if (lcm.handleTimeout(50) < 0 && !g_stop) {
+  while (!g_stop_requested) {
+    if (lcm.handleTimeout(50) < 0 && !g_stop_requested) {
       std::fprintf(stderr, "cblox-tracker: LCM receive failed\n");
       exit_code = 1;
       break;

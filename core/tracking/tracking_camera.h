@@ -25,4 +25,19 @@ struct TrackingCamera {
   std::string validate() const;
 };
 
+/// ORB-SLAM2's close/far split (ThDepth): 40 baselines.
+inline constexpr double kDefaultCloseDepthBaselines = 40.0;
+
+/// The tracking camera of rectified intrinsics and a (real or virtual) baseline in metres,
+/// with close_depth_m = close_depth_baselines * baseline_m. Does not validate. Thread-safe.
+inline TrackingCamera makeTrackingCamera(
+    const PinholeIntrinsics& intrinsics, double baseline_m,
+    double close_depth_baselines = kDefaultCloseDepthBaselines) {
+  TrackingCamera camera;
+  camera.intrinsics = intrinsics;
+  camera.baseline_m = baseline_m;
+  camera.close_depth_m = close_depth_baselines * baseline_m;
+  return camera;
+}
+
 }  // namespace cblox

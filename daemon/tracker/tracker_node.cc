@@ -202,11 +202,10 @@ void TrackerNode::trackingLoop() {
 
 bool TrackerNode::ensureSystem(const RectifiedStereoCalibration& calibration, std::string* error) {
   if (system_) return true;
-  TrackingCamera camera;
-  camera.intrinsics = calibration.intrinsics;
-  camera.baseline_m =
-      config_.mode == TrackerMode::kStereo ? calibration.baseline_m : config_.rgbd_baseline_m;
-  camera.close_depth_m = config_.close_depth_baselines * camera.baseline_m;
+  const TrackingCamera camera = makeTrackingCamera(
+      calibration.intrinsics,
+      config_.mode == TrackerMode::kStereo ? calibration.baseline_m : config_.rgbd_baseline_m,
+      config_.close_depth_baselines);
   std::unique_ptr<SlamSystem> system;
   try {
     system = std::make_unique<SlamSystem>(camera, config_.slam, vocabulary_);

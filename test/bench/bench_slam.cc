@@ -44,7 +44,8 @@ using Clock = std::chrono::steady_clock;
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
+  return v[std::min(v.size() - 1,
+                    static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
 }
 
 double cpuSeconds() {
@@ -90,14 +91,22 @@ int run(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (flag == "--scene") scene = value();
-    else if (flag == "--trajectory") trajectory = value();
-    else if (flag == "--laps") laps = std::atoi(value().c_str());
-    else if (flag == "--frames") max_frames = static_cast<size_t>(std::atol(value().c_str()));
-    else if (flag == "--rate") rate = std::atof(value().c_str());
-    else if (flag == "--one-core") one_core = true;
-    else if (flag == "--vocabulary") vocabulary_path = value();
-    else if (flag == "--out") out_dir = value();
+    if (flag == "--scene")
+      scene = value();
+    else if (flag == "--trajectory")
+      trajectory = value();
+    else if (flag == "--laps")
+      laps = std::atoi(value().c_str());
+    else if (flag == "--frames")
+      max_frames = static_cast<size_t>(std::atol(value().c_str()));
+    else if (flag == "--rate")
+      rate = std::atof(value().c_str());
+    else if (flag == "--one-core")
+      one_core = true;
+    else if (flag == "--vocabulary")
+      vocabulary_path = value();
+    else if (flag == "--out")
+      out_dir = value();
     else {
       std::fprintf(stderr, "unknown flag %s\n", flag.c_str());
       return 2;
@@ -136,10 +145,7 @@ int run(int argc, char** argv) {
   std::fprintf(stderr, "\rrendered %zu frames\n", frames.size());
 
   const RectifiedStereoCalibration& calibration = *info.stereo;
-  TrackingCamera camera;
-  camera.intrinsics = calibration.intrinsics;
-  camera.baseline_m = calibration.baseline_m;
-  camera.close_depth_m = 40.0 * calibration.baseline_m;
+  const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
   SlamSystemConfig config;
   config.frames.parallel_stereo_extraction = !one_core;
   SlamSystem slam(camera, config, &*vocabulary);
@@ -192,8 +198,8 @@ int run(int argc, char** argv) {
     if ((i + 1) % 100 == 0 || i + 1 == frames.size()) {
       const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
       std::fprintf(stderr, "\rframe %zu/%zu (%.1f Hz), %zu keyframes, %zu loops, ETA %.0f s   ",
-                   i + 1, frames.size(), (i + 1) / elapsed, slam.map().numKeyframes(),
-                   loops.size(), elapsed / (i + 1) * (frames.size() - i - 1));
+                   i + 1, frames.size(), (i + 1) / elapsed, slam.map().numKeyframes(), loops.size(),
+                   elapsed / (i + 1) * (frames.size() - i - 1));
     }
   }
   slam.waitUntilIdle();
@@ -219,8 +225,8 @@ int run(int argc, char** argv) {
     const Transformationd& tq = truth_by_frame.at(q->frame_id);
     const Transformationd& tc = truth_by_frame.at(c->frame_id);
     const double distance = (tq.translation() - tc.translation()).norm();
-    const double angle = std::acos(std::clamp(
-        (tq.rotationMatrix().col(2)).dot(tc.rotationMatrix().col(2)), -1.0, 1.0));
+    const double angle = std::acos(
+        std::clamp((tq.rotationMatrix().col(2)).dot(tc.rotationMatrix().col(2)), -1.0, 1.0));
     if (distance > 2.0 || angle > M_PI / 3.0) ++false_loops;
   }
   const Ate ate_online = ate(truth, online), ate_before = ate(truth, before_loop),
@@ -231,22 +237,25 @@ int run(int argc, char** argv) {
 
   std::printf("scene %s/%s x%d: %zu frames (%.1f m), %zu lost, %zu keyframes\n", scene.c_str(),
               trajectory.c_str(), laps, frames.size(), path, lost, slam.map().numKeyframes());
-  std::printf("  per frame (features + tracking): median %.1f ms, p95 %.1f ms; tracking alone "
-              "median %.1f ms%s\n",
-              percentile(frame_ms, 0.5), percentile(frame_ms, 0.95), percentile(track_ms, 0.5),
-              one_core ? " (one core)" : " (left/right extraction on 2 threads)");
+  std::printf(
+      "  per frame (features + tracking): median %.1f ms, p95 %.1f ms; tracking alone "
+      "median %.1f ms%s\n",
+      percentile(frame_ms, 0.5), percentile(frame_ms, 0.95), percentile(track_ms, 0.5),
+      one_core ? " (one core)" : " (left/right extraction on 2 threads)");
   std::printf("  local BA: %zu runs, median %.1f ms, p95 %.1f ms\n", ba_ms.size(),
               percentile(ba_ms, 0.5), percentile(ba_ms, 0.95));
-  std::printf("  loops: %zu closed (%zu false), %lu rejected after verification; correction "
-              "median %.1f ms; global BA %lu (last %.0f ms)\n",
-              loops.size(), false_loops, static_cast<unsigned long>(lc.loops_rejected),
-              percentile(correction_ms, 0.5),
-              static_cast<unsigned long>(lc.global_bundle_adjustments), lc.last_global_ba_ms);
+  std::printf(
+      "  loops: %zu closed (%zu false), %lu rejected after verification; correction "
+      "median %.1f ms; global BA %lu (last %.0f ms)\n",
+      loops.size(), false_loops, static_cast<unsigned long>(lc.loops_rejected),
+      percentile(correction_ms, 0.5), static_cast<unsigned long>(lc.global_bundle_adjustments),
+      lc.last_global_ba_ms);
   std::printf("  CPU: %.2f cores over %.1f s\n", cpu_s / wall_s, wall_s);
-  std::printf("  ATE RMSE: frames before the first loop %.4f m (%.2f %% of path), all frames as "
-              "published %.4f m, final keyframes %.4f m (%.3f %% of path)\n",
-              ate_before.rmse, 100.0 * ate_before.rmse / path, ate_online.rmse,
-              ate_keyframes.rmse, 100.0 * ate_keyframes.rmse / path);
+  std::printf(
+      "  ATE RMSE: frames before the first loop %.4f m (%.2f %% of path), all frames as "
+      "published %.4f m, final keyframes %.4f m (%.3f %% of path)\n",
+      ate_before.rmse, 100.0 * ate_before.rmse / path, ate_online.rmse, ate_keyframes.rmse,
+      100.0 * ate_keyframes.rmse / path);
 
   if (!out_dir.empty()) {
     std::filesystem::create_directories(out_dir);

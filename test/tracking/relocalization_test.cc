@@ -24,10 +24,7 @@ TEST(RelocalizationTest, LostOnBlackFramesThenRelocalizedAtAnEarlierPlace) {
   std::unique_ptr<FrameSource> source = openFrameSource("sim:room", options, &error);
   ASSERT_NE(source, nullptr) << error;
   const RectifiedStereoCalibration& calibration = *source->info().stereo;
-  TrackingCamera camera;
-  camera.intrinsics = calibration.intrinsics;
-  camera.baseline_m = calibration.baseline_m;
-  camera.close_depth_m = 40.0 * calibration.baseline_m;
+  const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
   SlamSystemConfig config;
   config.loop_closing_enabled = false;
   SlamSystem slam(camera, config, &*vocabulary);

@@ -29,12 +29,10 @@ TEST(RgbdTrackingTest, SevenScenesFramesTrackWithinThreeCentimetres) {
   std::string error;
   std::unique_ptr<FrameSource> source = openFrameSource("7scenes:" + folder, {}, &error);
   ASSERT_NE(source, nullptr) << error;
-  TrackingCamera camera;
-  camera.intrinsics = *source->info().depth_intrinsics;
   // ORB-SLAM2's TUM RGB-D settings: bf = 40 (a virtual 7 cm baseline at fx = 585),
   // close points up to 40 baselines.
-  camera.baseline_m = 40.0 / camera.intrinsics.fx;
-  camera.close_depth_m = 40.0 * camera.baseline_m;
+  const PinholeIntrinsics& intrinsics = *source->info().depth_intrinsics;
+  const TrackingCamera camera = makeTrackingCamera(intrinsics, 40.0 / intrinsics.fx);
   SlamSystemConfig config;
   SlamSystem slam(camera, config, nullptr);
   StampedTrajectory truth, estimate;

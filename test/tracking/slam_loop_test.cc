@@ -31,10 +31,7 @@ TEST(SlamLoopTest, ClosesTheRoomLoopAndCorrectsTheKeyframes) {
   std::unique_ptr<FrameSource> source = openFrameSource("sim:room", options, &error);
   ASSERT_NE(source, nullptr) << error;
   const RectifiedStereoCalibration& calibration = *source->info().stereo;
-  TrackingCamera camera;
-  camera.intrinsics = calibration.intrinsics;
-  camera.baseline_m = calibration.baseline_m;
-  camera.close_depth_m = 40.0 * calibration.baseline_m;
+  const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
   SlamSystem slam(camera, SlamSystemConfig{}, &*vocabulary);
   std::mutex mutex;
   std::vector<LoopClosureEvent> loops;
@@ -53,9 +50,9 @@ TEST(SlamLoopTest, ClosesTheRoomLoopAndCorrectsTheKeyframes) {
     truth[static_cast<uint64_t>(frame.frame_id)] = *frame.T_G_C;
     if (last) path += (frame.T_G_C->translation() - *last).norm();
     last = frame.T_G_C->translation();
-    const TrackingResult r = slam.trackStereo(static_cast<uint64_t>(frame.frame_id),
-                                              frame.timestamp_ns, frame.left, frame.right,
-                                              frame.T_G_C->inverse());
+    const TrackingResult r =
+        slam.trackStereo(static_cast<uint64_t>(frame.frame_id), frame.timestamp_ns, frame.left,
+                         frame.right, frame.T_G_C->inverse());
     if (r.state != TrackingState::kOk) {
       ++lost;
       continue;
@@ -86,10 +83,11 @@ TEST(SlamLoopTest, ClosesTheRoomLoopAndCorrectsTheKeyframes) {
   }
   const double keyframe_rmse = std::sqrt(sum2 / static_cast<double>(n));
   const double drift_before = frame_errors_before_loop.back();
-  std::printf("%zu loops; path %.2f m; error at the loop before correction %.4f m; keyframe "
-              "RMSE after %.4f m (%.3f %% of the path) over %zu keyframes; global BA %lu\n",
-              loops.size(), path, drift_before, keyframe_rmse, 100.0 * keyframe_rmse / path, n,
-              static_cast<unsigned long>(slam.loopClosingStats().global_bundle_adjustments));
+  std::printf(
+      "%zu loops; path %.2f m; error at the loop before correction %.4f m; keyframe "
+      "RMSE after %.4f m (%.3f %% of the path) over %zu keyframes; global BA %lu\n",
+      loops.size(), path, drift_before, keyframe_rmse, 100.0 * keyframe_rmse / path, n,
+      static_cast<unsigned long>(slam.loopClosingStats().global_bundle_adjustments));
   // The target is 0.5 % (BENCHMARKS.md: 0.13 % over two laps); runs vary with the
   // threads' timing (0.23-0.51 % measured at this point of the loop), so the test allows 0.8 %.
   EXPECT_LT(keyframe_rmse, 0.008 * path);

@@ -10,9 +10,9 @@
 
 #include <gtest/gtest.h>
 
+#include <thread>
 #include "core/tracking/frame_builder.h"
 #include "core/tracking/local_mapper.h"
-#include <thread>
 #include "drivers/open_frame_source.h"
 
 namespace cblox {
@@ -25,7 +25,7 @@ struct RunStats {
 };
 
 RunStats runTracker(const std::string& spec, const std::string& trajectory, size_t frames,
-                   bool local_mapping) {
+                    bool local_mapping) {
   SourceOptions options;
   options.trajectory = trajectory;
   options.max_frames = frames;
@@ -35,10 +35,7 @@ RunStats runTracker(const std::string& spec, const std::string& trajectory, size
   RunStats stats;
   if (!source) return stats;
   const RectifiedStereoCalibration& calibration = *source->info().stereo;
-  TrackingCamera camera;
-  camera.intrinsics = calibration.intrinsics;
-  camera.baseline_m = calibration.baseline_m;
-  camera.close_depth_m = 40.0 * calibration.baseline_m;
+  const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
   FrameBuilder builder(camera, FrameBuilderConfig{}, nullptr);
   SparseMap map;
   LocalMapper mapper(&map, camera, builder.pyramid(), LocalMapperConfig{});
@@ -66,12 +63,11 @@ RunStats runTracker(const std::string& spec, const std::string& trajectory, size
     ++stats.ok;
     const Transformationd error_pose = r.T_C_G->inverse() * T_C_G_true;  // T_Gest_Gtrue-ish
     const Transformationd T_G_C_est = r.T_C_G->inverse();
-    stats.max_translation_error =
-        std::max(stats.max_translation_error,
-                 (T_G_C_est.translation() - frame.T_G_C->translation()).norm());
-    stats.max_rotation_error_deg = std::max(
-        stats.max_rotation_error_deg,
-        T_G_C_est.rotation().angularDistance(frame.T_G_C->rotation()) * 180.0 / M_PI);
+    stats.max_translation_error = std::max(
+        stats.max_translation_error, (T_G_C_est.translation() - frame.T_G_C->translation()).norm());
+    stats.max_rotation_error_deg =
+        std::max(stats.max_rotation_error_deg,
+                 T_G_C_est.rotation().angularDistance(frame.T_G_C->rotation()) * 180.0 / M_PI);
     (void)error_pose;
   }
   if (local_mapping) {
@@ -79,13 +75,14 @@ RunStats runTracker(const std::string& spec, const std::string& trajectory, size
     mapper.stop();
     mapping_thread.join();
     const LocalMapperStats ms = mapper.stats();
-    std::printf("local mapping: %lu keyframes, %lu BAs (%lu aborted, last %.1f ms), %lu landmarks "
-                "culled, %lu fused\n",
-                static_cast<unsigned long>(ms.keyframes_processed),
-                static_cast<unsigned long>(ms.bundle_adjustments),
-                static_cast<unsigned long>(ms.bundle_adjustments_aborted), ms.last_ba_ms,
-                static_cast<unsigned long>(ms.landmarks_culled),
-                static_cast<unsigned long>(ms.landmarks_fused));
+    std::printf(
+        "local mapping: %lu keyframes, %lu BAs (%lu aborted, last %.1f ms), %lu landmarks "
+        "culled, %lu fused\n",
+        static_cast<unsigned long>(ms.keyframes_processed),
+        static_cast<unsigned long>(ms.bundle_adjustments),
+        static_cast<unsigned long>(ms.bundle_adjustments_aborted), ms.last_ba_ms,
+        static_cast<unsigned long>(ms.landmarks_culled),
+        static_cast<unsigned long>(ms.landmarks_fused));
   }
   return stats;
 }
@@ -96,10 +93,11 @@ TEST(TrackerSimTest, TracksTheRoomLoopCloseToTheExactPoses) {
   EXPECT_EQ(s.ok, 120);
   std::sort(const_cast<std::vector<double>&>(s.track_ms).begin(),
             const_cast<std::vector<double>&>(s.track_ms).end());
-  std::printf("room: %d frames, %d keyframes, path %.2f m, max error %.4f m %.3f deg, track "
-              "median %.2f ms\n",
-              s.frames, s.keyframes, s.path_length, s.max_translation_error,
-              s.max_rotation_error_deg, s.track_ms[s.track_ms.size() / 2]);
+  std::printf(
+      "room: %d frames, %d keyframes, path %.2f m, max error %.4f m %.3f deg, track "
+      "median %.2f ms\n",
+      s.frames, s.keyframes, s.path_length, s.max_translation_error, s.max_rotation_error_deg,
+      s.track_ms[s.track_ms.size() / 2]);
   EXPECT_LT(s.max_translation_error, 0.02 * s.path_length);
   EXPECT_LT(s.max_rotation_error_deg, 1.0);
   EXPECT_GT(s.keyframes, 2);

@@ -57,11 +57,8 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
       result.map_corrected = state_ != TrackingState::kNotInitialized;
     }
     if (state_ == TrackingState::kNotInitialized) {
-      if (current_.features->size() == 0) {
-        result.reason = "no features";
-      } else {
-        // Initialisation needs the exclusive lock: done below.
-      }
+      // Initialisation needs the exclusive lock: done below.
+      if (current_.features->size() == 0) result.reason = "no features";
     } else {
       bool ok = false;
       bool relocalized = false;

@@ -61,14 +61,12 @@ RunStats runTracker(const std::string& spec, const std::string& trajectory, size
       continue;
     }
     ++stats.ok;
-    const Transformationd error_pose = r.T_C_G->inverse() * T_C_G_true;  // T_Gest_Gtrue-ish
     const Transformationd T_G_C_est = r.T_C_G->inverse();
     stats.max_translation_error = std::max(
         stats.max_translation_error, (T_G_C_est.translation() - frame.T_G_C->translation()).norm());
     stats.max_rotation_error_deg =
         std::max(stats.max_rotation_error_deg,
                  T_G_C_est.rotation().angularDistance(frame.T_G_C->rotation()) * 180.0 / M_PI);
-    (void)error_pose;
   }
   if (local_mapping) {
     mapper.waitUntilIdle();

@@ -497,40 +497,45 @@ void Mapper::integratorLoop() {
       Transformationd T_G_B;
       bool jump = false;
       const Clock::time_point now = Clock::now();
-      std::optional<PendingFrame> frame =
-          pending_.takeNewestReady([&](const PendingFrame& p) -> FrameReadiness {
-            Transformationd T;
-            bool j = false;
-            const PoseBuffer::Lookup result = poses_.lookup(p.frame.utime, &T, &j);
-            auto what = [&p] {
-              return "depth frame " + std::to_string(p.frame.frame_id) + " at " +
-                     std::to_string(p.frame.utime) + " us: ";
-            };
-            switch (result) {
-              case PoseBuffer::Lookup::kFound:
-                T_G_B = T;
-                jump = j;
-                return FrameReadiness::kReady;
-              case PoseBuffer::Lookup::kNotYet:
-                if (now - p.received <= max_wait) return FrameReadiness::kWait;
-                count(InputProblem::kNoPose,
-                      what() + "no pose within " + fixed(config_.max_pose_wait_s, 2) + " s");
-                return FrameReadiness::kReject;
-              case PoseBuffer::Lookup::kTooOld:
-                count(InputProblem::kPoseTooOld, what() + PoseBuffer::name(result));
-                return FrameReadiness::kReject;
-              case PoseBuffer::Lookup::kGap:
-                count(InputProblem::kPoseGap, what() + PoseBuffer::name(result));
-                return FrameReadiness::kReject;
-              case PoseBuffer::Lookup::kAcrossJump:
-                count(InputProblem::kAcrossJump, what() + PoseBuffer::name(result));
-                return FrameReadiness::kReject;
-              case PoseBuffer::Lookup::kLost:
-                count(InputProblem::kTrackingLost, what() + PoseBuffer::name(result));
-                return FrameReadiness::kReject;
-            }
-            return FrameReadiness::kReject;
-          });
+      // One view of the poses for the whole scan (lock order: poses, then the in-tray),
+      // released before the frame is integrated.
+      std::optional<PendingFrame> frame;
+      {
+        const PoseBuffer::Reader poses(poses_);
+        frame = pending_.takeNewestReady([&](const PendingFrame& p) -> FrameReadiness {
+          Transformationd T;
+          bool j = false;
+          const PoseBuffer::Lookup result = poses.lookup(p.frame.utime, &T, &j);
+          auto what = [&p] {
+            return "depth frame " + std::to_string(p.frame.frame_id) + " at " +
+                   std::to_string(p.frame.utime) + " us: ";
+          };
+          switch (result) {
+            case PoseBuffer::Lookup::kFound:
+              T_G_B = T;
+              jump = j;
+              return FrameReadiness::kReady;
+            case PoseBuffer::Lookup::kNotYet:
+              if (now - p.received <= max_wait) return FrameReadiness::kWait;
+              count(InputProblem::kNoPose,
+                    what() + "no pose within " + fixed(config_.max_pose_wait_s, 2) + " s");
+              return FrameReadiness::kReject;
+            case PoseBuffer::Lookup::kTooOld:
+              count(InputProblem::kPoseTooOld, what() + PoseBuffer::name(result));
+              return FrameReadiness::kReject;
+            case PoseBuffer::Lookup::kGap:
+              count(InputProblem::kPoseGap, what() + PoseBuffer::name(result));
+              return FrameReadiness::kReject;
+            case PoseBuffer::Lookup::kAcrossJump:
+              count(InputProblem::kAcrossJump, what() + PoseBuffer::name(result));
+              return FrameReadiness::kReject;
+            case PoseBuffer::Lookup::kLost:
+              count(InputProblem::kTrackingLost, what() + PoseBuffer::name(result));
+              return FrameReadiness::kReject;
+          }
+          return FrameReadiness::kReject;
+        });
+      }
       if (!frame) {
         integrator_busy_ = false;
         break;

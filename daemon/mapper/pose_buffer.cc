@@ -39,6 +39,11 @@ PoseBuffer::AddResult PoseBuffer::add(const TimedPose& pose) {
 
 PoseBuffer::Lookup PoseBuffer::lookup(int64_t utime, Transformationd* T_G_C, bool* jump) const {
   std::lock_guard<std::mutex> lock(mutex_);
+  return lookupLocked(utime, T_G_C, jump);
+}
+
+PoseBuffer::Lookup PoseBuffer::lookupLocked(int64_t utime, Transformationd* T_G_C,
+                                            bool* jump) const {
   if (poses_.empty() || utime > poses_.back().utime) return Lookup::kNotYet;
   if (utime < poses_.front().utime) return Lookup::kTooOld;
   const auto after = std::lower_bound(
@@ -79,12 +84,18 @@ void PoseBuffer::clear() {
 
 const char* PoseBuffer::name(Lookup result) {
   switch (result) {
-    case Lookup::kFound: return "found";
-    case Lookup::kNotYet: return "pose not yet received";
-    case Lookup::kTooOld: return "older than every pose kept";
-    case Lookup::kGap: return "gap between poses too long";
-    case Lookup::kAcrossJump: return "across a tracking jump";
-    case Lookup::kLost: return "tracking lost";
+    case Lookup::kFound:
+      return "found";
+    case Lookup::kNotYet:
+      return "pose not yet received";
+    case Lookup::kTooOld:
+      return "older than every pose kept";
+    case Lookup::kGap:
+      return "gap between poses too long";
+    case Lookup::kAcrossJump:
+      return "across a tracking jump";
+    case Lookup::kLost:
+      return "tracking lost";
   }
   return "?";
 }

@@ -35,12 +35,12 @@ class PoseBuffer {
 
   enum class AddResult { kAdded, kDuplicate, kOutOfOrder, kInvalid };
   enum class Lookup {
-    kFound,        ///< *T_G_C set (exact or interpolated)
-    kNotYet,       ///< newer than every pose: may be answered when more poses arrive
-    kTooOld,       ///< older than every pose kept
-    kGap,          ///< the poses around it are more than max_gap_s apart
-    kAcrossJump,   ///< a tracking jump or epoch change lies between the poses around it
-    kLost,         ///< a pose around it is not tracked (LOST / NOT_INITIALIZED)
+    kFound,       ///< *T_G_C set (exact or interpolated)
+    kNotYet,      ///< newer than every pose: may be answered when more poses arrive
+    kTooOld,      ///< older than every pose kept
+    kGap,         ///< the poses around it are more than max_gap_s apart
+    kAcrossJump,  ///< a tracking jump or epoch change lies between the poses around it
+    kLost,        ///< a pose around it is not tracked (LOST / NOT_INITIALIZED)
   };
 
   /// Throws std::invalid_argument with Config::validate()'s message.
@@ -55,6 +55,22 @@ class PoseBuffer {
   /// first after a discontinuity (it has the jump pose itself).
   Lookup lookup(int64_t utime, Transformationd* T_G_C, bool* jump) const;
 
+  /// Holds the buffer's lock for its lifetime so that several lookups see one state: a pose
+  /// added between two lookups of a scan over waiting frames would otherwise make a newer
+  /// frame "not yet" and an older one "too old" in the same scan. Keep it short-lived; do not
+  /// call the buffer's own member functions while holding it.
+  class Reader {
+   public:
+    explicit Reader(const PoseBuffer& buffer) : buffer_(buffer), lock_(buffer.mutex_) {}
+    Lookup lookup(int64_t utime, Transformationd* T_G_C, bool* jump) const {
+      return buffer_.lookupLocked(utime, T_G_C, jump);
+    }
+
+   private:
+    const PoseBuffer& buffer_;
+    std::unique_lock<std::mutex> lock_;
+  };
+
   size_t size() const;
   /// Time stamp of the newest pose, or INT64_MIN when empty.
   int64_t newestUtime() const;
@@ -63,6 +79,8 @@ class PoseBuffer {
   static const char* name(Lookup result);
 
  private:
+  Lookup lookupLocked(int64_t utime, Transformationd* T_G_C, bool* jump) const;
+
   Config config_;
   mutable std::mutex mutex_;
   std::deque<TimedPose> poses_;

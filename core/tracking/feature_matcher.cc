@@ -5,11 +5,17 @@
 #include <cmath>
 #include <limits>
 
+#include "core/tracking/common_nodes.h"
+
 namespace cblox {
 
 namespace {
 
-constexpr int kHistogramBins = 30;
+// Rotation-consistency check: 36 bins of 10 degrees; matches within 30 degrees of the
+// dominant change are kept.
+constexpr int kRotationBins = 36;
+constexpr float kRotationBinDeg = 360.0f / kRotationBins;
+constexpr float kRotationToleranceDeg = 30.0f;
 
 // ORB-SLAM2's RadiusByViewingCos: a smaller window when the landmark is seen head on.
 float radiusByViewingCos(float view_cos) { return view_cos > 0.998f ? 2.5f : 4.0f; }
@@ -49,24 +55,6 @@ int filterByRotation(const std::vector<std::pair<size_t, float>>& matches, Unset
     }
   }
   return static_cast<int>(keep.size());
-}
-
-// Iterates the nodes two FeatureVectors share (both sorted by node id).
-template <typename F>
-void forCommonNodes(const FeatureVector& a, const FeatureVector& b, F f) {
-  auto ia = a.begin();
-  auto ib = b.begin();
-  while (ia != a.end() && ib != b.end()) {
-    if (ia->first == ib->first) {
-      f(ia->second, ib->second);
-      ++ia;
-      ++ib;
-    } else if (ia->first < ib->first) {
-      ++ia;
-    } else {
-      ++ib;
-    }
-  }
 }
 
 }  // namespace
@@ -248,41 +236,39 @@ int searchByBow(const Keyframe& a, const Keyframe& b, const FeatureMatcherConfig
 }
 
 std::vector<size_t> consistentRotations(const std::vector<float>& rotations) {
-  std::array<std::vector<size_t>, kHistogramBins> bins;
-  for (size_t i = 0; i < rotations.size(); ++i) {
-    float r = std::fmod(rotations[i], 360.0f);
-    if (r < 0.0f) r += 360.0f;
-    int bin = static_cast<int>(std::lround(r * kHistogramBins / 360.0f));
-    if (bin >= kHistogramBins) bin = 0;
-    bins[static_cast<size_t>(bin)].push_back(i);
+  if (rotations.empty()) return {};
+  auto wrap = [](float r) {
+    r = std::fmod(r, 360.0f);
+    return r < 0.0f ? r + 360.0f : r;
+  };
+  std::array<int, kRotationBins> histogram{};
+  auto binOf = [&](float r) { return static_cast<int>(wrap(r) / kRotationBinDeg) % kRotationBins; };
+  for (const float r : rotations) ++histogram[static_cast<size_t>(binOf(r))];
+  // The densest window of three adjacent bins (circular); the first one on ties.
+  auto window = [&](int b) {
+    return histogram[static_cast<size_t>((b + kRotationBins - 1) % kRotationBins)] +
+           histogram[static_cast<size_t>(b)] +
+           histogram[static_cast<size_t>((b + 1) % kRotationBins)];
+  };
+  int centre = 0;
+  for (int b = 1; b < kRotationBins; ++b) {
+    if (window(b) > window(centre)) centre = b;
   }
-  // The three largest bins (ORB-SLAM2's ComputeThreeMaxima).
-  std::array<int, 3> top{-1, -1, -1};
-  std::array<size_t, 3> size{0, 0, 0};
-  for (int b = 0; b < kHistogramBins; ++b) {
-    const size_t s = bins[static_cast<size_t>(b)].size();
-    if (s > size[0]) {
-      size = {s, size[0], size[1]};
-      top = {b, top[0], top[1]};
-    } else if (s > size[1]) {
-      size = {size[0], s, size[1]};
-      top = {top[0], b, top[1]};
-    } else if (s > size[2]) {
-      size[2] = s;
-      top[2] = b;
-    }
+  // The dominant change: circular mean of the changes in that window.
+  double sin_sum = 0.0, cos_sum = 0.0;
+  for (const float r : rotations) {
+    const int d = (binOf(r) - centre + kRotationBins) % kRotationBins;
+    if (d > 1 && d < kRotationBins - 1) continue;
+    const double a = static_cast<double>(r) * M_PI / 180.0;
+    sin_sum += std::sin(a);
+    cos_sum += std::cos(a);
   }
-  if (static_cast<double>(size[1]) < 0.1 * static_cast<double>(size[0]))
-    top[1] = top[2] = -1;
-  else if (static_cast<double>(size[2]) < 0.1 * static_cast<double>(size[0]))
-    top[2] = -1;
+  const float dominant = static_cast<float>(std::atan2(sin_sum, cos_sum) * 180.0 / M_PI);
   std::vector<size_t> keep;
-  for (const int b : top) {
-    if (b >= 0)
-      keep.insert(keep.end(), bins[static_cast<size_t>(b)].begin(),
-                  bins[static_cast<size_t>(b)].end());
+  for (size_t i = 0; i < rotations.size(); ++i) {
+    const float d = wrap(rotations[i] - dominant);
+    if (std::min(d, 360.0f - d) <= kRotationToleranceDeg) keep.push_back(i);
   }
-  std::sort(keep.begin(), keep.end());
   return keep;
 }
 

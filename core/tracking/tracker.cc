@@ -4,6 +4,7 @@
 #include <chrono>
 #include <set>
 #include <stdexcept>
+#include <unordered_set>
 #include <utility>
 
 #include <opencv2/calib3d.hpp>
@@ -12,6 +13,14 @@
 #include "core/tracking/feature_matcher.h"
 
 namespace cblox {
+namespace {
+
+// Relocalization's guided search windows (projectLandmark's th: radius th * 2.5-4 px times
+// the level scale), ORB-SLAM2's 10 px and 3 px windows.
+constexpr float kRelocalizationWideWindow = 3.0f;
+constexpr float kRelocalizationNarrowWindow = 1.0f;
+
+}  // namespace
 
 const char* trackingStateName(TrackingState state) {
   switch (state) {
@@ -505,7 +514,18 @@ bool Tracker::relocalize() {
       return T;
     }());
     optimizeCurrentPose();
-    if (discardOutliers(&current_) < config_.min_pose_inliers) continue;
+    int good = discardOutliers(&current_);
+    if (good < config_.min_pose_inliers) continue;
+    // ORB-SLAM2's guided search: too few PnP inliers to trust the pose are topped up with
+    // the candidate's other landmarks projected at it, first in a wide window, then (when
+    // close) in a narrow one; the candidate is accepted only with enough inliers.
+    for (const float window : {kRelocalizationWideWindow, kRelocalizationNarrowWindow}) {
+      if (good >= config_.min_local_map_inliers_after_relocalization) break;
+      if (searchKeyframeLandmarks(*keyframe, window) == 0) break;
+      optimizeCurrentPose();
+      good = discardOutliers(&current_);
+    }
+    if (good < config_.min_local_map_inliers_after_relocalization) continue;
     reference_keyframe_ = keyframe;
     last_relocalization_index_ = current_index_;
     ever_relocalized_ = true;
@@ -513,6 +533,21 @@ bool Tracker::relocalize() {
     return true;
   }
   return false;
+}
+
+int Tracker::searchKeyframeLandmarks(const Keyframe& keyframe, float th) {
+  std::unordered_set<const Landmark*> held;
+  for (const auto& m : current_.landmarks) held.insert(m.get());
+  std::vector<LandmarkProjection> projections;
+  for (Landmark* l : keyframe.landmarks()) {
+    if (l == nullptr || l->bad() || held.count(l) > 0) continue;
+    if (const auto p = projectLandmark(l, *current_.T_C_G, camera_, pyramid_)) {
+      projections.push_back(*p);
+    }
+  }
+  FeatureMatcherConfig matcher;
+  matcher.nn_ratio = 0.9f;
+  return searchLocalLandmarks(&current_, projections, th, matcher, pyramid_);
 }
 
 void Tracker::updateLastFramePose() {

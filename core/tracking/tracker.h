@@ -78,6 +78,9 @@ class Tracker {
   bool trackWithMotionModel();
   bool trackReferenceKeyframe();
   bool relocalize();
+  /// Matches the keyframe's landmarks not yet matched in the current frame, projected at
+  /// its pose, in a window `th` (see searchLocalLandmarks). Returns the new matches.
+  int searchKeyframeLandmarks(const Keyframe& keyframe, float th);
   bool trackLocalMap(TrackingResult* result);
   int optimizeCurrentPose();
   void updateLocalMap();

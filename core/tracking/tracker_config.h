@@ -31,7 +31,8 @@ struct TrackerConfig {
   float relocalized_search_radius = 5.0f;
   /// Matches needed: motion model / reference keyframe search (20 / 15), inliers after pose
   /// optimisation (10), inliers after tracking the local map (30; 50 within
-  /// max_frames_between_keyframes frames of a relocalization).
+  /// max_frames_between_keyframes frames of a relocalization, and a relocalization candidate
+  /// is accepted only when PnP plus a guided search of its landmarks reach those 50).
   int min_motion_model_matches = 20;
   int min_reference_matches = 15;
   int min_pose_inliers = 10;

@@ -161,6 +161,7 @@ int run(int argc, char** argv) {
   std::map<uint64_t, Transformationd> truth_by_frame;
   std::vector<double> frame_ms, track_ms;
   size_t lost = 0;
+  TrackingState last_state = TrackingState::kNotInitialized;
   const double cpu_start = cpuSeconds();
   const auto start = Clock::now();
   uint64_t last_ba = 0;
@@ -179,6 +180,13 @@ int run(int argc, char** argv) {
     frame_ms.push_back(
         std::chrono::duration<double, std::milli>(Clock::now() - frame_start).count());
     track_ms.push_back(r.time_ms);
+    if (r.state != last_state || r.relocalized) {
+      // Every change of state, with the tracker's reason, so a lost stretch can be found.
+      std::fprintf(stderr, "\nframe %zu: %s%s%s%s\n", i, trackingStateName(r.state),
+                   r.relocalized ? " (relocalized)" : "", r.reason.empty() ? "" : ": ",
+                   r.reason.c_str());
+      last_state = r.state;
+    }
     if (r.state != TrackingState::kOk) {
       ++lost;
     } else {

@@ -24,6 +24,8 @@ std::string LocalMapperConfig::validate() const {
     error << "redundant_ratio must be in (0, 1], got " << redundant_ratio;
   } else if (std::string e = cblox::validate(bundle_adjustment); !e.empty()) {
     error << "bundle_adjustment: " << e;
+  } else if (std::string t = triangulation.validate(); !t.empty()) {
+    error << "triangulation: " << t;
   }
   return error.str();
 }
@@ -70,6 +72,7 @@ bool LocalMapper::processOne() {
   if (keyframe == nullptr) return false;
   processNewKeyframe(keyframe);
   cullRecentLandmarks(keyframe);
+  if (config_.create_new_landmarks) triangulateNewLandmarks(keyframe);
   if (!queue_.moreWorkOrStopping()) fuseWithNeighbours(keyframe);
   abort_ba_ = false;
   if (!queue_.moreWorkOrStopping()) {
@@ -120,6 +123,20 @@ void LocalMapper::cullRecentLandmarks(Keyframe* keyframe) {
   }
   std::lock_guard<std::mutex> stats_lock(stats_mutex_);
   stats_.landmarks_culled += culled;
+}
+
+void LocalMapper::triangulateNewLandmarks(Keyframe* keyframe) {
+  // A waiting keyframe stops the neighbour loop early (ORB-SLAM2's CheckNewKeyFrames).
+  std::vector<std::shared_ptr<Landmark>> created =
+      createNewLandmarks(map_, keyframe, camera_, pyramid_, config_.triangulation,
+                         [this] { return queue_.moreWorkOrStopping(); });
+  {
+    std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+    stats_.landmarks_triangulated += created.size();
+  }
+  // On probation like the tracker's new landmarks (ORB-SLAM2's mlpRecentAddedMapPoints).
+  recent_landmarks_.insert(recent_landmarks_.end(), std::make_move_iterator(created.begin()),
+                           std::make_move_iterator(created.end()));
 }
 
 void LocalMapper::fuseWithNeighbours(Keyframe* keyframe) {

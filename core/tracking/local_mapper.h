@@ -15,6 +15,7 @@
 #include "core/features/scale_pyramid.h"
 #include "core/optimization/bundle_adjustment.h"
 #include "core/tracking/keyframe_sink.h"
+#include "core/tracking/keyframe_triangulation.h"
 #include "core/tracking/keyframe_work_queue.h"
 #include "core/tracking/sparse_map.h"
 #include "core/tracking/tracking_camera.h"
@@ -43,6 +44,11 @@ struct LocalMapperConfig {
   /// keyframe's pose would no longer follow bundle adjustment.
   bool cull_keyframes = false;
   double redundant_ratio = 0.9;
+  /// New landmarks triangulated between each keyframe and its best covisible keyframes
+  /// (ORB-SLAM2's CreateNewMapPoints), judged by the recent-landmark culling above. Without
+  /// them only the tracker's close stereo features become landmarks.
+  bool create_new_landmarks = true;
+  KeyframeTriangulationConfig triangulation;
 
   std::string validate() const;
 };
@@ -54,6 +60,7 @@ using KeyframePoseBatch = std::vector<std::pair<KeyframeId, Transformationd>>;
 struct LocalMapperStats {
   uint64_t keyframes_processed = 0;
   uint64_t landmarks_culled = 0;
+  uint64_t landmarks_triangulated = 0;  ///< made by createNewLandmarks
   uint64_t landmarks_fused = 0;
   uint64_t keyframes_culled = 0;
   uint64_t bundle_adjustments = 0;
@@ -64,9 +71,10 @@ struct LocalMapperStats {
 
 /// ORB-SLAM2's local mapping for stereo / RGB-D: for every keyframe the tracker inserted,
 /// refresh its landmarks' descriptors and viewing ranges, cull recent landmarks that do not
-/// track well, fuse duplicate landmarks with the covisible keyframes, run a local bundle
-/// adjustment and (optionally) cull redundant keyframes, then hand the keyframe on (loop
-/// closing) and report the changed keyframe poses.
+/// track well, triangulate new landmarks with the covisible keyframes, fuse duplicate
+/// landmarks with them, run a local bundle adjustment and (optionally) cull redundant
+/// keyframes, then hand the keyframe on (loop closing) and report the changed keyframe
+/// poses.
 ///
 /// Threads: insertKeyframe / acceptsKeyframes / queuedKeyframes / interruptBundleAdjustment
 /// are called by the tracking thread; processOne() / run() by the local mapping thread (the
@@ -109,6 +117,7 @@ class LocalMapper : public KeyframeSink {
  private:
   void processNewKeyframe(Keyframe* keyframe);
   void cullRecentLandmarks(Keyframe* keyframe);
+  void triangulateNewLandmarks(Keyframe* keyframe);
   void fuseWithNeighbours(Keyframe* keyframe);
   void localBundleAdjustment(Keyframe* keyframe);
   void cullKeyframes(Keyframe* keyframe);

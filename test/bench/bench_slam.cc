@@ -235,7 +235,13 @@ int run(int argc, char** argv) {
     const double distance = (tq.translation() - tc.translation()).norm();
     const double angle = std::acos(
         std::clamp((tq.rotationMatrix().col(2)).dot(tc.rotationMatrix().col(2)), -1.0, 1.0));
-    if (distance > 2.0 || angle > M_PI / 3.0) ++false_loops;
+    const bool is_false = distance > 2.0 || angle > M_PI / 3.0;
+    if (is_false) ++false_loops;
+    std::printf(
+        "  loop: keyframe of frame %lu to keyframe of frame %lu: true centres %.2f m, "
+        "viewing directions %.1f deg apart%s\n",
+        static_cast<unsigned long>(q->frame_id), static_cast<unsigned long>(c->frame_id), distance,
+        angle * 180.0 / M_PI, is_false ? " (FALSE)" : "");
   }
   const Ate ate_online = ate(truth, online), ate_before = ate(truth, before_loop),
             ate_keyframes = ate(truth, keyframes_final);

@@ -106,7 +106,7 @@ int searchLocalLandmarks(Frame* frame, const std::vector<LandmarkProjection>& pr
       best.offer(hammingDistance(landmark->descriptor(), f.descriptors[i]), f.keypoints[i].octave,
                  static_cast<int>(i));
     }
-    if (best.index < 0 || best.distance > kOrbDistanceHigh) continue;
+    if (best.index < 0 || best.distance > config.max_distance) continue;
     if (best.level == best.second_level &&
         static_cast<float>(best.distance) > config.nn_ratio * static_cast<float>(best.second)) {
       continue;
@@ -159,7 +159,7 @@ int searchLastFrame(Frame* current, const Frame& last, float th, const TrackingC
       best.offer(hammingDistance(landmark->descriptor(), cf.descriptors[j]), cf.keypoints[j].octave,
                  static_cast<int>(j));
     }
-    if (best.index < 0 || best.distance > kOrbDistanceHigh) continue;
+    if (best.index < 0 || best.distance > config.max_distance) continue;
     const size_t j = static_cast<size_t>(best.index);
     current->landmarks[j] = landmark;
     current->outlier[j] = 0;

@@ -29,9 +29,13 @@ struct FeatureMatcherConfig {
   /// Best / second-best distance ratio a match must beat (ORB-SLAM2: 0.8 for projection
   /// search in tracking, 0.7 for BoW search, 0.6 for BoW in relocalization).
   float nn_ratio = 0.8f;
-  /// Keep only matches whose rotation change falls into the 3 most common bins of a 30-bin
-  /// histogram (ORB-SLAM2's orientation consistency check).
+  /// Keep only matches whose rotation change agrees with the dominant one
+  /// (consistentRotations; ORB-SLAM2's orientation consistency check).
   bool check_orientation = true;
+  /// Largest descriptor distance of a projection match (searchLocalLandmarks,
+  /// searchLastFrame): ORB-SLAM2's TH_HIGH (100) in tracking, TH_LOW (50) when verifying a
+  /// loop.
+  int max_distance = kOrbDistanceHigh;
 };
 
 /// Projects a landmark into a camera at T_C_G: empty when it is behind the camera, outside
@@ -46,7 +50,7 @@ std::optional<LandmarkProjection> projectLandmark(Landmark* landmark, const Tran
 /// Matches landmarks expected in `frame` (projections from projectLandmark at the frame's
 /// predicted pose) to its unmatched features within a window of radius
 /// th * (2.5 if view_cos > 0.998 else 4) * scale(level) around each projection, features
-/// of level [level - 1, level], descriptor distance <= kOrbDistanceHigh and the ratio
+/// of level [level - 1, level], descriptor distance <= config.max_distance and the ratio
 /// test (unless both best candidates share a level). Features already holding a landmark
 /// with observations are not re-matched. Returns the number of new matches (ORB-SLAM2's
 /// SearchByProjection for the local map). Needs the map's shared lock.
@@ -55,7 +59,7 @@ int searchLocalLandmarks(Frame* frame, const std::vector<LandmarkProjection>& pr
 
 /// Matches the landmarks of `last` (non-outlier matches) into `current`, whose predicted
 /// pose must be set: projections within th * scale(last octave) px, octave window chosen by
-/// the camera's forward/backward motion for stereo, distance <= kOrbDistanceHigh,
+/// the camera's forward/backward motion for stereo, distance <= config.max_distance,
 /// orientation check. Returns the number of matches (ORB-SLAM2's SearchByProjection with a
 /// motion model). Needs the map's shared lock.
 int searchLastFrame(Frame* current, const Frame& last, float th, const TrackingCamera& camera,

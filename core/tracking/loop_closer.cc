@@ -26,6 +26,9 @@ std::string LoopCloserConfig::validate() const {
     error << "min_bow_matches, min_ransac_inliers and min_projection_matches must be >= 3";
   } else if (ransac_iterations < 1) {
     error << "ransac_iterations must be >= 1, got " << ransac_iterations;
+  } else if (!(max_drift_m >= 0.0) || !(max_drift_ratio >= 0.0)) {
+    error << "max_drift_m and max_drift_ratio must be >= 0, got " << max_drift_m << " and "
+          << max_drift_ratio;
   } else if (essential_graph_min_weight < 1) {
     error << "essential_graph_min_weight must be >= 1, got " << essential_graph_min_weight;
   } else if (std::string e = cblox::validate(pose_graph); !e.empty()) {
@@ -157,6 +160,10 @@ std::vector<Keyframe*> LoopCloser::detect(Keyframe* keyframe) {
 }
 
 namespace {
+// Projection search window of the verification (searchLocalLandmarks' th: 2.5 * 2.5-4 px,
+// ORB-SLAM2's 10 px, times the level scale).
+constexpr float kLoopProjectionWindow = 2.5f;
+
 uint32_t nextRandom(uint32_t* state) {  // xorshift32
   uint32_t x = *state;
   x ^= x << 13;
@@ -165,6 +172,22 @@ uint32_t nextRandom(uint32_t* state) {  // xorshift32
   return *state = x;
 }
 }  // namespace
+
+bool LoopCloser::plausibleCorrection(const Keyframe& keyframe, const Keyframe& candidate,
+                                     const Transformationd& T_C_G) const {
+  // Path travelled from the candidate to the query along the keyframes in creation order.
+  double path_m = 0.0;
+  const Keyframe* previous = nullptr;
+  for (const Keyframe* k : map_->keyframes()) {
+    if (k->bad() || k->id < candidate.id || k->id > keyframe.id) continue;
+    if (previous != nullptr)
+      path_m += (k->T_G_C().translation() - previous->T_G_C().translation()).norm();
+    previous = k;
+  }
+  const double correction_m =
+      (T_C_G.inverse().translation() - keyframe.T_G_C().translation()).norm();
+  return correction_m <= config_.max_drift_m + config_.max_drift_ratio * path_m;
+}
 
 std::optional<LoopCloser::Verified> LoopCloser::verify(Keyframe* keyframe,
                                                        const std::vector<Keyframe*>& candidates) {
@@ -273,22 +296,42 @@ std::optional<LoopCloser::Verified> LoopCloser::verify(Keyframe* keyframe,
         }
       }
     }
+    // ORB-SLAM2's window (10 px times the level scale) and close descriptors (TH_LOW); the
+    // matches must then agree with one pose: a place that merely looks alike (a street
+    // crossing repeated every block) gathers projection matches but not inliers.
     FeatureMatcherConfig projection_matcher;
     projection_matcher.nn_ratio = 1.0f;
-    searchLocalLandmarks(&probe, projections, 10.0f, projection_matcher, pyramid_);
-    int total = 0;
+    projection_matcher.max_distance = kOrbDistanceLow;
+    searchLocalLandmarks(&probe, projections, kLoopProjectionWindow, projection_matcher, pyramid_);
+    std::vector<PoseObservation> all;
+    std::vector<size_t> all_index;
+    for (size_t i = 0; i < probe.size(); ++i) {
+      if (!probe.landmarks[i] || probe.landmarks[i]->bad()) continue;
+      PoseObservation o;
+      o.u = f.keypoints[i].u;
+      o.v = f.keypoints[i].v;
+      o.u_right = f.right_u[i];
+      o.inv_sigma2 = pyramid_.invSigma2(f.keypoints[i].octave);
+      o.p_G = probe.landmarks[i]->position();
+      all.push_back(o);
+      all_index.push_back(i);
+    }
+    if (static_cast<int>(all.size()) < config_.min_projection_matches) continue;
+    const PoseOptimizationResult checked = optimizePose(model, refined.T_C_G, all);
+    if (checked.num_inliers < config_.min_projection_matches) continue;
+    if (!plausibleCorrection(*keyframe, *candidate, checked.T_C_G)) {
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      ++stats_.loops_rejected_drift;
+      continue;
+    }
     Verified v;
     v.matches.assign(f.size(), nullptr);
-    for (size_t i = 0; i < probe.size(); ++i) {
-      if (probe.landmarks[i] && !probe.landmarks[i]->bad()) {
-        v.matches[i] = probe.landmarks[i].get();
-        ++total;
-      }
+    for (size_t k = 0; k < all_index.size(); ++k) {
+      if (checked.inlier[k]) v.matches[all_index[k]] = probe.landmarks[all_index[k]].get();
     }
-    if (total < config_.min_projection_matches) continue;
     v.candidate = candidate;
-    v.T_C_G = refined.T_C_G;
-    v.inliers = total;
+    v.T_C_G = checked.T_C_G;
+    v.inliers = checked.num_inliers;
     return v;
   }
   return std::nullopt;

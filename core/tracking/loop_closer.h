@@ -31,11 +31,20 @@ struct LoopCloserConfig {
   int consistency_threshold = 3;
   /// Geometric verification: BoW matches per candidate (20); RANSAC iterations of the
   /// 3D-3D alignment (300) and the inliers it needs (20); matches after projecting the
-  /// candidate's covisible landmarks at the verified pose (40).
+  /// candidate's covisible landmarks at the verified pose (10 px window, descriptor distance
+  /// <= 50) that remain inliers of a pose optimised on all of them (40).
   int min_bow_matches = 20;
   int ransac_iterations = 300;
   int min_ransac_inliers = 20;
   int min_projection_matches = 40;
+  /// Drift gate (not in ORB-SLAM2): a verified loop is rejected when it would move the query
+  /// keyframe by more than max_drift_m + max_drift_ratio * (path travelled along the
+  /// keyframes from the candidate to the query). Places that repeat exactly (a street
+  /// crossing every block, identical shelves) pass appearance and geometry checks with the
+  /// wrong place; stereo odometry drifts by a few percent of the path, never by the whole
+  /// distance between two look-alike places. Defaults 1 m and 0.1 (10 %).
+  double max_drift_m = 1.0;
+  double max_drift_ratio = 0.1;
   /// Essential graph: covisibility edges of at least this weight (100).
   int essential_graph_min_weight = 100;
   PoseGraphConfig pose_graph;
@@ -61,6 +70,9 @@ struct LoopCloserStats {
   uint64_t keyframes_checked = 0;
   uint64_t candidates_detected = 0;  ///< consistent candidates reaching verification
   uint64_t loops_rejected = 0;       ///< failed geometric verification
+  /// Candidates that passed appearance and geometry but failed the drift gate (counted
+  /// within loops_rejected when no other candidate of the keyframe passed).
+  uint64_t loops_rejected_drift = 0;
   uint64_t loops_closed = 0;
   uint64_t global_bundle_adjustments = 0;
   double last_correction_ms = 0.0;
@@ -108,6 +120,10 @@ class LoopCloser {
   };
   std::vector<Keyframe*> detect(Keyframe* keyframe);
   std::optional<Verified> verify(Keyframe* keyframe, const std::vector<Keyframe*>& candidates);
+  /// The drift gate (LoopCloserConfig::max_drift_m / max_drift_ratio) for moving `keyframe`
+  /// to the verified pose T_C_G. Needs the map's shared lock.
+  bool plausibleCorrection(const Keyframe& keyframe, const Keyframe& candidate,
+                           const Transformationd& T_C_G) const;
   void correct(Keyframe* keyframe, const Verified& loop);
   void globalBundleAdjustment(Keyframe* loop_keyframe);
 

@@ -259,9 +259,10 @@ int run(int argc, char** argv) {
   std::printf("  local BA: %zu runs, median %.1f ms, p95 %.1f ms\n", ba_ms.size(),
               percentile(ba_ms, 0.5), percentile(ba_ms, 0.95));
   std::printf(
-      "  loops: %zu closed (%zu false), %lu rejected after verification; correction "
-      "median %.1f ms; global BA %lu (last %.0f ms)\n",
+      "  loops: %zu closed (%zu false), %lu rejected after verification (%lu candidates by "
+      "the drift gate); correction median %.1f ms; global BA %lu (last %.0f ms)\n",
       loops.size(), false_loops, static_cast<unsigned long>(lc.loops_rejected),
+      static_cast<unsigned long>(lc.loops_rejected_drift),
       percentile(correction_ms, 0.5), static_cast<unsigned long>(lc.global_bundle_adjustments),
       lc.last_global_ba_ms);
   std::printf("  CPU: %.2f cores over %.1f s\n", cpu_s / wall_s, wall_s);
@@ -289,6 +290,7 @@ int run(int argc, char** argv) {
     json.num("local_ba_ms_p95", percentile(ba_ms, 0.95));
     json.count("loops", loops.size());
     json.count("false_loops", false_loops);
+    json.count("loops_rejected_drift", lc.loops_rejected_drift);
     json.num("loop_correction_ms_median", percentile(correction_ms, 0.5));
     json.num("global_ba_ms_last", lc.last_global_ba_ms);
     json.num("cpu_cores", cpu_s / wall_s);

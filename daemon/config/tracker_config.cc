@@ -137,7 +137,9 @@ void loadLocalMapping(const YAML::Node& node, LocalMapperConfig* m) {
                     {"fuse_second_neighbours", &m->fuse_second_neighbours},
                     {"fuse_radius", &m->fuse_radius},
                     {"cull_keyframes", &m->cull_keyframes},
-                    {"redundant_ratio", &m->redundant_ratio}},
+                    {"redundant_ratio", &m->redundant_ratio},
+                    {"create_new_landmarks", &m->create_new_landmarks},
+                    {"triangulation_neighbours", &m->triangulation.neighbours}},
                    {"bundle_adjustment"})) {
     return;
   }
@@ -157,6 +159,8 @@ void loadLoopClosing(const YAML::Node& node, SlamSystemConfig* slam) {
                     {"ransac_iterations", &l.ransac_iterations},
                     {"min_ransac_inliers", &l.min_ransac_inliers},
                     {"min_projection_matches", &l.min_projection_matches},
+                    {"max_drift_m", &l.max_drift_m},
+                    {"max_drift_ratio", &l.max_drift_ratio},
                     {"essential_graph_min_weight", &l.essential_graph_min_weight},
                     {"global_bundle_adjustment", &l.global_bundle_adjustment}},
                    {"seed", "pose_graph", "global_ba"})) {

@@ -96,8 +96,14 @@ void SimRenderer::renderView(const Transformationd& T_G_C, const PinholeIntrinsi
   });
 }
 
-// Cloned for x86-64-v3 (AVX2, FMA) with a baseline fallback, chosen at load time.
-[[gnu::target_clones("arch=x86-64-v3", "default")]] void SimRenderer::renderRows(
+// Cloned for x86-64-v3 (AVX2, FMA) with a baseline fallback, chosen at load time. Not under
+// ThreadSanitizer: the clone's resolver runs before TSan's runtime is up and crashes at load.
+#if defined(__x86_64__) && !defined(__SANITIZE_THREAD__)
+#define CBLOX_RENDER_CLONES [[gnu::target_clones("arch=x86-64-v3", "default")]]
+#else
+#define CBLOX_RENDER_CLONES
+#endif
+CBLOX_RENDER_CLONES void SimRenderer::renderRows(
     const Transformationd& T_G_C, const PinholeIntrinsics& intrinsics, GrayImage* gray,
     ColorImage* color, DepthImage* depth, int thread_id, int num_threads) const {
   const int width = intrinsics.width, height = intrinsics.height;

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/tracking/feature_measurement.h"
 #include "core/tracking/landmark_fusion.h"
 
 namespace cblox {
@@ -250,10 +251,7 @@ void LocalMapper::localBundleAdjustment(Keyframe* keyframe) {
         BaObservation o;
         o.keyframe = it->second;
         o.landmark = static_cast<int>(li);
-        o.u = f.keypoints[index].u;
-        o.v = f.keypoints[index].v;
-        o.u_right = f.right_u[index];
-        o.inv_sigma2 = pyramid_.invSigma2(f.keypoints[index].octave);
+        static_cast<StereoMeasurement&>(o) = featureMeasurement(f, index, pyramid_);
         problem.observations.push_back(o);
         observation_of.emplace_back(k, index);
       }

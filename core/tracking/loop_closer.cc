@@ -11,6 +11,7 @@
 
 #include "core/optimization/pose_optimizer.h"
 #include "core/tracking/feature_matcher.h"
+#include "core/tracking/feature_measurement.h"
 #include "core/tracking/frame.h"
 #include "core/tracking/landmark_fusion.h"
 
@@ -266,13 +267,7 @@ std::optional<LoopCloser::Verified> LoopCloser::verify(Keyframe* keyframe,
     for (int k = 0; k < n; ++k) {
       if (!best_flags[static_cast<size_t>(k)]) continue;
       const size_t i = index[static_cast<size_t>(k)];
-      PoseObservation o;
-      o.u = f.keypoints[i].u;
-      o.v = f.keypoints[i].v;
-      o.u_right = f.right_u[i];
-      o.inv_sigma2 = pyramid_.invSigma2(f.keypoints[i].octave);
-      o.p_G = p_G[static_cast<size_t>(k)];
-      observations.push_back(o);
+      observations.push_back(poseObservation(f, i, pyramid_, p_G[static_cast<size_t>(k)]));
       observed.push_back(i);
     }
     const PoseOptimizationResult refined = optimizePose(model, best_T_C_G, observations);
@@ -307,13 +302,7 @@ std::optional<LoopCloser::Verified> LoopCloser::verify(Keyframe* keyframe,
     std::vector<size_t> all_index;
     for (size_t i = 0; i < probe.size(); ++i) {
       if (!probe.landmarks[i] || probe.landmarks[i]->bad()) continue;
-      PoseObservation o;
-      o.u = f.keypoints[i].u;
-      o.v = f.keypoints[i].v;
-      o.u_right = f.right_u[i];
-      o.inv_sigma2 = pyramid_.invSigma2(f.keypoints[i].octave);
-      o.p_G = probe.landmarks[i]->position();
-      all.push_back(o);
+      all.push_back(poseObservation(f, i, pyramid_, probe.landmarks[i]->position()));
       all_index.push_back(i);
     }
     if (static_cast<int>(all.size()) < config_.min_projection_matches) continue;
@@ -517,10 +506,7 @@ void LoopCloser::globalBundleAdjustment(Keyframe* loop_keyframe) {
         BaObservation o;
         o.keyframe = it->second;
         o.landmark = li;
-        o.u = f.keypoints[index].u;
-        o.v = f.keypoints[index].v;
-        o.u_right = f.right_u[index];
-        o.inv_sigma2 = pyramid_.invSigma2(f.keypoints[index].octave);
+        static_cast<StereoMeasurement&>(o) = featureMeasurement(f, index, pyramid_);
         problem.observations.push_back(o);
         any = true;
       }

@@ -11,6 +11,7 @@
 
 #include "core/optimization/pose_optimizer.h"
 #include "core/tracking/feature_matcher.h"
+#include "core/tracking/feature_measurement.h"
 
 namespace cblox {
 namespace {
@@ -185,13 +186,7 @@ int Tracker::optimizeCurrentPose() {
   for (size_t i = 0; i < current_.size(); ++i) {
     const std::shared_ptr<Landmark>& landmark = current_.landmarks[i];
     if (!landmark) continue;
-    PoseObservation o;
-    o.u = f.keypoints[i].u;
-    o.v = f.keypoints[i].v;
-    o.u_right = f.right_u[i];
-    o.inv_sigma2 = pyramid_.invSigma2(f.keypoints[i].octave);
-    o.p_G = landmark->position();
-    observations.push_back(o);
+    observations.push_back(poseObservation(f, i, pyramid_, landmark->position()));
     index.push_back(i);
   }
   if (observations.size() < 3) return 0;

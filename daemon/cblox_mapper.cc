@@ -371,12 +371,7 @@ int run(const Args& args) {
   MapperNode node(config, &lcm, &mapper);
   node.subscribe();
 
-  const auto status_period = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(config.status_period_s));
-  const auto progress_period = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(config.progress_period_s));
   const Clock::time_point start = Clock::now();
-  Clock::time_point next_status = start, next_progress = start + progress_period;
   uint64_t last_integrated = 0;
   Clock::time_point last_progress = start;
   auto progress = [&](const MapperStatus& s, const char* prefix) {
@@ -396,25 +391,16 @@ int run(const Args& args) {
     std::fflush(stdout);
   };
 
-  int exit_code = 0;
-  while (!g_stop_requested) {
-    if (lcm.handleTimeout(50) < 0 && !g_stop_requested) {
-      std::fprintf(stderr, "cblox-mapper: LCM receive failed\n");
-      exit_code = 1;
-      break;
-    }
-    const Clock::time_point now = Clock::now();
-    if (now >= next_status) {
-      const MapperStatus s = mapper.status();
-      node.publishStatus(s);
-      node.publishHeartbeat(s, "running");
-      next_status = now + status_period;
-    }
-    if (!args.quiet && now >= next_progress) {
-      progress(mapper.status(), "");
-      next_progress = now + progress_period;
-    }
+  std::vector<PeriodicTask> tasks{{config.status_period_s, 0.0, [&] {
+                                     const MapperStatus s = mapper.status();
+                                     node.publishStatus(s);
+                                     node.publishHeartbeat(s, "running");
+                                   }}};
+  if (!args.quiet) {
+    tasks.push_back({config.progress_period_s, config.progress_period_s,
+                     [&] { progress(mapper.status(), ""); }});
   }
+  const int exit_code = serveUntilStopped(lcm, "cblox-mapper", tasks);
   mapper.stop();  // finishes the frame in hand and the export in hand
   const MapperStatus s = mapper.status();
   node.publishStatus(s);

@@ -323,12 +323,7 @@ int run(const Args& args) {
   lcm_node.subscribe(&node);
   node.start();
 
-  const auto status_period = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(config.status_period_s));
-  const auto progress_period = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(config.progress_period_s));
   const Clock::time_point start = Clock::now();
-  Clock::time_point next_status = start, next_progress = start + progress_period;
   uint64_t last_processed = 0;
   Clock::time_point last_progress = start;
   auto progress = [&](const TrackerStatus& s, const char* prefix) {
@@ -351,24 +346,15 @@ int run(const Args& args) {
     std::fflush(stdout);
   };
 
-  int exit_code = 0;
-  while (!g_stop_requested) {
-    if (lcm.handleTimeout(50) < 0 && !g_stop_requested) {
-      std::fprintf(stderr, "cblox-tracker: LCM receive failed\n");
-      exit_code = 1;
-      break;
-    }
-    const Clock::time_point now = Clock::now();
-    if (now >= next_status) {
-      const TrackerStatus s = node.status();
-      lcm_node.publishHeartbeat(s, s.state);
-      next_status = now + status_period;
-    }
-    if (!args.quiet && now >= next_progress) {
-      progress(node.status(), "");
-      next_progress = now + progress_period;
-    }
+  std::vector<PeriodicTask> tasks{{config.status_period_s, 0.0, [&] {
+                                     const TrackerStatus s = node.status();
+                                     lcm_node.publishHeartbeat(s, s.state);
+                                   }}};
+  if (!args.quiet) {
+    tasks.push_back(
+        {config.progress_period_s, config.progress_period_s, [&] { progress(node.status(), ""); }});
   }
+  const int exit_code = serveUntilStopped(lcm, "cblox-tracker", tasks);
   node.stop();  // finishes the frame in hand, then stops local mapping and loop closing
   const TrackerStatus s = node.status();
   lcm_node.publishHeartbeat(s, "stopped");

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <exception>
+#include <functional>
+#include <vector>
 
 #include "daemon/config/yaml_config.h"
 
@@ -45,6 +47,42 @@ int runProcess(const char* name, Body&& body) {
     std::fprintf(stderr, "%s: error: %s\n", name, e.what());
     return 1;
   }
+}
+
+/// A task of serveUntilStopped: run every period_s seconds, the first time first_after_s
+/// seconds after the loop starts.
+struct PeriodicTask {
+  double period_s = 1.0;
+  double first_after_s = 0.0;
+  std::function<void()> run;
+};
+
+/// The daemons' main loop: handles `lcm`'s messages (waiting at most 50 ms at a time) until
+/// g_stop_requested, and runs each task when it is due. Returns 0 after a stop request, 1
+/// when receiving fails (one line on stderr naming the process). Lcm: lcm::LCM or anything
+/// with its handleTimeout(int ms). Call from the process's main thread.
+template <typename Lcm>
+int serveUntilStopped(Lcm& lcm, const char* name, const std::vector<PeriodicTask>& tasks) {
+  using Clock = std::chrono::steady_clock;
+  const auto after = [](double s) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  };
+  const Clock::time_point start = Clock::now();
+  std::vector<Clock::time_point> next;
+  for (const PeriodicTask& task : tasks) next.push_back(start + after(task.first_after_s));
+  while (!g_stop_requested) {
+    if (lcm.handleTimeout(50) < 0 && !g_stop_requested) {
+      std::fprintf(stderr, "%s: LCM receive failed\n", name);
+      return 1;
+    }
+    const Clock::time_point now = Clock::now();
+    for (size_t i = 0; i < tasks.size(); ++i) {
+      if (now < next[i]) continue;
+      tasks[i].run();
+      next[i] = now + after(tasks[i].period_s);
+    }
+  }
+  return 0;
 }
 
 }  // namespace cblox

@@ -25,6 +25,8 @@ std::string SubmapFusionConfig::validate() const {
   } else if (!std::isfinite(max_weight) || max_weight < min_weight) {
     error << "max_weight must be finite and >= min_weight (" << min_weight << "), got "
           << max_weight;
+  } else if (!(min_sample_coverage > 0.0f && min_sample_coverage <= 1.0f)) {
+    error << "min_sample_coverage must be in (0, 1], got " << min_sample_coverage;
   } else if (num_threads < 1 || num_threads > 64) {
     error << "num_threads must be in [1, 64], got " << num_threads;
   }
@@ -37,9 +39,10 @@ namespace {
 // centre at q = i), as documented at fuseLayers. One instance per thread.
 class SourceSampler {
  public:
-  SourceSampler(const TsdfLayer& layer, float min_weight)
+  SourceSampler(const TsdfLayer& layer, float min_weight, float min_coverage)
       : layer_(layer),
         min_weight_(min_weight),
+        min_coverage_(min_coverage),
         log2_(layer.voxelsPerSideLog2()),
         mask_(layer.voxelsPerSide() - 1) {}
 
@@ -56,35 +59,46 @@ class SourceSampler {
     const BlockIndex block_index(base.x() >> log2_, base.y() >> log2_, base.z() >> log2_);
     const GridIndex local(base.x() & mask_, base.y() & mask_, base.z() & mask_);
     const Block* base_block = block(block_index);
-    if (base_block == nullptr) return false;  // the base corner (c > 0) is always needed
-    const bool one_block = local.x() < mask_ && local.y() < mask_ && local.z() < mask_;
+    const bool one_block =
+        base_block != nullptr && local.x() < mask_ && local.y() < mask_ && local.z() < mask_;
 
-    float sum_distance = 0.0f, sum_weight = 0.0f;
+    float sum_distance = 0.0f, sum_weight = 0.0f, coverage = 0.0f;
     Eigen::Vector3f sum_color = Eigen::Vector3f::Zero();
+    bool complete = true;
     for (int corner = 0; corner < 8; ++corner) {
       const int ox = corner & 1, oy = (corner >> 1) & 1, oz = (corner >> 2) & 1;
       const float cx = ox ? f.x() : 1.0f - f.x();
       const float cy = oy ? f.y() : 1.0f - f.y();
       const float cz = oz ? f.z() : 1.0f - f.z();
       if (cx == 0.0f || cy == 0.0f || cz == 0.0f) continue;  // not needed, not read
-      const TsdfVoxel* voxel;
+      const TsdfVoxel* voxel = nullptr;
       if (one_block) {
         voxel = &base_block->voxel(GridIndex(local.x() + ox, local.y() + oy, local.z() + oz));
       } else {
         const GlobalVoxelIndex g(base.x() + ox, base.y() + oy, base.z() + oz);
         const Block* b = block(BlockIndex(g.x() >> log2_, g.y() >> log2_, g.z() >> log2_));
-        if (b == nullptr) return false;
-        voxel = &b->voxel(GridIndex(g.x() & mask_, g.y() & mask_, g.z() & mask_));
+        if (b != nullptr) voxel = &b->voxel(GridIndex(g.x() & mask_, g.y() & mask_, g.z() & mask_));
       }
-      if (!(voxel->weight >= min_weight_)) return false;
+      if (voxel == nullptr || !(voxel->weight >= min_weight_)) {
+        complete = false;
+        continue;
+      }
       const float c = cx * cy * cz;
+      coverage += c;
       sum_distance += c * voxel->distance;
       sum_weight += c * voxel->weight;
       sum_color += c * Eigen::Vector3f(voxel->color.r, voxel->color.g, voxel->color.b);
     }
-    *distance = sum_distance;
+    if (complete) {
+      *distance = sum_distance;
+      *weight = sum_weight;
+      *color = sum_color;
+      return true;
+    }
+    if (!(coverage >= min_coverage_) || coverage <= 0.0f) return false;
+    *distance = sum_distance / coverage;
     *weight = sum_weight;
-    *color = sum_color;
+    *color = sum_color / coverage;
     return true;
   }
 
@@ -101,6 +115,7 @@ class SourceSampler {
 
   const TsdfLayer& layer_;
   float min_weight_;
+  float min_coverage_;
   int log2_;
   int mask_;
   bool cache_valid_ = false;
@@ -155,7 +170,9 @@ SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T
     Eigen::Vector3d hi = -lo;
     for (int corner = 0; corner < 8; ++corner) {
       const Eigen::Vector3d offset(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-      const Eigen::Vector3d p_S = (q_lo + offset * n_s + Eigen::Vector3d::Constant(0.5)) * s;
+      // From the centre of the voxel before the block's first (rim samples there can reach
+      // the block) to the first voxel centre of the +1,+1,+1 neighbour.
+      const Eigen::Vector3d p_S = (q_lo + offset * (n_s + 1) - Eigen::Vector3d::Constant(0.5)) * s;
       const Eigen::Vector3d p_T = T_T_S * p_S;
       lo = lo.cwiseMin(p_T);
       hi = hi.cwiseMax(p_T);
@@ -197,7 +214,7 @@ SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T
   std::atomic<size_t> next_block{0};
   const int n_t = target->voxelsPerSide();
   runThreadTeam(config.num_threads, [&](int thread_id) {
-    SourceSampler sampler(source, config.min_weight);
+    SourceSampler sampler(source, config.min_weight, config.min_sample_coverage);
     size_t fused = 0;
     for (;;) {
       const size_t b = next_block.fetch_add(1, std::memory_order_relaxed);

@@ -21,6 +21,11 @@ struct SubmapFusionConfig {
   /// Source voxels with a lower weight count as unobserved (a sample needing one is
   /// skipped). Finite and > 0, so never-observed voxels (weight 0) are never used.
   float min_weight = 1e-4f;
+  /// At the rim of the observed region some of a sample's 8 corners are unobserved. The
+  /// sample still counts when the observed corners carry at least this fraction of the
+  /// trilinear weight (see fuseLayers); 1 = every needed corner must be observed (pure
+  /// trilinear, loses a one-voxel rim of the source's observed region). In (0, 1].
+  float min_sample_coverage = 0.5f;
   /// Fuse colours (weighted like the distance). Off: target colours are left as they are.
   bool use_color = true;
   /// Worker threads (the calling thread is one of them), in [1, 64]. The result does not
@@ -54,17 +59,22 @@ struct SubmapFusionStats {
 ///
 /// Exact behaviour:
 /// - Region: for every source block holding a voxel with weight >= min_weight, the cube
-///   spanned from its first voxel centre to the first voxel centre of its +1,+1,+1
-///   neighbour (the cells whose lower corner is one of its voxels) is mapped into T; every
+///   spanned from the centre of voxel (first - 1,1,1) to the first voxel centre of its
+///   +1,+1,+1 neighbour (every cell with a corner in the block) is mapped into T; every
 ///   target block overlapping the axis-aligned bounding box of that cube is allocated if
 ///   missing and each of its voxels is sampled once.
 /// - Sample: the target voxel centre p_T goes to p_S = T_T_S^-1 * p_T; with q = p_S / s - 1/2
 ///   (s: source voxel size; voxel i has its centre at q = i), base = floor(q), f = q - base,
 ///   the 8 corners base + o, o in {0,1}^3, have trilinear coefficients
 ///   c_o = prod_axes (o ? f : 1 - f). A corner with c_o == 0 is neither needed nor read
-///   (so a voxel-aligned point reads one voxel); every other corner must exist with weight
-///   >= min_weight, else the sample fails and the target voxel is untouched. The sample is
+///   (so a voxel-aligned point reads one voxel); every other corner is observed when it
+///   exists with weight >= min_weight. If all needed corners are observed the sample is
 ///   d_S = sum c_o d_o, w_S = sum c_o w_o, colour_S = sum c_o colour_o (unrounded).
+///   Otherwise, with the coverage C = sum of c_o over the observed corners: if
+///   C >= min_sample_coverage the sample is d_S = sum_obs c_o d_o / C,
+///   colour_S = sum_obs c_o colour_o / C and w_S = sum_obs c_o w_o (the weight is not
+///   renormalised, so rim samples count less); else the sample fails and the target voxel
+///   is untouched.
 ///   q = A * g + c (g: target global voxel index, A = R_S_T * t / s, t: target voxel size),
 ///   evaluated in double at each target block's first voxel and stepped in float from there,
 ///   so an identity transform (or a translation by whole voxels) between equal grids maps

@@ -10,8 +10,8 @@ namespace {
 bool present(const YAML::Node& node, const char* key) { return !isAbsent(node) && node[key]; }
 
 // The shared loaders start from the components' defaults; the mapper's defaults differ for a
-// few keys (4 cm voxels, 12 cm truncation, 5 m rays, one integration thread, 80 ms budget): keys absent
-// from the file keep the mapper's values.
+// few keys (4 cm voxels, 12 cm truncation, 5 m rays, one integration thread, 80 ms budget): keys
+// absent from the file keep the mapper's values.
 LayerConfig loadMapperLayer(const YAML::Node& node, const LayerConfig& defaults) {
   LayerConfig layer = loadLayerConfig(node, "layer");
   if (!present(node, "voxel_size")) layer.voxel_size = defaults.voxel_size;
@@ -36,11 +36,13 @@ IntegratorConfig loadMapperIntegrator(const YAML::Node& node, float voxel_size,
 
 SubmapFusionConfig loadFusion(const YAML::Node& node) {
   const std::string path = "fusion";
-  requireKnownKeys(node, path, {"max_weight", "min_weight", "use_color", "num_threads"});
+  requireKnownKeys(node, path,
+                   {"max_weight", "min_weight", "min_sample_coverage", "use_color", "num_threads"});
   SubmapFusionConfig fusion;
   if (!isAbsent(node)) {
     readOptional(node, path, "max_weight", &fusion.max_weight);
     readOptional(node, path, "min_weight", &fusion.min_weight);
+    readOptional(node, path, "min_sample_coverage", &fusion.min_sample_coverage);
     readOptional(node, path, "use_color", &fusion.use_color);
     readOptional(node, path, "num_threads", &fusion.num_threads);
   }

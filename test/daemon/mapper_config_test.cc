@@ -43,6 +43,7 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.mesh.num_threads, b.mesh.num_threads);
   EXPECT_EQ(a.fusion.max_weight, b.fusion.max_weight);
   EXPECT_EQ(a.fusion.min_weight, b.fusion.min_weight);
+  EXPECT_EQ(a.fusion.min_sample_coverage, b.fusion.min_sample_coverage);
   EXPECT_EQ(a.fusion.use_color, b.fusion.use_color);
   EXPECT_EQ(a.fusion.num_threads, b.fusion.num_threads);
   EXPECT_EQ(a.creation.max_keyframes_per_subvolume, b.creation.max_keyframes_per_subvolume);

@@ -1,0 +1,142 @@
+#include "core/maintenance/fusion_scheduler.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace cblox {
+
+std::string FusionSchedulerConfig::validate() const {
+  if (const std::string e = candidates.validate(); !e.empty()) return "candidates." + e;
+  std::ostringstream error;
+  if (!(q_min > 0.0) || !std::isfinite(q_min)) {
+    error << "q_min must be finite and > 0, got " << q_min;
+  } else if (max_pairs_per_request < 1) {
+    error << "max_pairs_per_request must be >= 1, got " << max_pairs_per_request;
+  } else if (!(reply_timeout_s > 0.0) || !std::isfinite(reply_timeout_s)) {
+    error << "reply_timeout_s must be finite and > 0, got " << reply_timeout_s;
+  } else if (!(retry_after_s >= 0.0) || !std::isfinite(retry_after_s)) {
+    error << "retry_after_s must be finite and >= 0, got " << retry_after_s;
+  }
+  return error.str();
+}
+
+FusionScheduler::FusionScheduler(const FusionSchedulerConfig& config) : config_(config) {
+  if (const std::string e = config_.validate(); !e.empty()) {
+    throw std::invalid_argument("FusionSchedulerConfig: " + e);
+  }
+}
+
+void FusionScheduler::addSubvolume(int64_t subvolume, int64_t anchor_keyframe) {
+  anchors_[subvolume] = anchor_keyframe;
+  graph_.addSubvolume(subvolume);
+}
+
+bool FusionScheduler::addKeyframeLandmarks(int64_t subvolume,
+                                           std::span<const uint64_t> landmark_ids) {
+  if (!anchors_.contains(subvolume)) return false;
+  graph_.addLandmarks(subvolume, landmark_ids);
+  return true;
+}
+
+void FusionScheduler::removeSubvolume(int64_t subvolume) {
+  anchors_.erase(subvolume);
+  graph_.removeSubvolume(subvolume);
+}
+
+std::optional<FusionCovarianceRequest> FusionScheduler::nextRequest(int64_t active_subvolume,
+                                                                    double now_s) {
+  if (in_flight_ && now_s - in_flight_->sent_s >= config_.reply_timeout_s) {
+    ++stats_.requests_timed_out;
+    in_flight_.reset();
+  }
+  if (!config_.enabled || in_flight_) return std::nullopt;
+
+  FusionCovarianceRequest request;
+  absl::flat_hash_set<int64_t> used;
+  for (const CovisibilityCandidate& c : graph_.candidates(config_.candidates)) {
+    if (static_cast<int>(request.pairs.size()) >= config_.max_pairs_per_request) break;
+    const int64_t older = std::min(c.a, c.b), newer = std::max(c.a, c.b);
+    if (older == active_subvolume || newer == active_subvolume) continue;
+    if (fusing_.contains(older) || fusing_.contains(newer)) continue;
+    if (used.contains(older) || used.contains(newer)) continue;
+    const PairKey key{older, newer};
+    if (const auto it = retry_at_.find(key); it != retry_at_.end() && now_s < it->second) {
+      continue;
+    }
+    FusionPair pair;
+    pair.older = older;
+    pair.newer = newer;
+    pair.older_keyframe = anchors_.at(older);
+    pair.newer_keyframe = anchors_.at(newer);
+    pair.shared_landmarks = c.shared;
+    request.pairs.push_back(pair);
+    used.insert(older);
+    used.insert(newer);
+    if (proposed_.insert(key).second) ++stats_.candidates;
+  }
+  if (request.pairs.empty()) return std::nullopt;
+  request.request_id = next_request_id_++;
+  stats_.requested += request.pairs.size();
+  in_flight_ = InFlight{request, now_s};
+  return request;
+}
+
+std::vector<FusionPair> FusionScheduler::onReply(int64_t request_id,
+                                                 std::span<const FusionCovarianceAnswer> answers,
+                                                 double now_s) {
+  std::vector<FusionPair> accepted;
+  if (!in_flight_ || in_flight_->request.request_id != request_id) {
+    ++stats_.replies_ignored;
+    return accepted;
+  }
+  const std::vector<FusionPair> pairs = std::move(in_flight_->request.pairs);
+  in_flight_.reset();
+  const bool sizes_match = answers.size() == pairs.size();
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    const FusionPair& pair = pairs[k];
+    const PairKey key{pair.older, pair.newer};
+    if (!sizes_match || !answers[k].ok) {
+      ++stats_.covariance_errors;
+      retry_at_[key] = now_s + config_.retry_after_s;
+      continue;
+    }
+    if (!(answers[k].q >= config_.q_min)) {
+      ++stats_.rejected_by_q;
+      retry_at_[key] = now_s + config_.retry_after_s;
+      continue;
+    }
+    // Removed or taken by another fusion since the request: not fused, not a rejection.
+    if (!anchors_.contains(pair.older) || !anchors_.contains(pair.newer) ||
+        fusing_.contains(pair.older) || fusing_.contains(pair.newer)) {
+      continue;
+    }
+    retry_at_.erase(key);
+    fusing_.insert(pair.older);
+    fusing_.insert(pair.newer);
+    ++fusing_pairs_;
+    ++stats_.accepted;
+    accepted.push_back(pair);
+  }
+  return accepted;
+}
+
+void FusionScheduler::onFused(const FusionPair& pair) {
+  if (fusing_.erase(pair.older) + fusing_.erase(pair.newer) > 0 && fusing_pairs_ > 0) {
+    --fusing_pairs_;
+  }
+  graph_.merge(pair.older, pair.newer);
+  anchors_.erase(pair.newer);
+  ++stats_.fused;
+}
+
+void FusionScheduler::onFusionFailed(const FusionPair& pair, double now_s) {
+  if (fusing_.erase(pair.older) + fusing_.erase(pair.newer) > 0 && fusing_pairs_ > 0) {
+    --fusing_pairs_;
+  }
+  retry_at_[PairKey{pair.older, pair.newer}] = now_s + config_.retry_after_s;
+  ++stats_.fusions_failed;
+}
+
+}  // namespace cblox

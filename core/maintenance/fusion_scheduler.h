@@ -1,0 +1,153 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <absl/container/flat_hash_map.h>
+#include <absl/container/flat_hash_set.h>
+
+#include "core/maintenance/covisibility_graph.h"
+
+namespace cblox {
+
+/// Settings of the map maintenance's fusion decisions (FusionScheduler).
+struct FusionSchedulerConfig {
+  /// Off: no candidate is ever proposed (the graph is still kept).
+  bool enabled = true;
+  /// Which covisibility edges are candidates.
+  CovisibilityGraphConfig candidates;
+  /// A pair is fused when q = 1 / ||Sigma_{i|j}||_2 >= q_min. Units: 1/m^2 or 1/rad^2
+  /// (the largest eigenvalue of the 6x6 conditional covariance, whose tangent mixes metres
+  /// and radians): 1e4 means no direction is less certain than 1 cm or 0.01 rad (0.57 deg)
+  /// of standard deviation. > 0.
+  double q_min = 1e4;
+  /// At most this many pairs per covariance request (>= 1).
+  int max_pairs_per_request = 8;
+  /// A request without a reply is abandoned after this long, seconds (> 0); its pairs may be
+  /// requested again.
+  double reply_timeout_s = 2.0;
+  /// A pair rejected (q too small, or an error) is not requested again for this long,
+  /// seconds (>= 0): BA may make it certain later, but not within a few keyframes.
+  double retry_after_s = 5.0;
+
+  /// Empty when valid, else a message naming the first bad field. Thread-safe.
+  std::string validate() const;
+};
+
+/// A pair chosen for fusion: `newer` (the later-created subvolume) is to be fused into
+/// `older`. The covariance asked for is Sigma_{newer_keyframe | older_keyframe}: the
+/// uncertainty of the newer subvolume's anchor keyframe with the older one's held fixed, i.e.
+/// of the relative pose the fusion bakes into the voxels.
+struct FusionPair {
+  int64_t older = 0;
+  int64_t newer = 0;
+  int64_t older_keyframe = 0;
+  int64_t newer_keyframe = 0;
+  int shared_landmarks = 0;
+};
+
+/// One covariance request to send: its id and pairs (in reply order).
+struct FusionCovarianceRequest {
+  int64_t request_id = 0;
+  std::vector<FusionPair> pairs;
+};
+
+/// The answer for one requested pair (from the covariance service).
+struct FusionCovarianceAnswer {
+  bool ok = false;
+  std::string error;  ///< why not, when !ok
+  double q = 0.0;     ///< 1 / ||Sigma_{i|j}||_2 when ok
+};
+
+/// Counters since construction. Exact.
+struct FusionSchedulerStats {
+  uint64_t candidates = 0;          ///< distinct candidate pairs ever proposed in a request
+  uint64_t requested = 0;           ///< pairs sent in covariance requests (repeats included)
+  uint64_t accepted = 0;            ///< pairs with q >= q_min handed on for fusion
+  uint64_t rejected_by_q = 0;       ///< pairs answered with q < q_min
+  uint64_t covariance_errors = 0;   ///< pairs answered with an error
+  uint64_t requests_timed_out = 0;  ///< requests abandoned without a reply
+  uint64_t replies_ignored = 0;     ///< replies to no request in flight (late, duplicate)
+  uint64_t fused = 0;               ///< fusions reported done (onFused)
+  uint64_t fusions_failed = 0;      ///< fusions reported failed (onFusionFailed)
+};
+
+/// The map maintenance's fusion bookkeeping (issue 6, item 4), free of threads and I/O:
+/// it keeps the subvolume covisibility graph, proposes candidate pairs for covariance
+/// requests, turns answers into fusion orders (q >= q_min) and follows the fusions through.
+///
+/// Rules:
+/// - Candidates are the graph's edges that meet `candidates`, strongest first, excluding the
+///   active subvolume (never fused while integrated), subvolumes that are part of a fusion
+///   in progress, pairs rejected less than retry_after_s ago, and subvolumes already used by
+///   an earlier pair of the same request (each appears at most once per request, so one
+///   fusion cannot remove a subvolume another pair of the batch needs).
+/// - At most one request is in flight; nextRequest() returns nothing until its reply came
+///   or it timed out.
+/// - A pair accepted for fusion locks both subvolumes until onFused / onFusionFailed.
+///   onFused merges the graph vertices (the older takes the union) and forgets the newer.
+/// Time is passed in by the caller (seconds of a monotonic clock) so tests are exact.
+/// Thread-safety: none (owned by the mapper's maintenance thread, or guarded by a mutex).
+class FusionScheduler {
+ public:
+  /// Throws std::invalid_argument with validate()'s message.
+  explicit FusionScheduler(const FusionSchedulerConfig& config);
+
+  /// A new subvolume anchored at `anchor_keyframe`. Ids must increase with creation time
+  /// (SubmapCollection's ids do); a known id only updates the anchor.
+  void addSubvolume(int64_t subvolume, int64_t anchor_keyframe);
+  /// A keyframe that contributed to `subvolume` observed these landmarks. Unknown
+  /// subvolumes are ignored (returns false).
+  bool addKeyframeLandmarks(int64_t subvolume, std::span<const uint64_t> landmark_ids);
+  /// The subvolume left the map by other means (e.g. removed); pairs in flight that name it
+  /// are dropped when answered.
+  void removeSubvolume(int64_t subvolume);
+
+  /// The next request to send, if any candidate is eligible (see the class rules);
+  /// `active_subvolume` (or -1) is excluded. Expires a timed-out request first.
+  std::optional<FusionCovarianceRequest> nextRequest(int64_t active_subvolume, double now_s);
+  /// The answers to request `request_id`, one per pair in order. Returns the pairs to fuse
+  /// (q >= q_min, both subvolumes still known and not in another fusion). A reply to no
+  /// request in flight returns nothing (counted); a reply with the wrong number of answers
+  /// counts every pair as an error.
+  std::vector<FusionPair> onReply(int64_t request_id,
+                                  std::span<const FusionCovarianceAnswer> answers, double now_s);
+  /// The fusion of `pair` is done: newer is gone, older holds both.
+  void onFused(const FusionPair& pair);
+  /// The fusion of `pair` did not happen (e.g. a subvolume vanished); both are free again and
+  /// the pair waits retry_after_s.
+  void onFusionFailed(const FusionPair& pair, double now_s);
+
+  const SubvolumeCovisibilityGraph& graph() const { return graph_; }
+  const FusionSchedulerStats& stats() const { return stats_; }
+  const FusionSchedulerConfig& config() const { return config_; }
+  /// True while a request waits for its reply.
+  bool requestInFlight() const { return in_flight_.has_value(); }
+  /// Number of pairs accepted and not yet reported fused or failed.
+  size_t fusionsInProgress() const { return fusing_pairs_; }
+
+ private:
+  struct InFlight {
+    FusionCovarianceRequest request;
+    double sent_s = 0.0;
+  };
+  using PairKey = std::pair<int64_t, int64_t>;  // (older, newer)
+
+  FusionSchedulerConfig config_;
+  SubvolumeCovisibilityGraph graph_;
+  absl::flat_hash_map<int64_t, int64_t> anchors_;  // subvolume -> anchor keyframe
+  absl::flat_hash_set<int64_t> fusing_;            // subvolumes in an accepted pair
+  absl::flat_hash_map<PairKey, double> retry_at_;  // pair -> earliest next request
+  absl::flat_hash_set<PairKey> proposed_;          // pairs ever requested
+  std::optional<InFlight> in_flight_;
+  int64_t next_request_id_ = 1;
+  size_t fusing_pairs_ = 0;
+  FusionSchedulerStats stats_;
+};
+
+}  // namespace cblox

@@ -1,0 +1,207 @@
+#include "core/maintenance/fusion_scheduler.h"
+
+#include <stdexcept>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace cblox {
+namespace {
+
+std::vector<uint64_t> range(uint64_t begin, uint64_t end) {
+  std::vector<uint64_t> ids;
+  for (uint64_t i = begin; i < end; ++i) ids.push_back(i);
+  return ids;
+}
+
+FusionSchedulerConfig testConfig() {
+  FusionSchedulerConfig config;
+  config.candidates.min_shared_landmarks = 30;
+  config.candidates.min_shared_ratio = 0.3;
+  config.q_min = 100.0;
+  config.reply_timeout_s = 2.0;
+  config.retry_after_s = 5.0;
+  return config;
+}
+
+FusionCovarianceAnswer answer(double q) { return FusionCovarianceAnswer{true, "", q}; }
+
+// Subvolumes 0, 1, 2 anchored at keyframes 10, 20, 30: 0 and 1 share 60 of 100 landmarks,
+// 1 and 2 share 40, 0 and 2 share 5 (below both bounds).
+FusionScheduler threeSubvolumes(const FusionSchedulerConfig& config = testConfig()) {
+  FusionScheduler s(config);
+  s.addSubvolume(0, 10);
+  s.addSubvolume(1, 20);
+  s.addSubvolume(2, 30);
+  s.addKeyframeLandmarks(0, range(0, 100));
+  s.addKeyframeLandmarks(1, range(40, 140));
+  s.addKeyframeLandmarks(2, range(100, 200));
+  s.addKeyframeLandmarks(2, range(0, 5));
+  return s;
+}
+
+TEST(FusionSchedulerTest, RequestsTheStrongestPairsWithTheirAnchorKeyframes) {
+  FusionScheduler s = threeSubvolumes();
+  ASSERT_EQ(s.graph().weight(0, 1), 60);
+  ASSERT_EQ(s.graph().weight(1, 2), 40);
+  ASSERT_EQ(s.graph().weight(0, 2), 5);
+  // Subvolume 1 can be in one pair only: (0, 1) is stronger, so (1, 2) waits.
+  const auto request = s.nextRequest(/*active_subvolume=*/-1, 0.0);
+  ASSERT_TRUE(request.has_value());
+  EXPECT_EQ(request->request_id, 1);
+  ASSERT_EQ(request->pairs.size(), 1u);
+  const FusionPair& p = request->pairs[0];
+  EXPECT_EQ(p.older, 0);
+  EXPECT_EQ(p.newer, 1);
+  EXPECT_EQ(p.older_keyframe, 10);
+  EXPECT_EQ(p.newer_keyframe, 20);
+  EXPECT_EQ(p.shared_landmarks, 60);
+  EXPECT_EQ(s.stats().candidates, 1u);
+  EXPECT_EQ(s.stats().requested, 1u);
+}
+
+TEST(FusionSchedulerTest, TheActiveSubvolumeIsNeverProposed) {
+  FusionScheduler s = threeSubvolumes();
+  const auto request = s.nextRequest(/*active_subvolume=*/0, 0.0);
+  ASSERT_TRUE(request.has_value());
+  ASSERT_EQ(request->pairs.size(), 1u);
+  EXPECT_EQ(request->pairs[0].older, 1);
+  EXPECT_EQ(request->pairs[0].newer, 2);
+  FusionScheduler only_active_pairs = threeSubvolumes();
+  EXPECT_FALSE(only_active_pairs.nextRequest(/*active_subvolume=*/1, 0.0).has_value());
+}
+
+TEST(FusionSchedulerTest, OneRequestInFlightUntilItsReplyOrTimeout) {
+  FusionScheduler s = threeSubvolumes();
+  const auto first = s.nextRequest(-1, 0.0);
+  ASSERT_TRUE(first.has_value());
+  EXPECT_TRUE(s.requestInFlight());
+  EXPECT_FALSE(s.nextRequest(-1, 1.9).has_value());
+  // Timed out at 2 s: the same pair is asked again under a new id.
+  const auto second = s.nextRequest(-1, 2.0);
+  ASSERT_TRUE(second.has_value());
+  EXPECT_EQ(second->request_id, 2);
+  EXPECT_EQ(second->pairs[0].newer, 1);
+  EXPECT_EQ(s.stats().requests_timed_out, 1u);
+  EXPECT_EQ(s.stats().candidates, 1u);  // the same pair, counted once
+  EXPECT_EQ(s.stats().requested, 2u);
+  // The late reply to the first request is ignored.
+  const std::vector<FusionCovarianceAnswer> answers{answer(1e6)};
+  EXPECT_TRUE(s.onReply(first->request_id, answers, 2.5).empty());
+  EXPECT_EQ(s.stats().replies_ignored, 1u);
+  EXPECT_TRUE(s.requestInFlight());
+}
+
+TEST(FusionSchedulerTest, AcceptsPairsAtOrAboveQMinAndLocksThemUntilFused) {
+  FusionScheduler s = threeSubvolumes();
+  const auto request = s.nextRequest(-1, 0.0);
+  const std::vector<FusionCovarianceAnswer> answers{answer(100.0)};  // exactly q_min
+  const std::vector<FusionPair> fuse = s.onReply(request->request_id, answers, 0.1);
+  ASSERT_EQ(fuse.size(), 1u);
+  EXPECT_EQ(fuse[0].older, 0);
+  EXPECT_EQ(fuse[0].newer, 1);
+  EXPECT_EQ(s.stats().accepted, 1u);
+  EXPECT_EQ(s.fusionsInProgress(), 1u);
+  // While 0 and 1 are being fused, no pair with either is proposed: (1, 2) waits.
+  EXPECT_FALSE(s.nextRequest(-1, 0.2).has_value());
+  s.onFused(fuse[0]);
+  EXPECT_EQ(s.fusionsInProgress(), 0u);
+  EXPECT_EQ(s.stats().fused, 1u);
+  // 0 took 1's landmarks: L_0 = [0, 140), so W(0, 2) = |[100, 140)| + |[0, 5)| = 45.
+  EXPECT_FALSE(s.graph().contains(1));
+  EXPECT_EQ(s.graph().weight(0, 2), 45);
+  const auto next = s.nextRequest(-1, 0.3);
+  ASSERT_TRUE(next.has_value());
+  ASSERT_EQ(next->pairs.size(), 1u);
+  EXPECT_EQ(next->pairs[0].older, 0);
+  EXPECT_EQ(next->pairs[0].newer, 2);
+  EXPECT_EQ(next->pairs[0].older_keyframe, 10);
+  EXPECT_EQ(next->pairs[0].shared_landmarks, 45);
+}
+
+TEST(FusionSchedulerTest, RejectedAndFailedPairsWaitBeforeTheyAreAskedAgain) {
+  FusionScheduler s = threeSubvolumes();
+  const auto request = s.nextRequest(-1, 0.0);
+  const std::vector<FusionCovarianceAnswer> low{answer(99.9)};
+  EXPECT_TRUE(s.onReply(request->request_id, low, 1.0).empty());
+  EXPECT_EQ(s.stats().rejected_by_q, 1u);
+  // (0, 1) waits until 6 s; (1, 2) is free meanwhile.
+  const auto meanwhile = s.nextRequest(-1, 1.0);
+  ASSERT_TRUE(meanwhile.has_value());
+  ASSERT_EQ(meanwhile->pairs.size(), 1u);
+  EXPECT_EQ(meanwhile->pairs[0].older, 1);
+  const std::vector<FusionCovarianceAnswer> error{FusionCovarianceAnswer{false, "stale", 0.0}};
+  EXPECT_TRUE(s.onReply(meanwhile->request_id, error, 1.5).empty());
+  EXPECT_EQ(s.stats().covariance_errors, 1u);
+  EXPECT_FALSE(s.nextRequest(-1, 5.9).has_value());
+  const auto again = s.nextRequest(-1, 6.0);
+  ASSERT_TRUE(again.has_value());
+  EXPECT_EQ(again->pairs[0].older, 0);
+  EXPECT_EQ(again->pairs[0].newer, 1);
+  // The fusion itself fails (e.g. a subvolume vanished): both free, the pair waits again.
+  const std::vector<FusionCovarianceAnswer> high{answer(1e9)};
+  const std::vector<FusionPair> fuse = s.onReply(again->request_id, high, 6.0);
+  ASSERT_EQ(fuse.size(), 1u);
+  s.onFusionFailed(fuse[0], 7.0);
+  EXPECT_EQ(s.stats().fusions_failed, 1u);
+  EXPECT_EQ(s.fusionsInProgress(), 0u);
+  EXPECT_TRUE(s.graph().contains(1));
+  const auto after_failure = s.nextRequest(-1, 7.0);
+  ASSERT_TRUE(after_failure.has_value());  // (1, 2), its wait ended at 6.5
+  EXPECT_EQ(after_failure->pairs[0].older, 1);
+}
+
+TEST(FusionSchedulerTest, MalformedRepliesAndVanishedSubvolumesFuseNothing) {
+  FusionScheduler s = threeSubvolumes();
+  auto request = s.nextRequest(-1, 0.0);
+  const std::vector<FusionCovarianceAnswer> two{answer(1e9), answer(1e9)};
+  EXPECT_TRUE(s.onReply(request->request_id, two, 0.0).empty());  // 2 answers for 1 pair
+  EXPECT_EQ(s.stats().covariance_errors, 1u);
+  // A subvolume removed while its pair was asked about: a good answer fuses nothing.
+  request = s.nextRequest(-1, 0.0);  // (1, 2): (0, 1) waits
+  ASSERT_TRUE(request.has_value());
+  s.removeSubvolume(2);
+  const std::vector<FusionCovarianceAnswer> one{answer(1e9)};
+  EXPECT_TRUE(s.onReply(request->request_id, one, 0.0).empty());
+  EXPECT_EQ(s.stats().accepted, 0u);
+  EXPECT_EQ(s.fusionsInProgress(), 0u);
+}
+
+TEST(FusionSchedulerTest, DisabledProposesNothingButKeepsTheGraph) {
+  FusionSchedulerConfig config = testConfig();
+  config.enabled = false;
+  FusionScheduler s = threeSubvolumes(config);
+  EXPECT_EQ(s.graph().weight(0, 1), 60);
+  EXPECT_FALSE(s.nextRequest(-1, 0.0).has_value());
+  EXPECT_FALSE(s.addKeyframeLandmarks(7, range(0, 3)));  // unknown subvolume
+}
+
+TEST(FusionSchedulerTest, InvalidConfigsAreRejected) {
+  const auto message = [](FusionSchedulerConfig c) {
+    try {
+      FusionScheduler s(c);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  FusionSchedulerConfig c = testConfig();
+  c.q_min = 0.0;
+  EXPECT_NE(message(c).find("q_min"), std::string::npos);
+  c = testConfig();
+  c.max_pairs_per_request = 0;
+  EXPECT_NE(message(c).find("max_pairs_per_request"), std::string::npos);
+  c = testConfig();
+  c.reply_timeout_s = 0.0;
+  EXPECT_NE(message(c).find("reply_timeout_s"), std::string::npos);
+  c = testConfig();
+  c.retry_after_s = -1.0;
+  EXPECT_NE(message(c).find("retry_after_s"), std::string::npos);
+  c = testConfig();
+  c.candidates.min_shared_ratio = 2.0;
+  EXPECT_NE(message(c).find("candidates.min_shared_ratio"), std::string::npos);
+  EXPECT_EQ(message(testConfig()), "");
+}
+
+}  // namespace
+}  // namespace cblox

@@ -7,9 +7,11 @@
 //
 // Subscribes: CBLOX_DEPTH (depth_frame_t); ground_truth mode: CBLOX_GT_POSE
 // (pose_stamped_t); tracker mode: CBLOX_FRAME_POSE (frame_pose_t), CBLOX_KEYFRAME
-// (keyframe_t); both: CBLOX_KEYFRAME_POSES (keyframe_pose_batch_t), CBLOX_CMD (command_t).
+// (keyframe_t), CBLOX_COV_REPLY (covariance_reply_t); both: CBLOX_KEYFRAME_POSES
+// (keyframe_pose_batch_t), CBLOX_CMD (command_t).
 // Publishes: CBLOX_MAP_STATUS (map_status_t) and CBLOX_HEARTBEAT (heartbeat_t) every second,
-// CBLOX_CMD_REPLY (command_reply_t).
+// CBLOX_CMD_REPLY (command_reply_t); tracker mode: CBLOX_COV_REQUEST (covariance_request_t)
+// for the map maintenance's fusion candidates.
 // Poses on CBLOX_GT_POSE / CBLOX_FRAME_POSE are of the body (primary camera) frame B; a depth
 // frame's camera is placed at T_G_B * calibration.T_B_C.
 // Exit status: 0 stopped by SIGINT/SIGTERM, 1 runtime error, 2 usage or configuration error.
@@ -18,15 +20,19 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <cblox/command_reply_t.hpp>
 #include <cblox/command_t.hpp>
+#include <cblox/covariance_reply_t.hpp>
+#include <cblox/covariance_request_t.hpp>
 #include <cblox/depth_frame_t.hpp>
 #include <cblox/frame_pose_t.hpp>
 #include <cblox/heartbeat_t.hpp>
@@ -105,6 +111,9 @@ class MapperNode {
     } else {
       lcm_->subscribe(config_.frame_pose_channel, &MapperNode::onFramePose, this);
       lcm_->subscribe(config_.keyframe_channel, &MapperNode::onKeyframe, this);
+      lcm_->subscribe(config_.covariance_reply_channel, &MapperNode::onCovarianceReply, this);
+      mapper_->setCovarianceRequester(
+          [this](const FusionCovarianceRequest& request) { publishCovarianceRequest(request); });
     }
     lcm_->subscribe(config_.keyframe_poses_channel, &MapperNode::onKeyframePoses, this);
     lcm_->subscribe(config_.command_channel, &MapperNode::onCommand, this);
@@ -124,10 +133,10 @@ class MapperNode {
     msg.integration_ms_last = s.integration_ms_last;
     msg.integration_ms_median = s.integration_ms_median;
     msg.integration_ms_p99 = s.integration_ms_p99;
-    msg.fusion_candidates = 0;  // map maintenance (issue 6) does not run yet: these stay 0
-    msg.covariance_requested = 0;
-    msg.subvolumes_fused = 0;
-    msg.rejected_by_q = 0;
+    msg.fusion_candidates = static_cast<int64_t>(s.fusion.candidates);
+    msg.covariance_requested = static_cast<int64_t>(s.fusion.requested);
+    msg.subvolumes_fused = static_cast<int64_t>(s.fusion.fused);
+    msg.rejected_by_q = static_cast<int64_t>(s.fusion.rejected_by_q);
     std::lock_guard<std::mutex> lock(publish_mutex_);
     lcm_->publish(config_.map_status_channel, &msg);
   }
@@ -275,7 +284,44 @@ class MapperNode {
                              "keyframe " + std::to_string(msg.keyframe_id) + ": " + error);
       return;
     }
-    mapper_->onKeyframe(msg.keyframe_id, msg.utime, *T);
+    std::vector<uint64_t> landmarks;
+    landmarks.reserve(msg.landmark_ids.size());
+    for (const int64_t id : msg.landmark_ids) {
+      if (id >= 0) landmarks.push_back(static_cast<uint64_t>(id));
+    }
+    mapper_->onKeyframe(msg.keyframe_id, msg.utime, *T, std::move(landmarks));
+  }
+
+  void publishCovarianceRequest(const FusionCovarianceRequest& request) {
+    covariance_request_t msg;
+    msg.utime = wallUtime();
+    msg.request_id = request.request_id;
+    for (const FusionPair& pair : request.pairs) {
+      msg.keyframe_i.push_back(pair.newer_keyframe);  // Sigma_{newer | older}
+      msg.keyframe_j.push_back(pair.older_keyframe);
+    }
+    msg.num_pairs = static_cast<int32_t>(msg.keyframe_i.size());
+    std::lock_guard<std::mutex> lock(publish_mutex_);
+    lcm_->publish(config_.covariance_request_channel, &msg);
+  }
+
+  void onCovarianceReply(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    covariance_reply_t msg;
+    if (!decode(rbuf, &msg)) {
+      mapper_->reportProblem(InputProblem::kCovarianceReplyInvalid,
+                             channel + ": message does not decode");
+      return;
+    }
+    std::vector<FusionCovarianceAnswer> answers;
+    answers.reserve(msg.pairs.size());
+    for (const covariance_pair_t& pair : msg.pairs) {
+      FusionCovarianceAnswer answer;
+      answer.ok = pair.ok && std::isfinite(pair.q) && pair.q >= 0.0;
+      answer.error = pair.ok && !answer.ok ? "q is not a finite, non-negative number" : pair.error;
+      answer.q = answer.ok ? pair.q : 0.0;
+      answers.push_back(std::move(answer));
+    }
+    mapper_->onCovarianceReply(msg.request_id, std::move(answers));
   }
 
   void onKeyframePoses(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
@@ -382,10 +428,12 @@ int run(const Args& args) {
     last_progress = Clock::now();
     std::printf(
         "mapper: %s%llu frames integrated (%.1f/s), %llu dropped, %llu rejected, "
-        "%zu subvolumes, %zu blocks, %.1f MiB, integration median %.1f ms p99 %.1f ms\n",
+        "%zu subvolumes (%llu fused), %zu blocks, %.1f MiB, integration median %.1f ms p99 "
+        "%.1f ms\n",
         prefix, static_cast<unsigned long long>(s.frames_integrated), rate,
         static_cast<unsigned long long>(s.frames_dropped),
-        static_cast<unsigned long long>(s.frames_rejected), s.num_submaps, s.num_blocks,
+        static_cast<unsigned long long>(s.frames_rejected), s.num_submaps,
+        static_cast<unsigned long long>(s.fusion.fused), s.num_blocks,
         static_cast<double>(s.memory_bytes) / 1048576.0, s.integration_ms_median,
         s.integration_ms_p99);
     std::fflush(stdout);

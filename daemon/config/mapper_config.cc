@@ -50,6 +50,25 @@ SubmapFusionConfig loadFusion(const YAML::Node& node) {
   return fusion;
 }
 
+FusionSchedulerConfig loadMaintenance(const YAML::Node& node) {
+  const std::string path = "maintenance";
+  requireKnownKeys(node, path,
+                   {"enabled", "min_shared_landmarks", "min_shared_ratio", "q_min",
+                    "max_pairs_per_request", "reply_timeout_s", "retry_after_s"});
+  FusionSchedulerConfig m;
+  if (!isAbsent(node)) {
+    readOptional(node, path, "enabled", &m.enabled);
+    readOptional(node, path, "min_shared_landmarks", &m.candidates.min_shared_landmarks);
+    readOptional(node, path, "min_shared_ratio", &m.candidates.min_shared_ratio);
+    readOptional(node, path, "q_min", &m.q_min);
+    readOptional(node, path, "max_pairs_per_request", &m.max_pairs_per_request);
+    readOptional(node, path, "reply_timeout_s", &m.reply_timeout_s);
+    readOptional(node, path, "retry_after_s", &m.retry_after_s);
+  }
+  if (const std::string e = m.validate(); !e.empty()) throw ConfigError(path + "." + e);
+  return m;
+}
+
 }  // namespace
 
 PoseSource parsePoseSource(const std::string& name) {
@@ -63,7 +82,7 @@ std::string MapperProcessConfig::validate() const {
   for (const std::string* channel :
        {&depth_channel, &ground_truth_channel, &frame_pose_channel, &keyframe_channel,
         &keyframe_poses_channel, &command_channel, &command_reply_channel, &map_status_channel,
-        &heartbeat_channel}) {
+        &heartbeat_channel, &covariance_request_channel, &covariance_reply_channel}) {
     if (channel->empty()) return "channels: a channel name is empty";
   }
   if (!(status_period_s > 0.0) || !std::isfinite(status_period_s)) {
@@ -79,9 +98,10 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   MapperProcessConfig config;
   MapperConfig& m = config.mapper;
   const std::string top = "mapper";
-  requireKnownKeys(root, top,
-                   {"pose_source", "lcm_url", "output_dir", "channels", "layer", "integrator",
-                    "mesh", "fusion", "subvolumes", "poses", "queues", "worker", "status"});
+  requireKnownKeys(
+      root, top,
+      {"pose_source", "lcm_url", "output_dir", "channels", "layer", "integrator", "mesh", "fusion",
+       "maintenance", "subvolumes", "poses", "queues", "worker", "status"});
   if (isAbsent(root)) return config;
 
   if (root["pose_source"]) {
@@ -97,9 +117,10 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   readOptional(root, top, "output_dir", &m.output_dir);
 
   const YAML::Node channels = root["channels"];
-  requireKnownKeys(channels, "channels",
-                   {"depth", "ground_truth_pose", "frame_pose", "keyframe", "keyframe_poses",
-                    "command", "command_reply", "map_status", "heartbeat"});
+  requireKnownKeys(
+      channels, "channels",
+      {"depth", "ground_truth_pose", "frame_pose", "keyframe", "keyframe_poses", "command",
+       "command_reply", "map_status", "heartbeat", "covariance_request", "covariance_reply"});
   if (!isAbsent(channels)) {
     readOptional(channels, "channels", "depth", &config.depth_channel);
     readOptional(channels, "channels", "ground_truth_pose", &config.ground_truth_channel);
@@ -110,6 +131,8 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
     readOptional(channels, "channels", "command_reply", &config.command_reply_channel);
     readOptional(channels, "channels", "map_status", &config.map_status_channel);
     readOptional(channels, "channels", "heartbeat", &config.heartbeat_channel);
+    readOptional(channels, "channels", "covariance_request", &config.covariance_request_channel);
+    readOptional(channels, "channels", "covariance_reply", &config.covariance_reply_channel);
   }
 
   m.layer = loadMapperLayer(root["layer"], m.layer);
@@ -117,6 +140,7 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
                                       &m.integrator_type);
   m.mesh = loadMeshConfig(root["mesh"], "mesh");
   m.fusion = loadFusion(root["fusion"]);
+  m.maintenance = loadMaintenance(root["maintenance"]);
 
   const YAML::Node subvolumes = root["subvolumes"];
   requireKnownKeys(subvolumes, "subvolumes",

@@ -23,6 +23,8 @@ struct MapperProcessConfig {
   std::string command_reply_channel = "CBLOX_CMD_REPLY";
   std::string map_status_channel = "CBLOX_MAP_STATUS";
   std::string heartbeat_channel = "CBLOX_HEARTBEAT";
+  std::string covariance_request_channel = "CBLOX_COV_REQUEST";  ///< tracker mode
+  std::string covariance_reply_channel = "CBLOX_COV_REPLY";      ///< tracker mode
   /// CBLOX_MAP_STATUS and CBLOX_HEARTBEAT period, seconds (> 0).
   double status_period_s = 1.0;
   /// Progress lines on stdout every this many seconds (> 0).

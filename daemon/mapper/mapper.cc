@@ -93,6 +93,8 @@ const char* inputProblemName(InputProblem problem) {
       return "keyframe_pose_invalid";
     case InputProblem::kMaintenanceDropped:
       return "maintenance_dropped";
+    case InputProblem::kCovarianceReplyInvalid:
+      return "covariance_reply_invalid";
     case InputProblem::kCommandInvalid:
       return "command_invalid";
     case InputProblem::kCount:
@@ -119,6 +121,7 @@ std::string MapperConfig::validate() const {
   if (std::string e = integrator.validate(layer.voxel_size); !e.empty()) return "integrator." + e;
   if (std::string e = mesh.validate(); !e.empty()) return "mesh." + e;
   if (std::string e = fusion.validate(); !e.empty()) return "fusion." + e;
+  if (std::string e = maintenance.validate(); !e.empty()) return "maintenance." + e;
   if (std::string e = creation.validate(); !e.empty()) return "creation." + e;
   if (std::string e = pose_buffer.validate(); !e.empty()) return "pose_buffer." + e;
   if (keyframe_every_n_frames < 1) {
@@ -246,7 +249,12 @@ Mapper::Mapper(const MapperConfig& config, LogSink log)
                    std::chrono::duration_cast<Clock::duration>(
                        std::chrono::duration<double>(config_.log_interval_s)),
                    [this](const std::string& line) { this->log(line); }),
-      policy_(config_.creation) {}
+      policy_(config_.creation),
+      scheduler_(config_.maintenance) {}
+
+void Mapper::setCovarianceRequester(CovarianceRequester requester) {
+  covariance_requester_ = std::move(requester);
+}
 
 Mapper::~Mapper() { stop(); }
 
@@ -403,7 +411,8 @@ bool Mapper::onFramePose(const TimedPose& pose) {
   return false;
 }
 
-bool Mapper::onKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K) {
+bool Mapper::onKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K,
+                        std::vector<uint64_t> landmark_ids) {
   if (!isFinitePose(T_G_K)) {
     count(InputProblem::kKeyframeInvalid, "keyframe " + std::to_string(id) + ": non-finite pose");
     return false;
@@ -412,14 +421,23 @@ bool Mapper::onKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G
   item.keyframe_id = id;
   item.utime = utime;
   item.T_G_K = T_G_K;
+  item.landmark_ids = std::move(landmark_ids);
   enqueueMaintenance(std::move(item));
   return true;
 }
 
 void Mapper::onKeyframePoses(std::vector<std::pair<KeyframeId, Transformationd>> T_G_K) {
   MaintenanceItem item;
-  item.is_batch = true;
+  item.kind = MaintenanceItem::Kind::kBatch;
   item.batch = std::move(T_G_K);
+  enqueueMaintenance(std::move(item));
+}
+
+void Mapper::onCovarianceReply(int64_t request_id, std::vector<FusionCovarianceAnswer> answers) {
+  MaintenanceItem item;
+  item.kind = MaintenanceItem::Kind::kCovarianceReply;
+  item.request_id = request_id;
+  item.answers = std::move(answers);
   enqueueMaintenance(std::move(item));
 }
 
@@ -617,8 +635,9 @@ void Mapper::recordIntegrationMs(double ms) {
 // Keyframes and pose batches (maintenance thread; integrator thread for synthesised keyframes)
 
 void Mapper::applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K,
-                           bool synthesised) {
+                           bool synthesised, std::span<const uint64_t> landmark_ids) {
   std::shared_ptr<Submap> created;
+  SubmapId joined = -1;
   {
     std::lock_guard<std::mutex> lock(policy_mutex_);
     if (synthesised && keyframes_seen_.count(id) > 0) id = max_keyframe_seen_ + 1;
@@ -632,9 +651,16 @@ void Mapper::applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& 
     if (policy_.onKeyframe(active.get())) {
       // Finishes the previous submap (waits for the frame being integrated into it).
       created = collection_.createSubmap(T_G_K, id, utime * 1000);
+      joined = created->id();
     } else {
       active->addKeyframe(id);
+      joined = active->id();
     }
+  }
+  {
+    std::lock_guard<std::mutex> lock(scheduler_mutex_);
+    if (created) scheduler_.addSubvolume(created->id(), id);
+    scheduler_.addKeyframeLandmarks(joined, landmark_ids);
   }
   keyframes_applied_.fetch_add(1, std::memory_order_relaxed);
   if (created) {
@@ -660,13 +686,22 @@ void Mapper::applyBatch(const std::vector<std::pair<KeyframeId, Transformationd>
 void Mapper::maintenanceLoop() {
   std::unique_lock<std::mutex> lock(queue_mutex_);
   while (true) {
-    queue_cv_.wait(lock, [this] { return stop_ || !maintenance_queue_.empty(); });
+    // The 0.25 s tick lets a timed-out covariance request be followed by a new one.
+    queue_cv_.wait_for(lock, std::chrono::milliseconds(250),
+                       [this] { return stop_ || !maintenance_queue_.empty(); });
     if (stop_) break;
+    if (maintenance_queue_.empty()) {
+      lock.unlock();
+      requestCovariances();
+      lock.lock();
+      continue;
+    }
     MaintenanceItem item = std::move(maintenance_queue_.front());
     maintenance_queue_.pop_front();
     maintenance_busy_ = true;
     lock.unlock();
     applyMaintenanceItem(item);
+    requestCovariances();
     lock.lock();
     maintenance_busy_ = false;
   }
@@ -683,16 +718,92 @@ void Mapper::maintenanceLoop() {
 }
 
 void Mapper::applyMaintenanceItem(const MaintenanceItem& item) {
+  using Kind = MaintenanceItem::Kind;
   try {
-    if (item.is_batch) {
-      applyBatch(item.batch);
-    } else {
-      applyKeyframe(item.keyframe_id, item.utime, item.T_G_K);
+    switch (item.kind) {
+      case Kind::kBatch:
+        applyBatch(item.batch);
+        break;
+      case Kind::kKeyframe:
+        applyKeyframe(item.keyframe_id, item.utime, item.T_G_K, false, item.landmark_ids);
+        break;
+      case Kind::kCovarianceReply:
+        applyCovarianceReply(item);
+        break;
     }
   } catch (const std::exception& e) {
-    count(item.is_batch ? InputProblem::kKeyframePoseInvalid : InputProblem::kKeyframeInvalid,
+    count(item.kind == Kind::kBatch      ? InputProblem::kKeyframePoseInvalid
+          : item.kind == Kind::kKeyframe ? InputProblem::kKeyframeInvalid
+                                         : InputProblem::kCovarianceReplyInvalid,
           e.what());
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Map maintenance (maintenance thread decides, worker fuses)
+
+double Mapper::secondsSinceStart() const {
+  return std::chrono::duration<double>(Clock::now() - start_time_).count();
+}
+
+void Mapper::requestCovariances() {
+  if (!covariance_requester_) return;
+  std::optional<FusionCovarianceRequest> request;
+  {
+    std::lock_guard<std::mutex> lock(scheduler_mutex_);
+    const std::shared_ptr<Submap> active = collection_.activeSubmap();
+    request = scheduler_.nextRequest(active ? active->id() : -1, secondsSinceStart());
+  }
+  if (request) covariance_requester_(*request);
+}
+
+void Mapper::applyCovarianceReply(const MaintenanceItem& item) {
+  std::vector<FusionPair> accepted;
+  {
+    std::lock_guard<std::mutex> lock(scheduler_mutex_);
+    accepted = scheduler_.onReply(item.request_id, item.answers, secondsSinceStart());
+  }
+  if (accepted.empty()) return;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    for (const FusionPair& pair : accepted) fusion_queue_.push_back(pair);
+  }
+  queue_cv_.notify_all();
+}
+
+void Mapper::fusePair(const FusionPair& pair) {
+  const std::shared_ptr<Submap> older = collection_.getSubmap(pair.older);
+  const std::shared_ptr<Submap> newer = collection_.getSubmap(pair.newer);
+  std::string failure;
+  if (!older || !newer) {
+    failure = "a subvolume of the pair no longer exists";
+  } else if (!older->isFinished() || !newer->isFinished()) {
+    failure = "a subvolume of the pair is still active";
+  } else {
+    try {
+      const SubmapFusionStats stats = fuseSubmaps(*newer, older.get(), config_.fusion);
+      collection_.removeSubmap(pair.newer);
+      {
+        std::lock_guard<std::mutex> lock(scheduler_mutex_);
+        scheduler_.onFused(pair);
+      }
+      char line[200];
+      std::snprintf(line, sizeof(line),
+                    "fused subvolume %lld into %lld (%d shared landmarks): %zu voxels in %.0f ms",
+                    static_cast<long long>(pair.newer), static_cast<long long>(pair.older),
+                    pair.shared_landmarks, stats.voxels_fused, stats.seconds * 1e3);
+      log(line);
+      return;
+    } catch (const std::exception& e) {
+      failure = e.what();
+    }
+  }
+  {
+    std::lock_guard<std::mutex> lock(scheduler_mutex_);
+    scheduler_.onFusionFailed(pair, secondsSinceStart());
+  }
+  log("fusion of subvolume " + std::to_string(pair.newer) + " into " + std::to_string(pair.older) +
+      " not done: " + failure);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -717,8 +828,19 @@ void Mapper::workerLoop() {
   lowerWorkerPriority();
   std::unique_lock<std::mutex> lock(queue_mutex_);
   while (true) {
-    queue_cv_.wait(lock, [this] { return stop_ || !command_queue_.empty(); });
+    queue_cv_.wait(lock,
+                   [this] { return stop_ || !command_queue_.empty() || !fusion_queue_.empty(); });
     if (stop_) break;
+    if (command_queue_.empty()) {  // exports first: an operator is waiting for them
+      const FusionPair pair = fusion_queue_.front();
+      fusion_queue_.pop_front();
+      worker_busy_ = true;
+      lock.unlock();
+      fusePair(pair);
+      lock.lock();
+      worker_busy_ = false;
+      continue;
+    }
     QueuedCommand queued = std::move(command_queue_.front());
     command_queue_.pop_front();
     worker_busy_ = true;
@@ -739,10 +861,16 @@ void Mapper::workerLoop() {
     lock.lock();
     worker_busy_ = false;
   }
-  // Stopping: answer whatever is still queued.
+  // Stopping: answer whatever is still queued; accepted fusions are left undone (the map
+  // stays valid: both subvolumes remain).
   std::deque<QueuedCommand> left;
   left.swap(command_queue_);
+  const size_t fusions_left = fusion_queue_.size();
+  fusion_queue_.clear();
   lock.unlock();
+  if (fusions_left > 0) {
+    log("stopping: " + std::to_string(fusions_left) + " accepted fusion(s) not done");
+  }
   for (QueuedCommand& queued : left) {
     MapperReply reply;
     reply.id = queued.command.id;
@@ -883,6 +1011,10 @@ MapperStatus Mapper::status() const {
   s.source_restarts = source_restarts_.load();
   s.exports_done = exports_done_.load();
   s.exports_failed = exports_failed_.load();
+  {
+    std::lock_guard<std::mutex> lock(scheduler_mutex_);
+    s.fusion = scheduler_.stats();
+  }
   for (size_t i = 0; i < kNumInputProblems; ++i) {
     s.problems[i] = problems_[i].load(std::memory_order_relaxed);
     if (isFrameProblem(static_cast<InputProblem>(i))) s.frames_rejected += s.problems[i];
@@ -928,6 +1060,11 @@ MapperReply Mapper::statusReply(const MapperCommand& command) const {
                   {"keyframes", std::to_string(s.keyframes_applied)},
                   {"pose_batches", std::to_string(s.keyframe_batches)},
                   {"source_restarts", std::to_string(s.source_restarts)},
+                  {"fusion_candidates", std::to_string(s.fusion.candidates)},
+                  {"covariance_requested", std::to_string(s.fusion.requested)},
+                  {"subvolumes_fused", std::to_string(s.fusion.fused)},
+                  {"rejected_by_q", std::to_string(s.fusion.rejected_by_q)},
+                  {"covariance_errors", std::to_string(s.fusion.covariance_errors)},
                   {"integration_ms_median", fixed(s.integration_ms_median, 2)},
                   {"integration_ms_p99", fixed(s.integration_ms_p99, 2)}};
   for (size_t i = 0; i < kNumInputProblems; ++i) {
@@ -946,8 +1083,8 @@ bool Mapper::waitUntilIdle(std::chrono::milliseconds timeout) const {
     bool idle = pending_.size() == 0 && !integrator_busy_.load();
     if (idle) {
       std::lock_guard<std::mutex> lock(queue_mutex_);
-      idle = maintenance_queue_.empty() && command_queue_.empty() && !maintenance_busy_ &&
-             !worker_busy_;
+      idle = maintenance_queue_.empty() && command_queue_.empty() && fusion_queue_.empty() &&
+             !maintenance_busy_ && !worker_busy_;
     }
     // Re-check the in-tray: a frame may have been taken between the two looks.
     if (idle && pending_.size() == 0 && !integrator_busy_.load()) return true;

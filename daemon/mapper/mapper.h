@@ -17,6 +17,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <thread>
 #include <unordered_set>
@@ -27,6 +28,7 @@
 #include "core/geometry/pinhole_camera.h"
 #include "core/geometry/se3.h"
 #include "core/integrator/integrator_config.h"
+#include "core/maintenance/fusion_scheduler.h"
 #include "core/mesh/mesh_integrator.h"
 #include "core/submap/submap_collection.h"
 #include "core/submap/submap_creation_policy.h"
@@ -64,8 +66,11 @@ struct MapperConfig {
   IntegratorConfig integrator = defaultIntegratorConfig();
   /// Mesh extraction for exports.
   MeshConfig mesh;
-  /// Fusion of subvolumes (export: projection of the collection into one volume).
+  /// Fusion of subvolumes (map maintenance, and export: projection of the collection into
+  /// one volume).
   SubmapFusionConfig fusion;
+  /// Map maintenance (tracker mode): covisibility candidates, covariance requests, q_min.
+  FusionSchedulerConfig maintenance;
   /// The paper's subvolume creation rule.
   SubmapCreationPolicyConfig creation{10};
   /// Frame-pose buffer: interpolation gap bound and capacity.
@@ -134,16 +139,17 @@ enum class InputProblem : int {
   kWaitingForAnchor,      ///< after a tracking jump / before the first keyframe
   kIntegrationFailed,     ///< the integrator threw (never expected; the frame is dropped)
   // Poses, keyframes, batches, commands (not frames):
-  kPoseUndecodable,      ///< pose message failed to decode, unknown tracking state
-  kPoseInvalid,          ///< non-finite pose or non-unit quaternion
-  kPoseDuplicate,        ///< same time stamp as the previous pose
-  kPoseOutOfOrder,       ///< older than the previous pose
-  kKeyframeInvalid,      ///< non-finite keyframe pose or undecodable keyframe message
-  kKeyframeDuplicate,    ///< keyframe id already applied
-  kKeyframePoseUnknown,  ///< batch entry for a keyframe no subvolume knows
-  kKeyframePoseInvalid,  ///< batch entry with a non-finite pose; undecodable batch
-  kMaintenanceDropped,   ///< keyframe / batch dropped because the queue was full
-  kCommandInvalid,       ///< unknown command, missing or bad argument, path outside
+  kPoseUndecodable,         ///< pose message failed to decode, unknown tracking state
+  kPoseInvalid,             ///< non-finite pose or non-unit quaternion
+  kPoseDuplicate,           ///< same time stamp as the previous pose
+  kPoseOutOfOrder,          ///< older than the previous pose
+  kKeyframeInvalid,         ///< non-finite keyframe pose or undecodable keyframe message
+  kKeyframeDuplicate,       ///< keyframe id already applied
+  kKeyframePoseUnknown,     ///< batch entry for a keyframe no subvolume knows
+  kKeyframePoseInvalid,     ///< batch entry with a non-finite pose; undecodable batch
+  kMaintenanceDropped,      ///< keyframe / batch dropped because the queue was full
+  kCovarianceReplyInvalid,  ///< covariance reply failed to decode or has a bad entry
+  kCommandInvalid,          ///< unknown command, missing or bad argument, path outside
   kCount
 };
 inline constexpr size_t kNumInputProblems = static_cast<size_t>(InputProblem::kCount);
@@ -179,9 +185,9 @@ struct MapperStatus {
   uint64_t frames_received = 0;  ///< depth frames offered (incl. undecodable ones)
   uint64_t frames_integrated = 0;
   uint64_t frames_cut_by_budget = 0;  ///< integrated, but the time budget cut them short
-  uint64_t frames_dropped = 0;   ///< superseded by a newer frame (newest wins) or queue full
-  uint64_t frames_rejected = 0;  ///< sum of the frame problem kinds
-  uint64_t frames_pending = 0;   ///< waiting for their pose now
+  uint64_t frames_dropped = 0;        ///< superseded by a newer frame (newest wins) or queue full
+  uint64_t frames_rejected = 0;       ///< sum of the frame problem kinds
+  uint64_t frames_pending = 0;        ///< waiting for their pose now
   uint64_t poses_received = 0;
   uint64_t keyframes_applied = 0;  ///< keyframes that anchored a submap or joined one
   uint64_t keyframe_batches = 0;   ///< pose batches applied
@@ -189,6 +195,10 @@ struct MapperStatus {
   uint64_t source_restarts = 0;    ///< depth or pose time stamps went back (new stream)
   uint64_t exports_done = 0;
   uint64_t exports_failed = 0;
+  /// Map maintenance (FusionSchedulerStats): candidate pairs, pairs whose covariance was
+  /// requested, accepted for fusion, rejected by q, answered with an error; fusions done and
+  /// failed; requests timed out.
+  FusionSchedulerStats fusion;
   float integration_ms_last = 0.0f;
   float integration_ms_median = 0.0f;
   float integration_ms_p99 = 0.0f;
@@ -211,11 +221,19 @@ struct MapperStatus {
 ///   Submap::lockForIntegration() with T_M_D = T_G_M^-1 * T_G_B * T_B_D.
 /// - Maintenance thread: applies keyframes (SubmapCreationPolicy::onKeyframe ->
 ///   SubmapCollection::createSubmap, or Submap::addKeyframe) and keyframe pose batches
-///   (SubmapCollection::updateKeyframePoses: frames move, no voxel is touched).
+///   (SubmapCollection::updateKeyframePoses: frames move, no voxel is touched). Map
+///   maintenance (FusionScheduler): each keyframe's landmark ids go into the subvolume
+///   covisibility graph; after each keyframe, pose batch or reply (and every 0.25 s) it asks
+///   the covariance requester for candidate pairs; replies (onCovarianceReply) come back
+///   through its queue and pairs with q >= q_min go to the worker's fusion queue.
 /// - Fusion/export worker thread, at low priority (nice worker_niceness, SCHED_IDLE): the
-///   single owner of FINISHED submap layers (SubmapCollection's rule); runs exports. It holds
-///   the ACTIVE submap's layer lock only while copying that layer (a block memcpy), never
-///   while fusing, meshing or writing, so an export delays integration by the copy only.
+///   single owner of FINISHED submap layers (SubmapCollection's rule); runs exports first,
+///   then fusions: the newer subvolume of a pair is fused into the older (fuseSubmaps:
+///   trilinear, its keyframes join the older, so pose batches naming them stay known) and
+///   removed from the collection. Both are finished (the active subvolume is never fused);
+///   only the worker reads finished layers, so no reader sees a half-fused subvolume. It
+///   holds the ACTIVE submap's layer lock only while copying that layer (a block memcpy),
+///   never while fusing, meshing or writing, so an export delays integration by the copy.
 ///
 /// Shared state and its guards: the SubmapCollection and Submaps are thread-safe by their
 /// own rule; the creation policy (not thread-safe) is guarded by policy_mutex_, which the
@@ -223,13 +241,17 @@ struct MapperStatus {
 /// onKeyframe() + createSubmap() (so no frame slips into the old submap after a jump; the
 /// integrator never holds it while holding a layer lock). Counters are atomics; the timing
 /// window has its own mutex. Lock order: policy_mutex_ -> layer lock -> collection mutex ->
-/// submap metadata mutex; PendingFrames' and PoseBuffer's mutexes are leaves.
+/// submap metadata mutex; PendingFrames', PoseBuffer's and scheduler_mutex_ (guards the
+/// FusionScheduler; held for bookkeeping only, never while calling out) are leaves.
 ///
 /// Thread-safety: every public member function is thread-safe unless noted.
 class Mapper {
  public:
   using ReplyCallback = std::function<void(const MapperReply&)>;
   using LogSink = std::function<void(const std::string&)>;
+  /// Sends a covariance request (cblox-mapper: CBLOX_COV_REQUEST). Called on the
+  /// maintenance thread; must not block for long.
+  using CovarianceRequester = std::function<void(const FusionCovarianceRequest&)>;
 
   /// Throws std::invalid_argument with MapperConfig::validate()'s message. `log` receives
   /// human-readable lines (default: stderr); it may be called from any of the threads.
@@ -238,6 +260,10 @@ class Mapper {
   ~Mapper();
   Mapper(const Mapper&) = delete;
   Mapper& operator=(const Mapper&) = delete;
+
+  /// Where covariance requests go (tracker mode). Without one, no request is made and no
+  /// subvolume is fused. Call before start(). Not thread-safe.
+  void setCovarianceRequester(CovarianceRequester requester);
 
   /// Creates the output directory and starts the threads. Returns false with a message when
   /// the output directory cannot be created (nothing started). Call once. Thread-safe.
@@ -257,10 +283,15 @@ class Mapper {
   /// A new keyframe (tracker mode; in ground-truth mode the mapper makes its own, but this is
   /// accepted too). Queued for the maintenance thread; false when rejected at once
   /// (non-finite pose). Thread-safe.
-  bool onKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K);
+  /// `landmark_ids`: the landmarks the keyframe observes (the covisibility graph's input).
+  bool onKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K,
+                  std::vector<uint64_t> landmark_ids = {});
   /// Corrected keyframe poses T_G_K (after BA / loop closure). Queued for the maintenance
   /// thread. Thread-safe.
   void onKeyframePoses(std::vector<std::pair<KeyframeId, Transformationd>> T_G_K);
+  /// The reply to covariance request `request_id`: one answer per requested pair, in
+  /// order. Queued for the maintenance thread. Thread-safe.
+  void onCovarianceReply(int64_t request_id, std::vector<FusionCovarianceAnswer> answers);
   /// A command. "status" is answered at once on the calling thread; "export_mesh" {path} and
   /// "export_submap_meshes" {path} are queued for the worker and answered from it; anything
   /// else is answered at once with ok = false. `reply` is called exactly once (also when the
@@ -292,11 +323,15 @@ class Mapper {
     std::chrono::steady_clock::time_point received;
   };
   struct MaintenanceItem {
-    bool is_batch = false;
+    enum class Kind { kKeyframe, kBatch, kCovarianceReply };
+    Kind kind = Kind::kKeyframe;
     KeyframeId keyframe_id = 0;
     int64_t utime = 0;
     Transformationd T_G_K;
+    std::vector<uint64_t> landmark_ids;
     std::vector<std::pair<KeyframeId, Transformationd>> batch;
+    int64_t request_id = 0;
+    std::vector<FusionCovarianceAnswer> answers;
   };
   struct QueuedCommand {
     MapperCommand command;
@@ -314,10 +349,16 @@ class Mapper {
   // Keyframe path (maintenance thread; integrator thread in ground-truth mode).
   // A synthesised keyframe whose id (frame id) was used before gets the next unused id.
   void applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K,
-                     bool synthesised = false);
+                     bool synthesised = false, std::span<const uint64_t> landmark_ids = {});
   void applyBatch(const std::vector<std::pair<KeyframeId, Transformationd>>& batch);
-  // A keyframe or a batch, errors counted (maintenance thread).
+  // A keyframe, a batch or a covariance reply, errors counted (maintenance thread).
   void applyMaintenanceItem(const MaintenanceItem& item);
+  // Map maintenance (maintenance thread): answers -> fusion queue; the next request.
+  void applyCovarianceReply(const MaintenanceItem& item);
+  void requestCovariances();
+  double secondsSinceStart() const;
+  // Worker thread: one accepted pair.
+  void fusePair(const FusionPair& pair);
   // Worker thread.
   MapperReply exportMesh(const MapperCommand& command);
   MapperReply exportSubmapMeshes(const MapperCommand& command);
@@ -351,6 +392,7 @@ class Mapper {
   std::condition_variable queue_cv_;
   std::deque<MaintenanceItem> maintenance_queue_;
   std::deque<QueuedCommand> command_queue_;
+  std::deque<FusionPair> fusion_queue_;  // accepted pairs for the worker
   bool maintenance_busy_ = false;
   bool worker_busy_ = false;
   std::atomic<bool> integrator_busy_{false};
@@ -360,8 +402,8 @@ class Mapper {
   float last_ms_ = 0.0f;
 
   std::atomic<uint64_t> frames_received_{0}, frames_integrated_{0}, frames_cut_by_budget_{0},
-      poses_received_{0}, keyframes_applied_{0}, keyframe_batches_{0}, submaps_moved_{0}, exports_done_{0},
-      exports_failed_{0}, source_restarts_{0};
+      poses_received_{0}, keyframes_applied_{0}, keyframe_batches_{0}, submaps_moved_{0},
+      exports_done_{0}, exports_failed_{0}, source_restarts_{0};
   std::mutex pose_order_mutex_;  // serialises the restart decision of onFramePose
   std::array<std::atomic<uint64_t>, kNumInputProblems> problems_{};
   std::mutex depth_order_mutex_;
@@ -371,6 +413,11 @@ class Mapper {
   bool started_ = false, stopped_ = false;
   std::mutex lifecycle_mutex_;
   std::thread integrator_thread_, maintenance_thread_, worker_thread_;
+
+  CovarianceRequester covariance_requester_;
+  mutable std::mutex scheduler_mutex_;  // guards scheduler_ (a leaf)
+  FusionScheduler scheduler_;
+  std::chrono::steady_clock::time_point start_time_ = std::chrono::steady_clock::now();
 };
 
 /// A distinct colour per submap id (golden-ratio hue steps, full saturation, bright), for

@@ -25,6 +25,8 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(shipped.command_reply_channel, defaults.command_reply_channel);
   EXPECT_EQ(shipped.map_status_channel, defaults.map_status_channel);
   EXPECT_EQ(shipped.heartbeat_channel, defaults.heartbeat_channel);
+  EXPECT_EQ(shipped.covariance_request_channel, defaults.covariance_request_channel);
+  EXPECT_EQ(shipped.covariance_reply_channel, defaults.covariance_reply_channel);
   EXPECT_EQ(a.layer.voxel_size, b.layer.voxel_size);
   EXPECT_EQ(a.layer.voxels_per_side, b.layer.voxels_per_side);
   EXPECT_EQ(a.integrator_type, b.integrator_type);
@@ -46,6 +48,14 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.fusion.min_sample_coverage, b.fusion.min_sample_coverage);
   EXPECT_EQ(a.fusion.use_color, b.fusion.use_color);
   EXPECT_EQ(a.fusion.num_threads, b.fusion.num_threads);
+  EXPECT_EQ(a.maintenance.enabled, b.maintenance.enabled);
+  EXPECT_EQ(a.maintenance.candidates.min_shared_landmarks,
+            b.maintenance.candidates.min_shared_landmarks);
+  EXPECT_EQ(a.maintenance.candidates.min_shared_ratio, b.maintenance.candidates.min_shared_ratio);
+  EXPECT_EQ(a.maintenance.q_min, b.maintenance.q_min);
+  EXPECT_EQ(a.maintenance.max_pairs_per_request, b.maintenance.max_pairs_per_request);
+  EXPECT_EQ(a.maintenance.reply_timeout_s, b.maintenance.reply_timeout_s);
+  EXPECT_EQ(a.maintenance.retry_after_s, b.maintenance.retry_after_s);
   EXPECT_EQ(a.creation.max_keyframes_per_subvolume, b.creation.max_keyframes_per_subvolume);
   EXPECT_EQ(a.keyframe_every_n_frames, b.keyframe_every_n_frames);
   EXPECT_EQ(a.pose_buffer.max_gap_s, b.pose_buffer.max_gap_s);
@@ -79,7 +89,8 @@ TEST(MapperConfigTest, AbsentKeysKeepTheMapperDefaultsNotTheGenericOnes) {
 TEST(MapperConfigTest, ReadsOverrides) {
   const MapperProcessConfig config = loadMapperConfig(YAML::Load(
       "pose_source: tracker\noutput_dir: /data/maps\nlcm_url: udpm://x\n"
-      "channels: {depth: D, command: C}\nlayer: {voxel_size: 0.02}\n"
+      "channels: {depth: D, command: C, covariance_request: REQ, covariance_reply: REP}\n"
+      "layer: {voxel_size: 0.02}\n"
       "integrator: {truncation_distance_m: 0.08, num_threads: 2}\n"
       "subvolumes: {max_keyframes_per_subvolume: 5, keyframe_every_n_frames: 3}\n"
       "poses: {max_gap_s: 0.1, max_wait_s: 0.2, buffer_capacity: 64, restart_after_backwards_s: "
@@ -87,7 +98,9 @@ TEST(MapperConfigTest, ReadsOverrides) {
       "queues: {pending_frames: 2, maintenance: 8, commands: 1}\n"
       "worker: {niceness: 19, sched_idle: false}\n"
       "status: {period_s: 0.5, progress_period_s: 2, timing_window: 10, log_interval_s: 1}\n"
-      "fusion: {num_threads: 1}\nmesh: {use_color: false}\n"));
+      "fusion: {num_threads: 1}\nmesh: {use_color: false}\n"
+      "maintenance: {enabled: false, min_shared_landmarks: 50, min_shared_ratio: 0.5, q_min: "
+      "2500, max_pairs_per_request: 3, reply_timeout_s: 1, retry_after_s: 9}\n"));
   const MapperConfig& m = config.mapper;
   EXPECT_EQ(m.pose_source, PoseSource::kTracker);
   EXPECT_EQ(m.output_dir, "/data/maps");
@@ -114,6 +127,15 @@ TEST(MapperConfigTest, ReadsOverrides) {
   EXPECT_EQ(m.log_interval_s, 1.0);
   EXPECT_EQ(m.fusion.num_threads, 1);
   EXPECT_FALSE(m.mesh.use_color);
+  EXPECT_FALSE(m.maintenance.enabled);
+  EXPECT_EQ(m.maintenance.candidates.min_shared_landmarks, 50);
+  EXPECT_EQ(m.maintenance.candidates.min_shared_ratio, 0.5);
+  EXPECT_EQ(m.maintenance.q_min, 2500.0);
+  EXPECT_EQ(m.maintenance.max_pairs_per_request, 3);
+  EXPECT_EQ(m.maintenance.reply_timeout_s, 1.0);
+  EXPECT_EQ(m.maintenance.retry_after_s, 9.0);
+  EXPECT_EQ(config.covariance_request_channel, "REQ");
+  EXPECT_EQ(config.covariance_reply_channel, "REP");
 }
 
 TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
@@ -125,6 +147,9 @@ TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"pose_sorce: tracker\n", "pose_sorce"},
       {"pose_source: slam\n", "pose_source"},
       {"channels: {dept: X}\n", "dept"},
+      {"maintenance: {q_min: 0}\n", "maintenance.q_min"},
+      {"maintenance: {min_shared_ratio: 1.5}\n", "maintenance.candidates.min_shared_ratio"},
+      {"maintenance: {qmin: 5}\n", "qmin"},
       {"layer: {voxel_size: -1}\n", "voxel_size"},
       {"integrator: {truncation_distance_m: 0.01}\n", "truncation"},  // < one 4 cm voxel
       {"integrator: {type: magic}\n", "integrator.type"},

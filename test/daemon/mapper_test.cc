@@ -11,6 +11,7 @@
 #include <future>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <string>
 #include <thread>
@@ -491,6 +492,132 @@ TEST(MapperTest, TrackerModeFollowsKeyframesAndStartsANewSubvolumeAfterAJump) {
   EXPECT_EQ(mapper.collection().getSubmap(1)->anchorKeyframe(), 102);
   EXPECT_TRUE(mapper.collection().getSubmap(1)->T_G_M().isApprox(frames[5].T_G_C, 1e-12));
   EXPECT_GT(mapper.collection().getSubmap(1)->numBlocks(), 0u);
+}
+
+/// Covariance requests the mapper made, for a test to answer.
+struct RequestLog {
+  std::mutex mutex;
+  std::vector<FusionCovarianceRequest> requests;
+  Mapper::CovarianceRequester requester() {
+    return [this](const FusionCovarianceRequest& r) {
+      std::lock_guard<std::mutex> lock(mutex);
+      requests.push_back(r);
+    };
+  }
+  /// Waits up to 5 s for request number `n` (0-based).
+  std::optional<FusionCovarianceRequest> waitFor(size_t n) {
+    for (int i = 0; i < 500; ++i) {
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (requests.size() > n) return requests[n];
+      }
+      std::this_thread::sleep_for(milliseconds(10));
+    }
+    return std::nullopt;
+  }
+};
+
+std::vector<uint64_t> landmarkRange(uint64_t begin, uint64_t end) {
+  std::vector<uint64_t> ids;
+  for (uint64_t i = begin; i < end; ++i) ids.push_back(i);
+  return ids;
+}
+
+// Map maintenance end to end in one process: keyframes carry landmark ids, two finished
+// subvolumes that share enough landmarks become a candidate, the mapper asks for
+// Sigma_{newer anchor | older anchor}, and an answer with q >= q_min makes the worker fuse the
+// newer subvolume into the older (its keyframes join it, pose batches naming them stay
+// known). An answer with q < q_min fuses nothing. The active subvolume is never proposed.
+TEST(MapperTest, TrackerModeFusesSubvolumesWhoseCovarianceIsSmallEnough) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  config.pose_source = PoseSource::kTracker;
+  config.creation.max_keyframes_per_subvolume = 2;
+  config.maintenance.q_min = 1e4;
+  LogLines log;
+  Mapper mapper(config, log.sink());
+  RequestLog requests;
+  mapper.setCovarianceRequester(requests.requester());
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  const auto& frames = roomFrames();
+  auto frameWithPose = [&](size_t i) {
+    ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));
+    ASSERT_TRUE(mapper.onFramePose(groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C)));
+    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  };
+  auto keyframe = [&](KeyframeId id, size_t frame, uint64_t first, uint64_t last) {
+    ASSERT_TRUE(mapper.onKeyframe(id, utimeOf(frames[frame]), frames[frame].T_G_C,
+                                  landmarkRange(first, last)));
+    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  };
+  // Subvolume 0: keyframes 100, 101 see landmarks [0, 100); subvolume 1: 102, 103 see
+  // [50, 150) (50 shared, half of each set); subvolume 2: 104 sees [1000, 1100).
+  keyframe(100, 0, 0, 100);
+  for (size_t i = 0; i < 3; ++i) frameWithPose(i);
+  keyframe(101, 2, 0, 100);
+  keyframe(102, 3, 50, 150);
+  for (size_t i = 3; i < 6; ++i) frameWithPose(i);
+  keyframe(103, 5, 50, 150);
+  {
+    // The maintenance thread asks right after each item, before it is idle: nothing yet,
+    // because subvolume 1 is active.
+    std::lock_guard<std::mutex> lock(requests.mutex);
+    EXPECT_TRUE(requests.requests.empty());
+  }
+  keyframe(104, 6, 1000, 1100);
+  frameWithPose(6);
+  ASSERT_EQ(mapper.collection().size(), 3u);
+  const size_t blocks_0 = mapper.collection().getSubmap(0)->numBlocks();
+  const size_t blocks_1 = mapper.collection().getSubmap(1)->numBlocks();
+
+  const std::optional<FusionCovarianceRequest> request = requests.waitFor(0);
+  ASSERT_TRUE(request.has_value());
+  ASSERT_EQ(request->pairs.size(), 1u);
+  EXPECT_EQ(request->pairs[0].older, 0);
+  EXPECT_EQ(request->pairs[0].newer, 1);
+  EXPECT_EQ(request->pairs[0].older_keyframe, 100);
+  EXPECT_EQ(request->pairs[0].newer_keyframe, 102);
+  EXPECT_EQ(request->pairs[0].shared_landmarks, 50);
+
+  mapper.onCovarianceReply(request->request_id, {FusionCovarianceAnswer{true, "", 2e4}});
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(20000)));
+  ASSERT_EQ(mapper.collection().size(), 2u);
+  EXPECT_EQ(mapper.collection().getSubmap(1), nullptr);
+  const std::shared_ptr<Submap> fused = mapper.collection().getSubmap(0);
+  EXPECT_EQ(fused->keyframeIds(), (std::vector<KeyframeId>{100, 101, 102, 103}));
+  EXPECT_GT(fused->numBlocks(), std::max(blocks_0, blocks_1));
+  EXPECT_EQ(log.countContaining("fused subvolume 1 into 0"), 1u);
+  MapperStatus s = mapper.status();
+  EXPECT_EQ(s.fusion.candidates, 1u);
+  EXPECT_EQ(s.fusion.requested, 1u);
+  EXPECT_EQ(s.fusion.accepted, 1u);
+  EXPECT_EQ(s.fusion.fused, 1u);
+  EXPECT_EQ(s.fusion.rejected_by_q, 0u);
+  // A correction naming the absorbed subvolume's anchor: known, moves nothing.
+  mapper.onKeyframePoses({{102, frames[3].T_G_C}});
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  EXPECT_EQ(mapper.status().problem(InputProblem::kKeyframePoseUnknown), 0u);
+
+  // Keyframe 105 joins subvolume 2 and sees [0, 100) too: 2 shares 100 landmarks with 0
+  // once 106 anchors subvolume 3 and 2 is finished. Its answer is below q_min.
+  keyframe(105, 7, 0, 100);
+  keyframe(106, 8, 2000, 2100);
+  frameWithPose(8);
+  ASSERT_EQ(mapper.collection().size(), 3u);  // 0, 2, 3
+  const std::optional<FusionCovarianceRequest> second = requests.waitFor(1);
+  ASSERT_TRUE(second.has_value());
+  ASSERT_EQ(second->pairs.size(), 1u);
+  EXPECT_EQ(second->pairs[0].older, 0);
+  EXPECT_EQ(second->pairs[0].newer, 2);
+  EXPECT_EQ(second->pairs[0].newer_keyframe, 104);
+  EXPECT_EQ(second->pairs[0].shared_landmarks, 100);
+  mapper.onCovarianceReply(second->request_id, {FusionCovarianceAnswer{true, "", 5e3}});
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  s = mapper.status();
+  EXPECT_EQ(s.fusion.rejected_by_q, 1u);
+  EXPECT_EQ(s.fusion.fused, 1u);
+  EXPECT_EQ(mapper.collection().size(), 3u);
 }
 
 TEST(MapperTest, StopAppliesTheKeyframesStillQueued) {

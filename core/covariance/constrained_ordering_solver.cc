@@ -1,0 +1,38 @@
+#include "core/covariance/constrained_ordering_solver.h"
+
+#include "core/covariance/block_ordering.h"
+
+namespace cblox {
+
+std::string validate(const ConstrainedOrderingSolverConfig& config) {
+  return validateFactorField(config.factor);
+}
+
+ConstrainedOrderingSolver::ConstrainedOrderingSolver(ReducedCameraMatrix S,
+                                                     const ConstrainedOrderingSolverConfig& config)
+    : S_(std::move(S)),
+      config_(validatedConfig(config, "ConstrainedOrderingSolver")),
+      A_(S_.matrix) {}
+
+std::vector<ConditionalCovariance> ConstrainedOrderingSolver::compute(
+    std::span<const KeyframePair> pairs) {
+  std::vector<ConditionalCovariance> out;
+  out.reserve(pairs.size());
+  for (const KeyframePair& pair : pairs) out.push_back(computePair(pair));
+  return out;
+}
+
+ConditionalCovariance ConstrainedOrderingSolver::computePair(const KeyframePair& pair) {
+  if (std::string e = pairIdError(S_, pair); !e.empty()) return failedPair(pair, std::move(e));
+  std::vector<int> constraint(S_.numBlocks(), 0);
+  constraint[S_.blockOf(pair.i)] = 1;
+  constraint[S_.blockOf(pair.j)] = 2;
+  const std::vector<int> perm = expandBlockPermutation(constrainedBlockOrdering(S_, constraint));
+  CholmodFactorOutcome f =
+      factorizeWithPermutation(common_, A_, perm, config_.factor, S_.keyframe_ids);
+  if (!f.ok) return failedPair(pair, std::move(f.error));
+  const Eigen::MatrixXd L22 = trailingFactorBlock(*f.factor.get(), 12);
+  return conditionalFromFactorBlock(pair, L22.topLeftCorner<6, 6>());
+}
+
+}  // namespace cblox

@@ -9,10 +9,12 @@
 //
 // Subscribes: stereo mode CBLOX_STEREO (stereo_pair_t), RGB-D mode CBLOX_DEPTH
 // (depth_frame_t with registered colour); initial_pose ground_truth: CBLOX_GT_POSE
-// (pose_stamped_t).
+// (pose_stamped_t); CBLOX_COV_REQUEST (covariance_request_t) from the mapper.
 // Publishes: CBLOX_FRAME_POSE (frame_pose_t) for every frame processed, CBLOX_KEYFRAME
 // (keyframe_t) for every new keyframe, CBLOX_KEYFRAME_POSES (keyframe_pose_batch_t) after
-// every local BA, loop correction and global BA, CBLOX_HEARTBEAT (heartbeat_t) every second.
+// every local BA, loop correction and global BA, CBLOX_HEARTBEAT (heartbeat_t) every second,
+// CBLOX_COV_REPLY (covariance_reply_t) for every request (computed on the covariance
+// service's own low-priority thread).
 // Frame poses are of the tracked camera (the rectified left camera, or the RGB-D camera).
 // Exit status: 0 stopped by SIGINT/SIGTERM, 1 runtime error, 2 usage or configuration error.
 
@@ -29,6 +31,8 @@
 #include <string>
 #include <type_traits>
 
+#include <cblox/covariance_reply_t.hpp>
+#include <cblox/covariance_request_t.hpp>
 #include <cblox/depth_frame_t.hpp>
 #include <cblox/frame_pose_t.hpp>
 #include <cblox/heartbeat_t.hpp>
@@ -182,6 +186,26 @@ class TrackerLcmNode {
       std::lock_guard<std::mutex> lock(publish_mutex_);
       lcm_->publish(config_.keyframe_poses_channel, &msg);
     };
+    out.covariance_reply = [this](const KeyframeCovarianceReply& reply) {
+      covariance_reply_t msg;
+      msg.utime = wallUtime();
+      msg.request_id = reply.request_id;
+      for (const ConditionalCovariance& r : reply.results) {
+        covariance_pair_t pair{};
+        pair.keyframe_i = static_cast<int64_t>(r.i);
+        pair.keyframe_j = static_cast<int64_t>(r.j);
+        pair.ok = r.ok;
+        pair.error = r.error;
+        for (int row = 0; row < 6; ++row) {
+          for (int col = 0; col < 6; ++col) pair.sigma_i_given_j[6 * row + col] = r.sigma(row, col);
+        }
+        pair.q = r.q;
+        msg.pairs.push_back(std::move(pair));
+      }
+      msg.num_pairs = static_cast<int32_t>(msg.pairs.size());
+      std::lock_guard<std::mutex> lock(publish_mutex_);
+      lcm_->publish(config_.covariance_reply_channel, &msg);
+    };
     return out;
   }
 
@@ -195,6 +219,7 @@ class TrackerLcmNode {
     if (config_.tracker.initial_pose == InitialPose::kGroundTruth) {
       lcm_->subscribe(config_.ground_truth_channel, &TrackerLcmNode::onGroundTruth, this);
     }
+    lcm_->subscribe(config_.covariance_request_channel, &TrackerLcmNode::onCovarianceRequest, this);
   }
 
   void publishHeartbeat(const TrackerStatus& s, const std::string& state) {
@@ -226,6 +251,11 @@ class TrackerLcmNode {
     add("loops_closed", s.loops_closed);
     add("local_bundle_adjustments", s.local_bundle_adjustments);
     add("global_bundle_adjustments", s.global_bundle_adjustments);
+    add("covariance_requests", s.covariance_requests);
+    add("covariance_pairs_ok", s.covariance_pairs_ok);
+    add("covariance_pairs_failed", s.covariance_pairs_failed);
+    add_us("covariance_build_us", s.covariance_build_ms);
+    add_us("covariance_solve_us", s.covariance_solve_ms);
     add_us("tracking_median_us", s.tracking_ms_median);
     add_us("tracking_p95_us", s.tracking_ms_p95);
     add_us("frame_median_us", s.frame_ms_median);
@@ -284,6 +314,24 @@ class TrackerLcmNode {
       return;
     }
     node_->onGroundTruth(msg.frame_id, msg.utime, *T);
+  }
+
+  void onCovarianceRequest(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    covariance_request_t msg;
+    if (!decode(rbuf, &msg)) {
+      node_->reportProblem(TrackerProblem::kBadCovarianceRequest,
+                           channel + ": message does not decode");
+      return;
+    }
+    KeyframeCovarianceRequest request;
+    request.request_id = msg.request_id;
+    for (size_t k = 0; k < msg.keyframe_i.size() && k < msg.keyframe_j.size(); ++k) {
+      // A negative id is no keyframe: its bit pattern as uint64 names none either, so the
+      // pair is answered "not in the BA linearization".
+      request.pairs.push_back(KeyframePair{static_cast<uint64_t>(msg.keyframe_i[k]),
+                                           static_cast<uint64_t>(msg.keyframe_j[k])});
+    }
+    node_->onCovarianceRequest(std::move(request));
   }
 
   const TrackerProcessConfig& config_;

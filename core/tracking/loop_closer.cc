@@ -14,6 +14,7 @@
 #include "core/tracking/feature_measurement.h"
 #include "core/tracking/frame.h"
 #include "core/tracking/landmark_fusion.h"
+#include "core/tracking/map_ba_problem.h"
 
 namespace cblox {
 
@@ -479,42 +480,12 @@ void LoopCloser::correct(Keyframe* keyframe, const Verified& loop) {
 }
 
 void LoopCloser::globalBundleAdjustment(Keyframe* loop_keyframe) {
-  BundleAdjustmentProblem problem;
-  problem.camera = StereoCameraModel{camera_.intrinsics.fx, camera_.intrinsics.fy,
-                                     camera_.intrinsics.cx, camera_.intrinsics.cy, camera_.bf()};
-  std::vector<Keyframe*> keyframes;
-  std::vector<std::shared_ptr<Landmark>> landmarks;
-  int change_index = 0;
-  {
-    std::shared_lock<std::shared_mutex> lock(map_->mutex());
-    change_index = map_->changeIndex();
-    std::map<const Keyframe*, int> index_of;
-    for (Keyframe* k : map_->keyframes()) {
-      index_of[k] = static_cast<int>(keyframes.size());
-      keyframes.push_back(k);
-      // Gauge: the loop keyframe (fixed during the essential graph too).
-      problem.keyframes.push_back(
-          BaKeyframe{static_cast<uint64_t>(k->id), k->T_C_G(), k == loop_keyframe});
-    }
-    for (Landmark* l : map_->landmarks()) {
-      const int li = static_cast<int>(landmarks.size());
-      bool any = false;
-      for (const auto& [k, index] : l->observations()) {
-        const auto it = index_of.find(k);
-        if (it == index_of.end()) continue;
-        const FrameFeatures& f = k->features();
-        BaObservation o;
-        o.keyframe = it->second;
-        o.landmark = li;
-        static_cast<StereoMeasurement&>(o) = featureMeasurement(f, index, pyramid_);
-        problem.observations.push_back(o);
-        any = true;
-      }
-      if (!any) continue;
-      landmarks.push_back(l->shared_from_this());
-      problem.landmarks.push_back(BaLandmark{l->id, l->position()});
-    }
-  }
+  // Gauge: the loop keyframe (fixed during the essential graph too).
+  MapBaProblem map_problem = buildMapBaProblem(*map_, camera_, pyramid_, loop_keyframe);
+  const BundleAdjustmentProblem& problem = map_problem.problem;
+  const std::vector<Keyframe*>& keyframes = map_problem.keyframes;
+  const std::vector<std::shared_ptr<Landmark>>& landmarks = map_problem.landmarks;
+  const int change_index = map_problem.change_index;
   if (problem.observations.empty()) return;
   const BundleAdjustmentResult result = bundleAdjust(problem, config_.global_ba);
   KeyframePoseBatch batch;

@@ -195,7 +195,8 @@ std::string TrackerProcessConfig::validate() const {
   if (std::string e = tracker.validate(); !e.empty()) return e;
   for (const std::string* channel :
        {&stereo_channel, &depth_channel, &ground_truth_channel, &frame_pose_channel,
-        &keyframe_channel, &keyframe_poses_channel, &heartbeat_channel}) {
+        &keyframe_channel, &keyframe_poses_channel, &heartbeat_channel, &covariance_request_channel,
+        &covariance_reply_channel}) {
     if (channel->empty()) return "channels: a channel name is empty";
   }
   if (calibration_source == CalibrationSource::kFile && calibration_file.empty()) {
@@ -227,9 +228,10 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
   TrackerProcessConfig config;
   TrackerNodeConfig& t = config.tracker;
   const std::string top = "tracker";
-  if (!readSection(root, top, {{"lcm_url", &config.lcm_url}, {"vocabulary", &config.vocabulary}},
-                   {"mode", "initial_pose", "channels", "camera", "frames", "tracker",
-                    "local_mapping", "loop_closing", "input", "image_check", "status"})) {
+  if (!readSection(
+          root, top, {{"lcm_url", &config.lcm_url}, {"vocabulary", &config.vocabulary}},
+          {"mode", "initial_pose", "channels", "camera", "frames", "tracker", "local_mapping",
+           "loop_closing", "covariance", "input", "image_check", "status"})) {
     finishTrackerConfig(&config);
     return config;
   }
@@ -246,7 +248,9 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
                {"frame_pose", &config.frame_pose_channel},
                {"keyframe", &config.keyframe_channel},
                {"keyframe_poses", &config.keyframe_poses_channel},
-               {"heartbeat", &config.heartbeat_channel}});
+               {"heartbeat", &config.heartbeat_channel},
+               {"covariance_request", &config.covariance_request_channel},
+               {"covariance_reply", &config.covariance_reply_channel}});
   const YAML::Node camera = root["camera"];
   if (readSection(camera, "camera",
                   {{"calibration_file", &config.calibration_file},
@@ -262,6 +266,17 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
   loadTracking(root["tracker"], &t.slam.tracker);
   loadLocalMapping(root["local_mapping"], &t.slam.local_mapping);
   loadLoopClosing(root["loop_closing"], &t.slam);
+  const YAML::Node covariance = root["covariance"];
+  if (readSection(covariance, "covariance", {}, {"method", "max_queued_requests", "niceness"})) {
+    readOptionalEnum(covariance, "covariance", "method",
+                     {{"constrained_ordering", CovarianceMethod::kConstrainedOrdering},
+                      {"batch", CovarianceMethod::kBatch},
+                      {"kaess_recovery", CovarianceMethod::kKaessRecovery}},
+                     &t.covariance.method);
+    readInteger(covariance, "covariance", "max_queued_requests", 1, 1024,
+                &t.covariance.max_queued_requests);
+    readInteger(covariance, "covariance", "niceness", 0, 19, &t.covariance.niceness);
+  }
 
   const YAML::Node input = root["input"];
   if (readSection(input, "input", {{"ground_truth_wait_s", &t.ground_truth_wait_s}},

@@ -33,6 +33,8 @@ struct TrackerProcessConfig {
   std::string keyframe_channel = "CBLOX_KEYFRAME";
   std::string keyframe_poses_channel = "CBLOX_KEYFRAME_POSES";
   std::string heartbeat_channel = "CBLOX_HEARTBEAT";
+  std::string covariance_request_channel = "CBLOX_COV_REQUEST";  ///< from the mapper
+  std::string covariance_reply_channel = "CBLOX_COV_REPLY";      ///< to the mapper
   /// CBLOX_HEARTBEAT period, seconds (> 0).
   double status_period_s = 1.0;
   /// Progress lines on stdout every this many seconds (> 0).

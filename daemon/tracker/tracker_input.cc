@@ -22,10 +22,10 @@ std::string sizeText(int width, int height) {
 
 const char* trackerProblemName(TrackerProblem problem) {
   static constexpr const char* kNames[] = {
-      "undecodable",     "bad_image",          "bad_calibration", "calibration_changed",
-      "wrong_size",      "timestamp_mismatch", "out_of_order",    "dark_image",
-      "saturated_image", "textureless_image",  "no_ground_truth", "not_initialized",
-      "tracking_lost",   "tracking_failed",    "bad_ground_truth"};
+      "undecodable",     "bad_image",          "bad_calibration",  "calibration_changed",
+      "wrong_size",      "timestamp_mismatch", "out_of_order",     "dark_image",
+      "saturated_image", "textureless_image",  "no_ground_truth",  "not_initialized",
+      "tracking_lost",   "tracking_failed",    "bad_ground_truth", "bad_covariance_request"};
   static_assert(std::size(kNames) == kNumTrackerProblems);
   const size_t index = static_cast<size_t>(problem);
   return index < kNumTrackerProblems ? kNames[index] : "unknown";
@@ -36,7 +36,8 @@ bool isRejection(TrackerProblem problem) {
 }
 
 std::string trackerProblemCounter(TrackerProblem problem) {
-  const bool rejected = isRejection(problem) || problem == TrackerProblem::kBadGroundTruth;
+  const bool rejected = isRejection(problem) || problem == TrackerProblem::kBadGroundTruth ||
+                        problem == TrackerProblem::kBadCovarianceRequest;
   return std::string(rejected ? "rejected_" : "untracked_") + trackerProblemName(problem);
 }
 

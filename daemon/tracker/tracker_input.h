@@ -33,7 +33,8 @@ enum class TrackerProblem : int {
   kTrackingLost,      ///< the tracker lost track (its reason is logged)
   kTrackingFailed,    ///< the SLAM system threw (never expected)
   // Other messages (heartbeat "rejected_<name>"):
-  kBadGroundTruth,  ///< CBLOX_GT_POSE that does not decode or holds an invalid pose
+  kBadGroundTruth,        ///< CBLOX_GT_POSE that does not decode or holds an invalid pose
+  kBadCovarianceRequest,  ///< CBLOX_COV_REQUEST that does not decode
   kCount
 };
 inline constexpr size_t kNumTrackerProblems = static_cast<size_t>(TrackerProblem::kCount);

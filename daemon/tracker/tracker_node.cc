@@ -74,6 +74,7 @@ std::string TrackerNodeConfig::validate() const {
   if (!(log_interval_s > 0.0) || !std::isfinite(log_interval_s)) {
     return "log_interval_s must be finite and > 0";
   }
+  if (std::string e = covariance.validate(); !e.empty()) return "covariance." + e;
   return {};
 }
 
@@ -108,10 +109,13 @@ void TrackerNode::stop() {
   queue_.notify();
   if (tracking_thread_.joinable()) tracking_thread_.join();
   SlamSystem* system = nullptr;
+  KeyframeCovarianceService* covariance = nullptr;
   {
     std::lock_guard<std::mutex> system_lock(system_mutex_);
     system = system_.get();
+    covariance = covariance_.get();
   }
+  if (covariance != nullptr) covariance->stop();  // answers the request in hand
   // Kept (not destroyed) so that status() still reads the final map; callbacks may still
   // report the last pose batches while it stops.
   if (system != nullptr) system->stop();
@@ -235,9 +239,33 @@ bool TrackerNode::ensureSystem(const RectifiedStereoCalibration& calibration, st
       ", baseline " + std::to_string(camera.baseline_m) + " m" +
       (config_.mode == TrackerMode::kRgbd ? " (virtual)" : "") +
       (vocabulary_ != nullptr ? "" : "; no vocabulary: no relocalization, no loop closing"));
+  auto covariance = std::make_unique<KeyframeCovarianceService>(
+      system->map(), camera, system->pyramid(), config_.covariance,
+      [this](const KeyframeCovarianceReply& reply) {
+        if (outputs_.covariance_reply) outputs_.covariance_reply(reply);
+      });
+  covariance->start();
   std::lock_guard<std::mutex> lock(system_mutex_);
   system_ = std::move(system);
+  covariance_ = std::move(covariance);
   return true;
+}
+
+void TrackerNode::onCovarianceRequest(KeyframeCovarianceRequest request) {
+  {
+    std::lock_guard<std::mutex> lock(system_mutex_);
+    if (covariance_ && !stop_) {
+      covariance_->submit(std::move(request));
+      return;
+    }
+  }
+  KeyframeCovarianceReply reply;
+  reply.request_id = request.request_id;
+  for (const KeyframePair& pair : request.pairs) {
+    reply.results.push_back(
+        failedPair(pair, stop_ ? "the tracker is stopping" : "the tracker has no map yet"));
+  }
+  if (outputs_.covariance_reply) outputs_.covariance_reply(reply);
 }
 
 void TrackerNode::publish(const FramePoseReport& report) {
@@ -368,6 +396,14 @@ TrackerStatus TrackerNode::status() const {
       s.loops_closed = loops.loops_closed;
       s.global_bundle_adjustments = loops.global_bundle_adjustments;
       s.local_bundle_adjustments = system_->localMappingStats().bundle_adjustments;
+    }
+    if (covariance_) {
+      const KeyframeCovarianceServiceStats c = covariance_->stats();
+      s.covariance_requests = c.requests;
+      s.covariance_pairs_ok = c.pairs_ok;
+      s.covariance_pairs_failed = c.pairs_failed;
+      s.covariance_build_ms = c.last_build_ms;
+      s.covariance_solve_ms = c.last_solve_ms;
     }
   }
   s.tracking_ms_median = tracking_ms_.quantile(0.5);

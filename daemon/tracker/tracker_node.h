@@ -19,6 +19,7 @@
 
 #include "core/geometry/se3.h"
 #include "core/geometry/stereo_rig.h"
+#include "core/tracking/keyframe_covariance_service.h"
 #include "core/tracking/slam_system.h"
 #include "core/vocabulary/binary_vocabulary.h"
 #include "daemon/mapper/pending_frames.h"
@@ -71,6 +72,8 @@ struct TrackerNodeConfig {
   size_t timing_window = 200;
   /// Minimum interval between two log lines of the same problem kind, seconds (> 0).
   double log_interval_s = 10.0;
+  /// The covariance service (CBLOX_COV_REQUEST -> CBLOX_COV_REPLY) for the mapper.
+  KeyframeCovarianceServiceConfig covariance;
 
   /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
   std::string validate() const;
@@ -111,6 +114,12 @@ struct TrackerStatus {
   uint64_t loops_closed = 0;
   uint64_t local_bundle_adjustments = 0;
   uint64_t global_bundle_adjustments = 0;
+  /// Covariance service: requests, pairs answered with a covariance / with an error, and
+  /// the last request's build (map -> S) and solve times, milliseconds.
+  uint64_t covariance_requests = 0;
+  uint64_t covariance_pairs_ok = 0;
+  uint64_t covariance_pairs_failed = 0;
+  double covariance_build_ms = 0.0, covariance_solve_ms = 0.0;
   /// Tracking time of a frame (TrackingResult::time_ms) and the whole frame (features,
   /// stereo matching and tracking), milliseconds, over the last timing_window frames.
   double tracking_ms_median = 0.0, tracking_ms_p95 = 0.0;
@@ -144,6 +153,9 @@ class TrackerNode {
     std::function<void(const FramePoseReport&)> frame_pose;
     std::function<void(const KeyframeInfo&)> keyframe;
     std::function<void(const KeyframePoseBatch&, PoseUpdateReason)> keyframe_poses;
+    /// Covariance replies: on the covariance service's thread (or the caller's, for a
+    /// request made before the map exists or dropped because the service was busy).
+    std::function<void(const KeyframeCovarianceReply&)> covariance_reply;
     /// Human-readable lines (problems, loop closures); default: stderr.
     std::function<void(const std::string&)> log;
   };
@@ -170,6 +182,10 @@ class TrackerNode {
   /// A ground-truth pose T_G_C of a frame (CBLOX_GT_POSE), used only with initial_pose
   /// ground_truth.
   void onGroundTruth(int64_t frame_id, int64_t utime, const Transformationd& T_G_C);
+  /// A covariance request (CBLOX_COV_REQUEST): queued for the covariance service, which
+  /// answers through Outputs::covariance_reply; before the map exists every pair fails at
+  /// once ("the tracker has no map yet").
+  void onCovarianceRequest(KeyframeCovarianceRequest request);
   /// Counts and logs a problem found outside the node (e.g. a message that did not decode).
   /// A rejection kind also counts as a received frame.
   void reportProblem(TrackerProblem problem, const std::string& detail);
@@ -212,6 +228,8 @@ class TrackerNode {
   // status(); system_mutex_ guards the pointer, not the system.
   mutable std::mutex system_mutex_;
   std::unique_ptr<SlamSystem> system_;
+  // Created with the system (reads its map); stopped first, destroyed first.
+  std::unique_ptr<KeyframeCovarianceService> covariance_;
   // Tracking thread only.
   bool pose_published_ = false;  // the last published frame had a pose
   bool map_started_ = false;     // the tracker has initialised its map

@@ -1,8 +1,9 @@
 // Multi-process test of cblox-mapper in tracker mode: this process plays the tracker (frame
-// poses, keyframes, a keyframe pose batch) and the capture (simulated depth frames), and
-// sends malformed messages; the mapper must integrate the frames, apply the batch, count
-// every bad input by kind and keep running. Runs in a private network namespace
-// (scripts/netns-run.sh; ctest does this).
+// poses, keyframes with landmark ids, covariance replies, a keyframe pose batch) and the
+// capture (simulated depth frames), and sends malformed messages; the mapper must integrate
+// the frames, ask for the covariance of its covisible subvolumes and fuse them when the
+// answer is certain enough, apply the batch, count every bad input by kind and keep running. Runs
+// in a private network namespace (scripts/netns-run.sh; ctest does this).
 
 #include <signal.h>
 #include <spawn.h>
@@ -10,18 +11,21 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <fstream>
 #include <map>
 #include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include <gtest/gtest.h>
 #include <cblox/command_reply_t.hpp>
 #include <cblox/command_t.hpp>
+#include <cblox/covariance_reply_t.hpp>
+#include <cblox/covariance_request_t.hpp>
 #include <cblox/frame_pose_t.hpp>
 #include <cblox/keyframe_pose_batch_t.hpp>
 #include <cblox/keyframe_t.hpp>
-#include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
 #include "daemon/lcm/messages.h"
@@ -63,6 +67,29 @@ std::map<std::string, std::string> statusOf(lcm::LCM* lcm, Replies* replies, int
   return values;
 }
 
+/// Plays the tracker's covariance service: every pair is certain (q = 1e6).
+struct CovarianceResponder {
+  lcm::LCM* lcm = nullptr;
+  std::vector<covariance_request_t> requests;
+  void onRequest(const lcm::ReceiveBuffer*, const std::string&, const covariance_request_t* m) {
+    requests.push_back(*m);
+    covariance_reply_t reply;
+    reply.utime = m->utime;
+    reply.request_id = m->request_id;
+    for (int k = 0; k < m->num_pairs; ++k) {
+      covariance_pair_t pair{};
+      pair.keyframe_i = m->keyframe_i[k];
+      pair.keyframe_j = m->keyframe_j[k];
+      pair.ok = true;
+      for (int d = 0; d < 6; ++d) pair.sigma_i_given_j[7 * d] = 1e-6;
+      pair.q = 1e6;
+      reply.pairs.push_back(pair);
+    }
+    reply.num_pairs = static_cast<int32_t>(reply.pairs.size());
+    lcm->publish("CBLOX_COV_REPLY", &reply);
+  }
+};
+
 int64_t value(const std::map<std::string, std::string>& values, const std::string& key) {
   const auto it = values.find(key);
   return it == values.end() ? 0 : std::stoll(it->second);
@@ -70,9 +97,15 @@ int64_t value(const std::map<std::string, std::string>& values, const std::strin
 
 TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput) {
   test::TempDir dir("cblox_mapper_tracker");
-  const std::vector<std::string> args = {CBLOX_MAPPER_EXE, "--pose-source", "tracker",
-                                         "--output-dir", dir.path().string(), "--lcm-url", kUrl,
-                                         "--quiet"};
+  // Two keyframes per subvolume: keyframes 0, 5 | 10, 15 | 20, 25 (frames every 5).
+  const std::string config = (dir.path() / "mapper.yaml").string();
+  {
+    std::ofstream out(config);
+    out << "subvolumes: {max_keyframes_per_subvolume: 2}\n";
+  }
+  const std::vector<std::string> args = {
+      CBLOX_MAPPER_EXE,    "--config",  config, "--pose-source", "tracker", "--output-dir",
+      dir.path().string(), "--lcm-url", kUrl,   "--quiet"};
   const pid_t mapper = test::spawnProcess(args);
   ASSERT_GT(mapper, 0);
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
@@ -81,6 +114,9 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
   ASSERT_TRUE(lcm.good());
   Replies replies;
   lcm.subscribe("CBLOX_CMD_REPLY", &Replies::onReply, &replies);
+  CovarianceResponder responder;
+  responder.lcm = &lcm;
+  lcm.subscribe("CBLOX_COV_REQUEST", &CovarianceResponder::onRequest, &responder);
 
   // The simulated room at 160 x 120, played as capture + tracker would.
   SourceOptions options;
@@ -111,7 +147,12 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
       keyframe.keyframe_id = frame.frame_id;
       keyframe.frame_id = frame.frame_id;
       keyframe.T_G_K = toPoseMsg(*frame.T_G_C);
-      keyframe.num_landmarks = 0;
+      // Keyframe k sees landmarks [10 k, 10 k + 100): subvolumes 0 ([0, 150)) and 1
+      // ([100, 250)) share 50, a third of each.
+      for (int64_t l = 10 * frame.frame_id; l < 10 * frame.frame_id + 100; ++l) {
+        keyframe.landmark_ids.push_back(l);
+      }
+      keyframe.num_landmarks = static_cast<int32_t>(keyframe.landmark_ids.size());
       lcm.publish("CBLOX_KEYFRAME", &keyframe);
     }
     lcm.publish("CBLOX_DEPTH", &depth);
@@ -123,8 +164,8 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
   // Malformed input: bytes that are no message, and a depth image whose data is short.
   const uint8_t garbage[5] = {1, 2, 3, 4, 5};
   lcm.publish("CBLOX_DEPTH", garbage, sizeof(garbage));
-  depth_frame_t truncated = toDepthFrameMsg(frame, source->info(), t0 + 10'000'000,
-                                            DepthEncoding::kFloat32Metres);
+  depth_frame_t truncated =
+      toDepthFrameMsg(frame, source->info(), t0 + 10'000'000, DepthEncoding::kFloat32Metres);
   truncated.depth.data.resize(100);
   truncated.depth.size = 100;
   lcm.publish("CBLOX_DEPTH", &truncated);
@@ -143,9 +184,9 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
   batch.utime = t0 + 30'000'000;
   batch.reason = keyframe_pose_batch_t::LOOP_CORRECTION;
   batch.keyframe_ids = {0, 424242};
-  batch.poses = {toPoseMsg(Transformationd(Eigen::Quaterniond::Identity(),
-                                           Eigen::Vector3d(1.0, 0.0, 0.0))),
-                 toPoseMsg(Transformationd::Identity())};
+  batch.poses = {
+      toPoseMsg(Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d(1.0, 0.0, 0.0))),
+      toPoseMsg(Transformationd::Identity())};
   batch.num_keyframes = 2;
   lcm.publish("CBLOX_KEYFRAME_POSES", &batch);
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
@@ -160,6 +201,17 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
   EXPECT_EQ(value(status, "rejected_depth_undecodable"), 2);
   EXPECT_EQ(value(status, "rejected_pose_invalid"), 1);
   EXPECT_EQ(value(status, "rejected_keyframe_pose_unknown"), 1);
+  // Map maintenance: subvolume 1 (anchor keyframe 10) given subvolume 0 (keyframe 0) was
+  // asked for once subvolume 2 took over, answered certain, and fused.
+  ASSERT_EQ(responder.requests.size(), 1u);
+  ASSERT_EQ(responder.requests[0].num_pairs, 1);
+  EXPECT_EQ(responder.requests[0].keyframe_i[0], 10);
+  EXPECT_EQ(responder.requests[0].keyframe_j[0], 0);
+  EXPECT_EQ(value(status, "fusion_candidates"), 1);
+  EXPECT_EQ(value(status, "covariance_requested"), 1);
+  EXPECT_EQ(value(status, "subvolumes_fused"), 1);
+  EXPECT_EQ(value(status, "rejected_by_q"), 0);
+  EXPECT_EQ(value(status, "subvolumes"), 2);
 
   // Still alive after all that: a second status answers; SIGTERM ends it cleanly.
   EXPECT_FALSE(statusOf(&lcm, &replies, 78).empty());

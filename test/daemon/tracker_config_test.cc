@@ -40,6 +40,11 @@ TEST(TrackerConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(shipped.keyframe_channel, defaults.keyframe_channel);
   EXPECT_EQ(shipped.keyframe_poses_channel, defaults.keyframe_poses_channel);
   EXPECT_EQ(shipped.heartbeat_channel, defaults.heartbeat_channel);
+  EXPECT_EQ(shipped.covariance_request_channel, defaults.covariance_request_channel);
+  EXPECT_EQ(shipped.covariance_reply_channel, defaults.covariance_reply_channel);
+  EXPECT_EQ(a.covariance.method, b.covariance.method);
+  EXPECT_EQ(a.covariance.max_queued_requests, b.covariance.max_queued_requests);
+  EXPECT_EQ(a.covariance.niceness, b.covariance.niceness);
   EXPECT_EQ(shipped.calibration_source, defaults.calibration_source);
   EXPECT_EQ(shipped.calibration_file, defaults.calibration_file);
   EXPECT_FALSE(a.calibration.has_value());
@@ -141,7 +146,9 @@ TEST(TrackerConfigTest, ReadsOverrides) {
   const TrackerProcessConfig config = loadTrackerConfig(YAML::Load(
       "mode: rgbd\nlcm_url: udpm://x\nvocabulary: none\ninitial_pose: ground_truth\n"
       "channels: {stereo: S, depth: D, ground_truth_pose: G, frame_pose: F, keyframe: K,\n"
-      "           keyframe_poses: P, heartbeat: H}\n"
+      "           keyframe_poses: P, heartbeat: H, covariance_request: CQ,\n"
+      "           covariance_reply: CR}\n"
+      "covariance: {method: kaess_recovery, max_queued_requests: 2, niceness: 0}\n"
       "camera: {close_depth_baselines: 35, rgbd_baseline_m: 0.07}\n"
       "frames: {orb: {num_features: 1500, num_levels: 6}, stereo: {min_depth_m: 0.5},\n"
       "         parallel_stereo_extraction: false}\n"
@@ -167,6 +174,11 @@ TEST(TrackerConfigTest, ReadsOverrides) {
   EXPECT_EQ(config.keyframe_channel, "K");
   EXPECT_EQ(config.keyframe_poses_channel, "P");
   EXPECT_EQ(config.heartbeat_channel, "H");
+  EXPECT_EQ(config.covariance_request_channel, "CQ");
+  EXPECT_EQ(config.covariance_reply_channel, "CR");
+  EXPECT_EQ(t.covariance.method, CovarianceMethod::kKaessRecovery);
+  EXPECT_EQ(t.covariance.max_queued_requests, 2u);
+  EXPECT_EQ(t.covariance.niceness, 0);
   EXPECT_EQ(t.close_depth_baselines, 35.0);
   EXPECT_EQ(t.rgbd_baseline_m, 0.07);
   EXPECT_EQ(t.slam.frames.orb.num_features, 1500);
@@ -227,6 +239,9 @@ TEST(TrackerConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"loop_closing: {seed: -1}\n", "loop_closing.seed"},
       {"loop_closing: {enabled: maybe}\n", "loop_closing.enabled"},
       {"input: {queue_capacity: 0}\n", "input.queue_capacity"},
+      {"covariance: {method: magic}\n", "covariance.method"},
+      {"covariance: {niceness: 20}\n", "covariance.niceness"},
+      {"covariance: {max_queued_requests: 0}\n", "covariance.max_queued_requests"},
       {"input: {queue_capacity: 17}\n", "input.queue_capacity"},
       {"input: {ground_truth_wait_s: -1}\n", "ground_truth_wait_s"},
       {"image_check: {dark_level: 250}\n", "dark_level"},

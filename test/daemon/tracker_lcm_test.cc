@@ -22,6 +22,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <cblox/covariance_reply_t.hpp>
+#include <cblox/covariance_request_t.hpp>
 #include <cblox/frame_pose_t.hpp>
 #include <cblox/heartbeat_t.hpp>
 #include <cblox/keyframe_pose_batch_t.hpp>
@@ -54,6 +56,7 @@ struct Received {
   std::map<int64_t, pose_stamped_t> ground_truth;
   std::optional<heartbeat_t> heartbeat;  // the tracker's latest
   size_t heartbeats = 0;
+  std::vector<covariance_reply_t> covariance_replies;
 
   void onPose(const lcm::ReceiveBuffer*, const std::string&, const frame_pose_t* m) {
     poses[m->frame_id] = *m;
@@ -67,6 +70,10 @@ struct Received {
   }
   void onGroundTruth(const lcm::ReceiveBuffer*, const std::string&, const pose_stamped_t* m) {
     ground_truth[m->frame_id] = *m;
+  }
+  void onCovarianceReply(const lcm::ReceiveBuffer*, const std::string&,
+                         const covariance_reply_t* m) {
+    covariance_replies.push_back(*m);
   }
   void onHeartbeat(const lcm::ReceiveBuffer*, const std::string&, const heartbeat_t* m) {
     if (m->process != "cblox-tracker") return;
@@ -88,6 +95,7 @@ void subscribeAll(lcm::LCM* lcm, Received* received) {
   lcm->subscribe("CBLOX_KEYFRAME_POSES", &Received::onBatch, received);
   lcm->subscribe("CBLOX_GT_POSE", &Received::onGroundTruth, received);
   lcm->subscribe("CBLOX_HEARTBEAT", &Received::onHeartbeat, received);
+  lcm->subscribe("CBLOX_COV_REPLY", &Received::onCovarianceReply, received);
 }
 
 /// Pumps LCM until `done()` or the deadline; true when done.
@@ -166,6 +174,42 @@ TEST(TrackerLcmTest, TracksTheSimulatedRoomCloseToGroundTruth) {
     return received.counter("frames_received") == kFrames &&
            received.counter("frames_processed") + received.counter("frames_dropped") == kFrames;
   });
+  // The covariance service (as the mapper asks it): Sigma of the last keyframe given the one
+  // before, and a pair naming no keyframe, answered in order with the request's id.
+  ASSERT_GE(received.keyframes.size(), 3u);
+  covariance_request_t request;
+  request.utime = 1;
+  request.request_id = 77;
+  request.keyframe_i = {received.keyframes.back().keyframe_id, 123456};
+  request.keyframe_j = {received.keyframes[received.keyframes.size() - 2].keyframe_id, 0};
+  request.num_pairs = 2;
+  lcm.publish("CBLOX_COV_REQUEST", &request);
+  ASSERT_TRUE(pumpUntil(&lcm, std::chrono::seconds(20), [&] {
+    return !received.covariance_replies.empty();
+  })) << "no CBLOX_COV_REPLY";
+  const covariance_reply_t& reply = received.covariance_replies.front();
+  EXPECT_EQ(reply.request_id, 77);
+  ASSERT_EQ(reply.num_pairs, 2);
+  EXPECT_EQ(reply.pairs[0].keyframe_i, request.keyframe_i[0]);
+  EXPECT_EQ(reply.pairs[0].keyframe_j, request.keyframe_j[0]);
+  ASSERT_TRUE(reply.pairs[0].ok) << reply.pairs[0].error;
+  // Row-major, symmetric, positive diagonal; q = 1 / lambda_max <= 1 / max diagonal entry.
+  double max_diagonal = 0.0;
+  for (int r = 0; r < 6; ++r) {
+    EXPECT_GT(reply.pairs[0].sigma_i_given_j[6 * r + r], 0.0);
+    max_diagonal = std::max(max_diagonal, reply.pairs[0].sigma_i_given_j[6 * r + r]);
+    for (int c = 0; c < 6; ++c) {
+      EXPECT_NEAR(reply.pairs[0].sigma_i_given_j[6 * r + c],
+                  reply.pairs[0].sigma_i_given_j[6 * c + r], 1e-12);
+    }
+  }
+  EXPECT_GT(reply.pairs[0].q, 0.0);
+  EXPECT_LE(reply.pairs[0].q, 1.0 / max_diagonal * (1 + 1e-9));
+  EXPECT_FALSE(reply.pairs[1].ok);
+  EXPECT_NE(reply.pairs[1].error.find("123456"), std::string::npos) << reply.pairs[1].error;
+  std::printf("covariance: Sigma_{%lld|%lld} q %.3g\n",
+              static_cast<long long>(reply.pairs[0].keyframe_i),
+              static_cast<long long>(reply.pairs[0].keyframe_j), reply.pairs[0].q);
   EXPECT_EQ(terminate(&lcm, tracker), 0);
   const double elapsed_s = std::chrono::duration<double>(Clock::now() - start).count();
   ASSERT_TRUE(received.heartbeat.has_value());

@@ -31,9 +31,14 @@ struct Collected {
   std::vector<KeyframeInfo> keyframes;
   std::vector<std::pair<KeyframePoseBatch, PoseUpdateReason>> batches;
   std::vector<std::string> log;
+  std::vector<KeyframeCovarianceReply> covariance_replies;
 
   TrackerNode::Outputs outputs() {
     TrackerNode::Outputs out;
+    out.covariance_reply = [this](const KeyframeCovarianceReply& r) {
+      std::lock_guard<std::mutex> lock(mutex);
+      covariance_replies.push_back(r);
+    };
     out.frame_pose = [this](const FramePoseReport& r) {
       std::lock_guard<std::mutex> lock(mutex);
       poses.push_back(r);
@@ -88,6 +93,15 @@ TEST(TrackerNodeTest, TracksRgbdFramesOfTheSimulatedRoom) {
   Collected out;
   TrackerNode node(config, nullptr, out.outputs());
   node.start();
+  // Before the map exists a covariance request fails at once, pair by pair.
+  node.onCovarianceRequest({1, {{1, 0}, {2, 0}}});
+  {
+    std::lock_guard<std::mutex> lock(out.mutex);
+    ASSERT_EQ(out.covariance_replies.size(), 1u);
+    ASSERT_EQ(out.covariance_replies[0].results.size(), 2u);
+    EXPECT_FALSE(out.covariance_replies[0].results[1].ok);
+    EXPECT_NE(out.covariance_replies[0].results[1].error.find("no map yet"), std::string::npos);
+  }
   std::map<int64_t, Transformationd> truth;
   CaptureFrame frame;
   std::string error;
@@ -104,7 +118,29 @@ TEST(TrackerNodeTest, TracksRgbdFramesOfTheSimulatedRoom) {
     ASSERT_TRUE(node.onFrame(std::move(input)));
     ASSERT_TRUE(node.waitUntilIdle(std::chrono::seconds(20)));  // no frame dropped
   }
+  // With the map: the service thread answers from it.
+  ASSERT_GE(out.keyframes.size(), 3u);
+  const uint64_t last = out.keyframes.back().id,
+                 before = out.keyframes[out.keyframes.size() - 2].id;
+  node.onCovarianceRequest({2, {{last, before}}});
+  for (int i = 0; i < 1000; ++i) {
+    {
+      std::lock_guard<std::mutex> lock(out.mutex);
+      if (out.covariance_replies.size() == 2) break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
   node.stop();
+  {
+    std::lock_guard<std::mutex> lock(out.mutex);
+    ASSERT_EQ(out.covariance_replies.size(), 2u);
+    const KeyframeCovarianceReply& reply = out.covariance_replies[1];
+    EXPECT_EQ(reply.request_id, 2);
+    ASSERT_EQ(reply.results.size(), 1u);
+    ASSERT_TRUE(reply.results[0].ok) << reply.results[0].error;
+    EXPECT_GT(reply.results[0].q, 0.0);
+    EXPECT_EQ(node.status().covariance_pairs_ok, 1u);
+  }
   ASSERT_EQ(out.poses.size(), kFrames);
   double max_translation_m = 0.0, max_rotation_deg = 0.0;
   for (const FramePoseReport& r : out.poses) {

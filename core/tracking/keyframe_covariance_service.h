@@ -1,0 +1,131 @@
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/covariance/conditional_covariance.h"
+#include "core/covariance/reduced_camera_matrix.h"
+#include "core/features/scale_pyramid.h"
+#include "core/optimization/ba_linearization.h"
+#include "core/tracking/sparse_map.h"
+#include "core/tracking/tracking_camera.h"
+
+namespace cblox {
+
+/// Which core/covariance solver answers a request.
+enum class CovarianceMethod {
+  kConstrainedOrdering,  ///< the paper's: one CAMD ordering + factorisation per pair
+  kBatch,                ///< all keyframes of the request last in one factorisation
+  kKaessRecovery,        ///< one AMD factorisation, Kaess & Dellaert recovery per pair
+};
+/// "constrained_ordering", "batch", "kaess_recovery". Thread-safe.
+const char* covarianceMethodName(CovarianceMethod method);
+
+struct KeyframeCovarianceServiceConfig {
+  CovarianceMethod method = CovarianceMethod::kBatch;
+  /// Requests waiting (the oldest is answered with an error when more arrive), >= 1.
+  size_t max_queued_requests = 4;
+  /// Niceness the service thread gives itself (setpriority on its thread id), [0, 19]; the
+  /// tracking thread keeps its own. 0 = leave it.
+  int niceness = 10;
+  /// The linearization: Huber reweighting on (observations that BA would call outliers
+  /// count less instead of inflating the certainty).
+  BaLinearizationConfig linearization{true};
+  /// Degenerate landmarks are left out of S (see ReducedCameraMatrixConfig).
+  ReducedCameraMatrixConfig reduction;
+
+  /// Empty when valid, else a message naming the first bad field. Thread-safe.
+  std::string validate() const;
+};
+
+/// A request: pairs (i, j) of keyframe ids, Sigma_{i|j} wanted for each.
+struct KeyframeCovarianceRequest {
+  int64_t request_id = 0;
+  std::vector<KeyframePair> pairs;
+};
+
+/// The answer: one result per pair in request order (errors per pair), and what it took.
+struct KeyframeCovarianceReply {
+  int64_t request_id = 0;
+  std::vector<ConditionalCovariance> results;
+  int keyframes = 0;      ///< free keyframes of the linearization (blocks of S)
+  int landmarks = 0;      ///< landmarks of the problem
+  double build_ms = 0.0;  ///< map -> BA problem -> Jacobian -> S
+  double solve_ms = 0.0;  ///< the solver over all pairs
+};
+
+/// Counters since start. Exact.
+struct KeyframeCovarianceServiceStats {
+  uint64_t requests = 0;  ///< submitted
+  uint64_t answered = 0;  ///< replies sent (also for dropped requests)
+  uint64_t dropped = 0;   ///< answered with an error because the queue was full
+  uint64_t pairs_ok = 0;
+  uint64_t pairs_failed = 0;
+  double last_build_ms = 0.0;
+  double last_solve_ms = 0.0;
+};
+
+/// The tracker's covariance service (CBLOX_COV_REQUEST -> CBLOX_COV_REPLY, issue 6 item 3):
+/// answers requests for conditional keyframe covariances from the current sparse map, on a
+/// thread of its own at low priority, so it never delays tracking.
+///
+/// Per request: the whole map as a BA problem (buildMapBaProblem, the first keyframe fixed as
+/// the gauge, as in DESIGN: conditioning on it too) read under the map's shared lock (which
+/// the tracking thread also only reads under; local mapping and loop closing wait for the
+/// read, a few ms), linearised at the map's current estimate (the latest local / global BA
+/// solution) with Huber reweighting, S = reduceCameraMatrix, then the configured solver.
+/// Units and convention: core/covariance/conditional_covariance.h (m^2, m*rad, rad^2;
+/// tangent [rho; phi] of T_C_G's left perturbation = T_G_C's right perturbation).
+/// Errors are per pair: keyframes unknown to the map, culled, or the gauge keyframe itself
+/// ("not in the BA linearization"), i == j, S not positive definite. A request that arrives
+/// when max_queued_requests are waiting pushes out the oldest, which is answered with every
+/// pair failed ("dropped: service busy").
+/// Thread-safety: submit() and stats() from any thread; `reply` is called on the service
+/// thread (or in submit() for a dropped request).
+class KeyframeCovarianceService {
+ public:
+  using ReplyCallback = std::function<void(const KeyframeCovarianceReply&)>;
+
+  /// `map` must outlive the service. Throws std::invalid_argument for an invalid config.
+  KeyframeCovarianceService(const SparseMap& map, const TrackingCamera& camera,
+                            const ScalePyramid& pyramid,
+                            const KeyframeCovarianceServiceConfig& config, ReplyCallback reply);
+  ~KeyframeCovarianceService();
+  KeyframeCovarianceService(const KeyframeCovarianceService&) = delete;
+  KeyframeCovarianceService& operator=(const KeyframeCovarianceService&) = delete;
+
+  /// Starts the thread (once). Thread-safe.
+  void start();
+  /// Answers the request in hand, drops the queued ones unanswered, joins. Idempotent.
+  void stop();
+  /// Queues a request. Never blocks on the computation. Thread-safe.
+  void submit(KeyframeCovarianceRequest request);
+  /// Computes a reply on the calling thread (what the service thread does per request).
+  /// Thread-safe with respect to the map (shared lock); not counted in stats().
+  KeyframeCovarianceReply compute(const KeyframeCovarianceRequest& request) const;
+  KeyframeCovarianceServiceStats stats() const;
+
+ private:
+  void loop();
+
+  const SparseMap& map_;
+  const TrackingCamera camera_;
+  const ScalePyramid pyramid_;
+  const KeyframeCovarianceServiceConfig config_;
+  const ReplyCallback reply_;
+
+  mutable std::mutex mutex_;  // guards everything below
+  std::condition_variable cv_;
+  std::deque<KeyframeCovarianceRequest> queue_;
+  KeyframeCovarianceServiceStats stats_;
+  bool stop_ = false, started_ = false;
+  std::thread thread_;
+};
+
+}  // namespace cblox

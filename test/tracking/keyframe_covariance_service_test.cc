@@ -1,0 +1,211 @@
+// The tracker's covariance service on a real sparse map: the first 250 frames of the
+// simulated room loop, tracked and mapped by the SLAM system. All three solvers give the same
+// Sigma_{i|j} (1e-9 relative); a keyframe is more certain given its neighbour than given a
+// keyframe far away; bad pairs get their own error; the service thread answers every
+// request exactly once, the ones pushed out of its queue with an error.
+
+#include "core/tracking/keyframe_covariance_service.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
+
+#include "core/tracking/slam_system.h"
+#include "drivers/open_frame_source.h"
+
+namespace cblox {
+namespace {
+
+class KeyframeCovarianceServiceTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    std::string error;
+    vocabulary_ = new BinaryVocabulary(*BinaryVocabulary::load(CBLOX_DEFAULT_VOCABULARY, &error));
+    SourceOptions options;
+    options.trajectory = "loop";
+    options.max_frames = 250;
+    std::unique_ptr<FrameSource> source = openFrameSource("sim:room", options, &error);
+    ASSERT_NE(source, nullptr) << error;
+    const RectifiedStereoCalibration& calibration = *source->info().stereo;
+    camera_ =
+        new TrackingCamera(makeTrackingCamera(calibration.intrinsics, calibration.baseline_m));
+    slam_ = new SlamSystem(*camera_, SlamSystemConfig{}, vocabulary_);
+    CaptureFrame frame;
+    while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+      slam_->trackStereo(static_cast<uint64_t>(frame.frame_id), frame.timestamp_ns, frame.left,
+                         frame.right, frame.T_G_C->inverse());
+    }
+    slam_->waitUntilIdle();
+    slam_->stop();  // the map stays as it is from here on
+  }
+  static void TearDownTestSuite() {
+    delete slam_;
+    delete camera_;
+    delete vocabulary_;
+  }
+
+  static std::vector<uint64_t> keyframeIds() {
+    std::vector<uint64_t> ids;
+    for (const Keyframe* k : slam_->map().keyframes()) ids.push_back(k->id);
+    std::sort(ids.begin(), ids.end());
+    return ids;
+  }
+  static KeyframeCovarianceReply computeWith(CovarianceMethod method,
+                                             const KeyframeCovarianceRequest& request) {
+    KeyframeCovarianceServiceConfig config;
+    config.method = method;
+    KeyframeCovarianceService service(slam_->map(), *camera_, slam_->pyramid(), config, nullptr);
+    return service.compute(request);
+  }
+
+  static BinaryVocabulary* vocabulary_;
+  static TrackingCamera* camera_;
+  static SlamSystem* slam_;
+};
+BinaryVocabulary* KeyframeCovarianceServiceTest::vocabulary_ = nullptr;
+TrackingCamera* KeyframeCovarianceServiceTest::camera_ = nullptr;
+SlamSystem* KeyframeCovarianceServiceTest::slam_ = nullptr;
+
+double relativeDifference(const Eigen::Matrix<double, 6, 6>& a,
+                          const Eigen::Matrix<double, 6, 6>& b) {
+  return (a - b).norm() / b.norm();
+}
+
+TEST_F(KeyframeCovarianceServiceTest, SolversAgreeAndNeighboursAreMoreCertainThanFarKeyframes) {
+  const std::vector<uint64_t> ids = keyframeIds();
+  ASSERT_GE(ids.size(), 8u);
+  const uint64_t last = ids.back(), before_last = ids[ids.size() - 2], second = ids[1];
+  KeyframeCovarianceRequest request;
+  request.request_id = 7;
+  request.pairs = {{last, before_last}, {last, second}, {second, last}, {ids[3], ids[4]}};
+  const KeyframeCovarianceReply batch = computeWith(CovarianceMethod::kBatch, request);
+  const KeyframeCovarianceReply per_pair =
+      computeWith(CovarianceMethod::kConstrainedOrdering, request);
+  const KeyframeCovarianceReply kaess = computeWith(CovarianceMethod::kKaessRecovery, request);
+  EXPECT_EQ(batch.request_id, 7);
+  EXPECT_EQ(batch.keyframes, static_cast<int>(ids.size()) - 1);  // the gauge has no block
+  EXPECT_GT(batch.landmarks, 500);
+  std::printf(
+      "[ measured ] %d keyframes, %d landmarks: build %.1f ms; solve batch %.2f ms, "
+      "per pair %.2f ms, Kaess %.2f ms for %zu pairs\n",
+      batch.keyframes, batch.landmarks, batch.build_ms, batch.solve_ms, per_pair.solve_ms,
+      kaess.solve_ms, request.pairs.size());
+  ASSERT_EQ(batch.results.size(), request.pairs.size());
+  for (size_t k = 0; k < request.pairs.size(); ++k) {
+    const ConditionalCovariance& r = batch.results[k];
+    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(per_pair.results[k].ok) << per_pair.results[k].error;
+    ASSERT_TRUE(kaess.results[k].ok) << kaess.results[k].error;
+    EXPECT_EQ(r.i, request.pairs[k].i);
+    EXPECT_EQ(r.j, request.pairs[k].j);
+    EXPECT_LT(relativeDifference(per_pair.results[k].sigma, r.sigma), 1e-9);
+    EXPECT_LT(relativeDifference(kaess.results[k].sigma, r.sigma), 1e-9);
+    // Symmetric positive definite, q = 1 / lambda_max.
+    EXPECT_LT((r.sigma - r.sigma.transpose()).norm(), 1e-12 * r.sigma.norm());
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(r.sigma);
+    EXPECT_GT(eigen.eigenvalues().minCoeff(), 0.0);
+    EXPECT_NEAR(r.q, 1.0 / eigen.eigenvalues().maxCoeff(), 1e-9 * r.q);
+    std::printf("[ measured ] Sigma_{%llu|%llu}: sd %.2f mm / %.3f deg (largest), q %.3g\n",
+                static_cast<unsigned long long>(r.i), static_cast<unsigned long long>(r.j),
+                1e3 * std::sqrt(r.sigma.topLeftCorner<3, 3>().diagonal().maxCoeff()),
+                std::sqrt(r.sigma.bottomRightCorner<3, 3>().diagonal().maxCoeff()) * 180 / M_PI,
+                r.q);
+  }
+  // The last keyframe given its neighbour is more certain than given the second keyframe,
+  // half a room away.
+  EXPECT_GT(batch.results[0].q, 2.0 * batch.results[1].q);
+}
+
+TEST_F(KeyframeCovarianceServiceTest, BadPairsGetTheirOwnErrors) {
+  const std::vector<uint64_t> ids = keyframeIds();
+  KeyframeCovarianceRequest request;
+  request.pairs = {{ids[2], ids[2]}, {999999, ids[1]}, {ids[2], ids[0]}, {ids[2], ids[1]}};
+  for (const CovarianceMethod method :
+       {CovarianceMethod::kBatch, CovarianceMethod::kConstrainedOrdering,
+        CovarianceMethod::kKaessRecovery}) {
+    const KeyframeCovarianceReply reply = computeWith(method, request);
+    ASSERT_EQ(reply.results.size(), 4u);
+    EXPECT_FALSE(reply.results[0].ok);
+    EXPECT_NE(reply.results[0].error.find("same keyframe"), std::string::npos)
+        << reply.results[0].error;
+    EXPECT_FALSE(reply.results[1].ok);
+    EXPECT_NE(reply.results[1].error.find("999999"), std::string::npos) << reply.results[1].error;
+    // ids[0] is the gauge: held fixed, it has no block.
+    EXPECT_FALSE(reply.results[2].ok);
+    EXPECT_NE(reply.results[2].error.find("not in the BA linearization"), std::string::npos)
+        << reply.results[2].error;
+    EXPECT_TRUE(reply.results[3].ok)
+        << covarianceMethodName(method) << ": " << reply.results[3].error;
+  }
+}
+
+TEST_F(KeyframeCovarianceServiceTest, TheThreadAnswersEveryRequestOnceAndDropsTheOldest) {
+  const std::vector<uint64_t> ids = keyframeIds();
+  std::mutex mutex;
+  std::map<int64_t, KeyframeCovarianceReply> replies;
+  std::atomic<int> duplicates{0};
+  KeyframeCovarianceServiceConfig config;
+  config.max_queued_requests = 1;
+  KeyframeCovarianceService service(slam_->map(), *camera_, slam_->pyramid(), config,
+                                    [&](const KeyframeCovarianceReply& r) {
+                                      std::lock_guard<std::mutex> lock(mutex);
+                                      if (!replies.emplace(r.request_id, r).second) ++duplicates;
+                                    });
+  // Queued before the thread runs: with room for one, requests 1..4 are pushed out at once.
+  for (int64_t id = 1; id <= 5; ++id) {
+    service.submit({id, {{ids[3], ids[2]}}});
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    ASSERT_EQ(replies.size(), 4u);
+    for (int64_t id = 1; id <= 4; ++id) {
+      ASSERT_FALSE(replies.at(id).results.at(0).ok);
+      EXPECT_NE(replies.at(id).results[0].error.find("busy"), std::string::npos);
+    }
+  }
+  service.start();
+  for (int i = 0; i < 2000; ++i) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (replies.size() == 5) break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  service.stop();
+  std::lock_guard<std::mutex> lock(mutex);
+  ASSERT_EQ(replies.size(), 5u);
+  EXPECT_TRUE(replies.at(5).results.at(0).ok) << replies.at(5).results[0].error;
+  EXPECT_EQ(duplicates.load(), 0);
+  const KeyframeCovarianceServiceStats stats = service.stats();
+  EXPECT_EQ(stats.requests, 5u);
+  EXPECT_EQ(stats.answered, 5u);
+  EXPECT_EQ(stats.dropped, 4u);
+  EXPECT_EQ(stats.pairs_ok, 1u);
+  EXPECT_EQ(stats.pairs_failed, 4u);
+}
+
+TEST(KeyframeCovarianceServiceConfigTest, BadValuesAreNamed) {
+  KeyframeCovarianceServiceConfig config;
+  EXPECT_EQ(config.validate(), "");
+  config.max_queued_requests = 0;
+  EXPECT_NE(config.validate().find("max_queued_requests"), std::string::npos);
+  config = KeyframeCovarianceServiceConfig{};
+  config.niceness = 20;
+  EXPECT_NE(config.validate().find("niceness"), std::string::npos);
+  config = KeyframeCovarianceServiceConfig{};
+  config.reduction.landmark_min_relative_eigenvalue = 1.0;
+  EXPECT_NE(config.validate().find("reduction."), std::string::npos);
+}
+
+}  // namespace
+}  // namespace cblox

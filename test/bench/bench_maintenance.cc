@@ -1,0 +1,413 @@
+// Map maintenance evaluation (issue 6 item 5, the paper's Table II) on the simulator: one run
+// of the sparse SLAM over a scene with place revisiting feeds, frame by frame, several dense
+// mappers that differ only in how they use the poses:
+//   (a) gt     one volume, ground-truth poses (the reference),
+//   (b) naive  one volume, the tracker's live frame poses, never corrected,
+//   (c) off    subvolumes moved by every keyframe pose correction, no fusion,
+//   (d) on     the same with map maintenance: covisible subvolumes whose conditional
+//              covariance q = 1/||Sigma_{i|j}||_2 reaches q_min are fused (one mapper per
+//              q_min of the sweep, each with its own covariance service on the live map).
+// At the end every map is meshed (the projection of its subvolumes into one volume) and
+// compared with the scene's exact surface: vertex RMSE and median, and the map's size in
+// TSDF blocks (over all subvolumes).
+//
+//   cblox-bench-maintenance [--scene room|hall|town] [--laps 2] [--frames N]
+//                           [--voxel 0.05] [--keyframes-per-subvolume 10]
+//                           [--q-min 3e3,1e4,3e4,1e5] [--out DIR]
+//
+// Mappers integrate every frame (no time budget, waited for) so the comparison does not
+// depend on the machine's load. --out writes DIR/maintenance_<scene>.json and
+// DIR/maintenance_<scene>_sweep.png (map size against RMSE for every variant).
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/eval/json_writer.h"
+#include "core/eval/mesh_accuracy.h"
+#include "core/eval/scatter_plot.h"
+#include "core/raycast/triangle_mesh_raycaster.h"
+#include "core/submap/submap_fusion.h"
+#include "core/tracking/keyframe_covariance_service.h"
+#include "core/tracking/slam_system.h"
+#include "daemon/mapper/mapper.h"
+#include "drivers/open_frame_source.h"
+#include "drivers/sim/builtin_scenes.h"
+
+namespace cblox {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+enum class Kind { kGroundTruth, kNaive, kOff, kOn };
+
+struct Variant {
+  std::string name;
+  Kind kind = Kind::kOff;
+  double q_min = 0.0;
+  std::unique_ptr<Mapper> mapper;
+  std::unique_ptr<KeyframeCovarianceService> covariance;
+  // Results.
+  size_t subvolumes = 0, blocks = 0, vertices = 0;
+  double rmse_m = 0.0, median_m = 0.0;
+  FusionSchedulerStats fusion;
+};
+
+std::vector<double> parseList(const std::string& text) {
+  std::vector<double> values;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (!item.empty()) values.push_back(std::atof(item.c_str()));
+  }
+  return values;
+}
+
+MapperConfig baseConfig(float voxel, const std::filesystem::path& out) {
+  MapperConfig config;
+  config.layer = LayerConfig{voxel, 8};
+  config.integrator.truncation_distance_m = 3.0f * voxel;
+  config.integrator.max_integration_time_s = 0.0;  // every frame whole: load-independent
+  config.output_dir = out.string();
+  config.worker_sched_idle = false;  // fusion must not starve behind the bench's own work
+  config.worker_niceness = 0;
+  config.pending_capacity = 4;
+  config.max_pose_wait_s = 5.0;
+  return config;
+}
+
+int run(int argc, char** argv) {
+  std::string scene = "room", out_dir, vocabulary_path;
+  int laps = 2;
+  size_t max_frames = 0;
+  float voxel = 0.05f;
+  int keyframes_per_subvolume = MapperConfig{}.creation.max_keyframes_per_subvolume;
+  std::vector<double> sweep = {3e3, 1e4, 3e4, 1e5};
+#ifdef CBLOX_DEFAULT_VOCABULARY
+  vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
+#endif
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", flag.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (flag == "--scene") {
+      scene = value();
+    } else if (flag == "--laps") {
+      laps = std::atoi(value().c_str());
+    } else if (flag == "--frames") {
+      max_frames = static_cast<size_t>(std::atol(value().c_str()));
+    } else if (flag == "--voxel") {
+      voxel = static_cast<float>(std::atof(value().c_str()));
+    } else if (flag == "--keyframes-per-subvolume") {
+      keyframes_per_subvolume = std::atoi(value().c_str());
+    } else if (flag == "--q-min") {
+      sweep = parseList(value());
+    } else if (flag == "--out") {
+      out_dir = value();
+    } else if (flag == "--vocabulary") {
+      vocabulary_path = value();
+    } else {
+      std::fprintf(stderr, "unknown flag %s\n", flag.c_str());
+      return 2;
+    }
+  }
+  if (sweep.empty() || !(voxel > 0.0f)) {
+    std::fprintf(stderr, "--q-min needs at least one value and --voxel must be > 0\n");
+    return 2;
+  }
+  std::string error;
+  const auto vocabulary = BinaryVocabulary::load(vocabulary_path, &error);
+  if (!vocabulary) {
+    std::fprintf(stderr, "vocabulary: %s\n", error.c_str());
+    return 2;
+  }
+  SourceOptions options;
+  options.trajectory = "loop";
+  options.laps = laps;
+  options.max_frames = max_frames;
+  auto source = openFrameSource("sim:" + scene, options, &error);
+  if (!source) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return 2;
+  }
+  const SourceInfo info = source->info();
+  if (!info.stereo || !info.depth_intrinsics) {
+    std::fprintf(stderr, "the source must deliver stereo and depth\n");
+    return 2;
+  }
+  const RectifiedStereoCalibration& calibration = *info.stereo;
+  const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
+  SlamSystem slam(camera, SlamSystemConfig{}, &*vocabulary);
+
+  const std::filesystem::path work =
+      std::filesystem::temp_directory_path() / ("cblox_bench_maintenance_" + scene);
+  std::filesystem::create_directories(work);
+  std::vector<std::unique_ptr<Variant>> variants;
+  auto add = [&](std::string name, Kind kind, double q_min) {
+    auto v = std::make_unique<Variant>();
+    v->name = std::move(name);
+    v->kind = kind;
+    v->q_min = q_min;
+    MapperConfig config = baseConfig(voxel, work);
+    if (kind == Kind::kGroundTruth || kind == Kind::kNaive) {
+      config.pose_source = PoseSource::kGroundTruth;          // poses fed as given, never corrected
+      config.creation.max_keyframes_per_subvolume = 1 << 30;  // one volume
+    } else {
+      config.pose_source = PoseSource::kTracker;
+      config.creation.max_keyframes_per_subvolume = keyframes_per_subvolume;
+      config.maintenance.enabled = kind == Kind::kOn;
+      if (kind == Kind::kOn) config.maintenance.q_min = q_min;
+    }
+    v->mapper = std::make_unique<Mapper>(config, [](const std::string&) {});
+    if (kind == Kind::kOn) {
+      Mapper* mapper = v->mapper.get();
+      v->covariance = std::make_unique<KeyframeCovarianceService>(
+          slam.map(), camera, slam.pyramid(), KeyframeCovarianceServiceConfig{},
+          [mapper](const KeyframeCovarianceReply& reply) {
+            std::vector<FusionCovarianceAnswer> answers;
+            for (const ConditionalCovariance& r : reply.results) {
+              answers.push_back(FusionCovarianceAnswer{r.ok, r.error, r.q});
+            }
+            mapper->onCovarianceReply(reply.request_id, std::move(answers));
+          });
+      KeyframeCovarianceService* service = v->covariance.get();
+      mapper->setCovarianceRequester([service](const FusionCovarianceRequest& request) {
+        KeyframeCovarianceRequest r;
+        r.request_id = request.request_id;
+        for (const FusionPair& p : request.pairs) {
+          r.pairs.push_back(KeyframePair{static_cast<uint64_t>(p.newer_keyframe),
+                                         static_cast<uint64_t>(p.older_keyframe)});
+        }
+        service->submit(std::move(r));
+      });
+      v->covariance->start();
+    }
+    std::string start_error;
+    if (!v->mapper->start(&start_error)) {
+      std::fprintf(stderr, "mapper %s: %s\n", v->name.c_str(), start_error.c_str());
+      std::exit(1);
+    }
+    variants.push_back(std::move(v));
+  };
+  add("gt", Kind::kGroundTruth, 0.0);
+  add("naive", Kind::kNaive, 0.0);
+  add("off", Kind::kOff, 0.0);
+  for (const double q : sweep) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "on q>=%.0e", q);
+    add(name, Kind::kOn, q);
+  }
+
+  // SLAM outputs, from its threads, handed to the tracker-mode mappers by the main loop.
+  std::mutex mutex;
+  std::vector<KeyframeInfo> keyframes;
+  std::vector<KeyframePoseBatch> batches;
+  slam.setKeyframeCallback([&](const KeyframeInfo& k) {
+    std::lock_guard<std::mutex> lock(mutex);
+    keyframes.push_back(k);
+  });
+  slam.setPoseCallback([&](const KeyframePoseBatch& batch, PoseUpdateReason) {
+    std::lock_guard<std::mutex> lock(mutex);
+    batches.push_back(batch);
+  });
+  auto deliver = [&] {
+    std::vector<KeyframeInfo> k;
+    std::vector<KeyframePoseBatch> b;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      k.swap(keyframes);
+      b.swap(batches);
+    }
+    for (auto& v : variants) {
+      if (v->kind != Kind::kOff && v->kind != Kind::kOn) continue;
+      for (const KeyframeInfo& info_k : k) {
+        v->mapper->onKeyframe(
+            static_cast<KeyframeId>(info_k.id), info_k.timestamp_ns / 1000, info_k.T_G_K,
+            std::vector<uint64_t>(info_k.landmark_ids.begin(), info_k.landmark_ids.end()));
+      }
+      for (const KeyframePoseBatch& batch : b) {
+        v->mapper->onKeyframePoses(
+            std::vector<std::pair<KeyframeId, Transformationd>>(batch.begin(), batch.end()));
+      }
+    }
+  };
+  auto waitAll = [&] {
+    for (auto& v : variants) v->mapper->waitUntilIdle(std::chrono::seconds(120));
+  };
+
+  const size_t total = info.frame_count.value_or(0);
+  const auto start = Clock::now();
+  CaptureFrame frame;
+  size_t n = 0, lost = 0;
+  while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+    const TrackingResult r =
+        slam.trackStereo(static_cast<uint64_t>(frame.frame_id), frame.timestamp_ns, frame.left,
+                         frame.right, frame.T_G_C->inverse());
+    deliver();
+    const int64_t utime = frame.timestamp_ns / 1000;
+    DepthFrame depth;
+    depth.utime = utime;
+    depth.frame_id = frame.frame_id;
+    depth.depth = frame.depth;
+    depth.color = frame.color;
+    depth.intrinsics = *info.depth_intrinsics;
+    depth.T_B_D = info.T_C_D;
+    depth.min_depth_m = static_cast<float>(info.depth_min_m);
+    depth.max_depth_m = static_cast<float>(info.depth_max_m);
+    const bool ok = r.state == TrackingState::kOk && r.T_C_G.has_value();
+    if (!ok) ++lost;
+    for (auto& v : variants) {
+      TimedPose pose;
+      pose.utime = utime;
+      if (v->kind == Kind::kGroundTruth) {
+        pose.T_G_C = *frame.T_G_C;
+      } else {
+        if (!ok) {
+          if (v->kind == Kind::kNaive) continue;  // nothing to integrate with
+          pose.tracking_ok = false;
+        } else {
+          pose.T_G_C = r.T_C_G->inverse();
+          pose.jump = v->kind != Kind::kNaive && (r.relocalized || r.map_corrected);
+        }
+      }
+      v->mapper->onFramePose(pose);
+      v->mapper->onDepthFrame(depth);
+    }
+    waitAll();
+    ++n;
+    if (n % 50 == 0) {
+      const double s = std::chrono::duration<double>(Clock::now() - start).count();
+      std::fprintf(stderr,
+                   "frame %zu/%zu, %.1f frames/s, ETA %.0f s, %zu keyframes, "
+                   "subvolumes:",
+                   n, total, n / s, total > n ? (total - n) * s / n : 0.0,
+                   slam.map().numKeyframes());
+      for (auto& v : variants) std::fprintf(stderr, " %zu", v->mapper->collection().size());
+      std::fprintf(stderr, "\n");
+    }
+  }
+  std::fprintf(stderr, "\n");
+  slam.waitUntilIdle();
+  deliver();
+  waitAll();
+  // Requests and fusions still in flight settle (replies arrive within the services' time).
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  waitAll();
+  slam.stop();
+  for (auto& v : variants) {
+    if (v->covariance) v->covariance->stop();
+  }
+  waitAll();
+
+  // Evaluation against the exact scene.
+  const BuiltinScene truth_scene = makeBuiltinScene(scene);
+  const auto raycaster = TriangleMeshRaycaster::create(truth_scene.mesh, &error);
+  if (!raycaster) {
+    std::fprintf(stderr, "ground truth: %s\n", error.c_str());
+    return 1;
+  }
+  MeshAccuracyOptions accuracy_options;
+  accuracy_options.max_surface_samples = 200000;
+  for (auto& v : variants) {
+    const MapperConfig& config = v->mapper->config();
+    const Mesh mesh = meshCollection(v->mapper->collection(), config.layer, config.fusion,
+                                     config.mesh, /*include_active=*/true);
+    v->subvolumes = v->mapper->collection().size();
+    v->blocks = v->mapper->collection().numBlocks();
+    v->vertices = mesh.numVertices();
+    v->fusion = v->mapper->status().fusion;
+    const auto accuracy = evaluateMeshAccuracy(*raycaster, mesh, accuracy_options, &error);
+    if (accuracy) {
+      v->rmse_m = accuracy->accuracy_m.rmse;
+      v->median_m = accuracy->accuracy_m.median;
+    } else {
+      std::fprintf(stderr, "%s: %s\n", v->name.c_str(), error.c_str());
+    }
+    v->mapper->stop();
+  }
+  std::filesystem::remove_all(work);
+
+  const Variant& gt = *variants[0];
+  const Variant& off = *variants[2];
+  std::printf("scene %s x%d, %zu frames (%zu not tracked), %zu keyframes, voxel %.3f m\n",
+              scene.c_str(), laps, n, lost, slam.map().numKeyframes(), voxel);
+  std::printf(
+      "| map | subvolumes | blocks | size / OFF | RMSE (mm) | RMSE / GT | median (mm) | "
+      "candidates | requested | fused | rejected by q |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const auto& v : variants) {
+    std::printf("| %s | %zu | %zu | %.0f %% | %.1f | %.2f | %.2f | %llu | %llu | %llu | %llu |\n",
+                v->name.c_str(), v->subvolumes, v->blocks,
+                100.0 * static_cast<double>(v->blocks) / static_cast<double>(off.blocks),
+                1e3 * v->rmse_m, v->rmse_m / gt.rmse_m, 1e3 * v->median_m,
+                static_cast<unsigned long long>(v->fusion.candidates),
+                static_cast<unsigned long long>(v->fusion.requested),
+                static_cast<unsigned long long>(v->fusion.fused),
+                static_cast<unsigned long long>(v->fusion.rejected_by_q));
+  }
+
+  if (!out_dir.empty()) {
+    std::filesystem::create_directories(out_dir);
+    JsonObject json("");
+    json.str("scene", scene);
+    json.count("laps", static_cast<size_t>(laps));
+    json.count("frames", n);
+    json.count("keyframes", slam.map().numKeyframes());
+    json.num("voxel_m", voxel);
+    std::string maps = "[";
+    for (size_t k = 0; k < variants.size(); ++k) {
+      const Variant& v = *variants[k];
+      JsonObject m("    ");
+      m.str("name", v.name);
+      m.num("q_min", v.q_min);
+      m.count("subvolumes", v.subvolumes);
+      m.count("blocks", v.blocks);
+      m.num("rmse_m", v.rmse_m);
+      m.num("median_m", v.median_m);
+      m.count("candidates", v.fusion.candidates);
+      m.count("requested", v.fusion.requested);
+      m.count("fused", v.fusion.fused);
+      m.count("rejected_by_q", v.fusion.rejected_by_q);
+      maps += (k == 0 ? "\n    " : ",\n    ") + m.close();
+    }
+    maps += "\n  ]";
+    json.raw("maps", maps);
+    std::ofstream(out_dir + "/maintenance_" + scene + ".json") << json.close() << "\n";
+    ScatterPlotOptions plot;
+    plot.title = "map maintenance on " + scene + ": size vs accuracy";
+    plot.x_label = "map size [TSDF blocks]";
+    plot.y_label = "vertex RMSE [mm]";
+    std::vector<ScatterPoint> points;
+    for (const auto& v : variants) {
+      points.push_back(ScatterPoint{static_cast<double>(v->blocks), 1e3 * v->rmse_m, v->name,
+                                    v->kind == Kind::kOn ? 1 : 0});
+    }
+    const std::string path = out_dir + "/maintenance_" + scene + "_sweep.png";
+    if (!writeScatterPlotPng(path, points, plot, &error)) {
+      std::fprintf(stderr, "%s\n", error.c_str());
+    } else {
+      std::printf("wrote %s\n", path.c_str());
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace cblox
+
+int main(int argc, char** argv) { return cblox::run(argc, argv); }

@@ -38,6 +38,7 @@ TEST(SubmapConcurrency, IntegrationPoseUpdatesAndFusionRunConcurrently) {
   std::atomic<int> frames_done{0};
   std::atomic<bool> stop{false};
   std::atomic<int> frames_integrated{0}, lock_refused{0}, fusions{0}, projections{0};
+  std::atomic<int> created{1};  // submaps made (the first above)
 
   std::thread integrator_thread([&] {
     IntegratorConfig config = test::integratorConfig(/*num_threads=*/2);
@@ -85,6 +86,7 @@ TEST(SubmapConcurrency, IntegrationPoseUpdatesAndFusionRunConcurrently) {
         last_switch = done;
         const SyntheticFrame& frame = frames[static_cast<size_t>(done) % frames.size()];
         collection.createSubmap(frame.T_G_C, next_keyframe++, done);
+        ++created;
       }
       std::this_thread::yield();
     }
@@ -134,8 +136,11 @@ TEST(SubmapConcurrency, IntegrationPoseUpdatesAndFusionRunConcurrently) {
   worker_thread.join();
 
   EXPECT_GT(frames_integrated.load(), kFrames / 2);
-  EXPECT_GE(collection.size() + static_cast<size_t>(fusions.load()),
-            static_cast<size_t>(kFrames / kFramesPerSubmap));
+  // Every submap made is still there or was fused away (how many were made depends on
+  // how the threads were scheduled; under load fewer switches happen).
+  EXPECT_GE(created.load(), 2);
+  EXPECT_EQ(collection.size() + static_cast<size_t>(fusions.load()),
+            static_cast<size_t>(created.load()));
   EXPECT_GT(projections.load(), 0);
   const TsdfLayer map =
       projectCollection(collection, collection.config().layer, SubmapFusionConfig{});

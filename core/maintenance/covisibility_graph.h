@@ -18,8 +18,10 @@ struct CovisibilityGraphConfig {
   /// landmarks (>= 1; 30) ...
   int min_shared_landmarks = 30;
   /// ... and at least this fraction of the smaller of the two landmark sets, in [0, 1]
-  /// (0.3; 0 = the absolute bound alone).
-  double min_shared_ratio = 0.3;
+  /// (0.1; 0 = the absolute bound alone). Measured on the simulated room (2 laps, 5 keyframes
+  /// per subvolume, ~2000 landmarks each): neighbouring subvolumes share 13-22 % of the smaller
+  /// set, a revisit after loop closure 22 %; unrelated ones 0-1 landmarks.
+  double min_shared_ratio = 0.1;
 
   /// Empty when valid, else a message naming the first bad field. Thread-safe.
   std::string validate() const;

@@ -1037,6 +1037,14 @@ MapperStatus Mapper::status() const {
   return s;
 }
 
+std::vector<CovisibilityCandidate> Mapper::covisibilityEdges() const {
+  CovisibilityGraphConfig all;
+  all.min_shared_landmarks = 1;
+  all.min_shared_ratio = 0.0;
+  std::lock_guard<std::mutex> lock(scheduler_mutex_);
+  return scheduler_.graph().candidates(all);
+}
+
 MapperReply Mapper::statusReply(const MapperCommand& command) const {
   const MapperStatus s = status();
   MapperReply reply;

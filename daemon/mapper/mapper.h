@@ -304,6 +304,10 @@ class Mapper {
 
   /// A snapshot of the counters and the map's size. Thread-safe.
   MapperStatus status() const;
+  /// The subvolume covisibility graph's edges (every pair sharing a landmark), strongest
+  /// first, with the landmark set sizes: what the candidate bounds are applied to.
+  /// Thread-safe.
+  std::vector<CovisibilityCandidate> covisibilityEdges() const;
   /// Waits until no frame is pending or in hand and the maintenance and command queues are
   /// empty (or `timeout` passes); true when idle. For tests and orderly shutdown.
   /// Thread-safe.

@@ -342,6 +342,17 @@ int run(int argc, char** argv) {
   }
   std::filesystem::remove_all(work);
 
+  // The covisibility graph the fusion candidates come from (the first fusion mapper's).
+  for (const auto& v : variants) {
+    if (v->kind != Kind::kOn) continue;
+    std::printf("covisibility edges (shared / |L_a| / |L_b|):");
+    for (const CovisibilityCandidate& e : v->mapper->covisibilityEdges()) {
+      std::printf(" %lld-%lld %d/%zu/%zu", static_cast<long long>(e.a),
+                  static_cast<long long>(e.b), e.shared, e.landmarks_a, e.landmarks_b);
+    }
+    std::printf("\n");
+    break;
+  }
   const Variant& gt = *variants[0];
   const Variant& off = *variants[2];
   std::printf("scene %s x%d, %zu frames (%zu not tracked), %zu keyframes, voxel %.3f m\n",

@@ -11,6 +11,8 @@
 #include <utility>
 
 #include "core/covariance/batch_covariance_solver.h"
+#include "core/covariance/block_ordering.h"
+#include "core/covariance/cholmod_support.h"
 #include "core/covariance/constrained_ordering_solver.h"
 #include "core/covariance/kaess_recovery_solver.h"
 #include "core/tracking/map_ba_problem.h"
@@ -57,6 +59,28 @@ std::unique_ptr<ConditionalCovarianceSolver> makeSolver(CovarianceMethod method,
       break;
   }
   return std::make_unique<BatchCovarianceSolver>(std::move(S));
+}
+
+// Sigma_{i|g} for the gauge keyframe g: g is held fixed in the BA, so S^-1 is already the
+// covariance given g and the answer is the marginal [S^-1]_ii. With i's block alone ordered
+// last (CAMD constraint sets {others} < {i}), the trailing 6x6 block c of L gives i's
+// marginal information c c^T, and Sigma = (c c^T)^-1 (conditionalFromFactorBlock).
+ConditionalCovariance covarianceGivenGauge(const ReducedCameraMatrix& S, const KeyframePair& pair) {
+  const int block = S.blockOf(pair.i);
+  if (block < 0) {
+    return failedPair(pair, "keyframe " + std::to_string(pair.i) +
+                                " is not in the BA linearization (fixed, culled or unknown)");
+  }
+  std::vector<int> constraint(static_cast<size_t>(S.numBlocks()), 0);
+  constraint[static_cast<size_t>(block)] = 1;
+  const std::vector<int> perm = expandBlockPermutation(constrainedBlockOrdering(S, constraint));
+  CholmodCommon common;
+  CholmodSymmetricMatrix A(S.matrix);
+  const CholmodFactorOutcome outcome =
+      factorizeWithPermutation(common, A, perm, CholmodFactorConfig{}, S.keyframe_ids);
+  if (!outcome.ok) return failedPair(pair, outcome.error);
+  const Eigen::Matrix<double, 6, 6> c = trailingFactorBlock(*outcome.factor.get(), 6);
+  return conditionalFromFactorBlock(pair, c);
 }
 
 std::vector<ConditionalCovariance> failAll(std::span<const KeyframePair> pairs,
@@ -128,6 +152,9 @@ KeyframeCovarianceReply KeyframeCovarianceService::compute(
   reply.request_id = request.request_id;
   const auto start = std::chrono::steady_clock::now();
   std::unique_ptr<ConditionalCovarianceSolver> solver;
+  // Pairs conditioned on the gauge keyframe are answered apart (it has no block in S).
+  std::vector<size_t> gauge_pairs, other_pairs;
+  std::vector<ConditionalCovariance> gauge_results;
   try {
     const MapBaProblem map_problem = buildMapBaProblem(map_, camera_, pyramid_, nullptr);
     reply.landmarks = static_cast<int>(map_problem.problem.landmarks.size());
@@ -139,6 +166,19 @@ KeyframeCovarianceReply KeyframeCovarianceService::compute(
         linearizeBundleAdjustment(map_problem.problem, {}, config_.linearization),
         config_.reduction);
     reply.keyframes = S.numBlocks();
+    uint64_t gauge = 0;
+    for (const BaKeyframe& k : map_problem.problem.keyframes) {
+      if (k.fixed) gauge = k.id;
+    }
+    for (size_t p = 0; p < request.pairs.size(); ++p) {
+      const KeyframePair& pair = request.pairs[p];
+      if (pair.j == gauge && pair.i != gauge) {
+        gauge_pairs.push_back(p);
+        gauge_results.push_back(covarianceGivenGauge(S, pair));
+      } else {
+        other_pairs.push_back(p);
+      }
+    }
     solver = makeSolver(config_.method, std::move(S));
   } catch (const std::exception& e) {
     reply.results = failAll(request.pairs, std::string("linearization failed: ") + e.what());
@@ -146,7 +186,13 @@ KeyframeCovarianceReply KeyframeCovarianceService::compute(
   }
   reply.build_ms = msSince(start);
   const auto solve_start = std::chrono::steady_clock::now();
-  reply.results = solver->compute(request.pairs);
+  std::vector<KeyframePair> others;
+  for (const size_t p : other_pairs) others.push_back(request.pairs[p]);
+  const std::vector<ConditionalCovariance> other_results =
+      others.empty() ? std::vector<ConditionalCovariance>{} : solver->compute(others);
+  reply.results.resize(request.pairs.size());
+  for (size_t k = 0; k < other_pairs.size(); ++k) reply.results[other_pairs[k]] = other_results[k];
+  for (size_t k = 0; k < gauge_pairs.size(); ++k) reply.results[gauge_pairs[k]] = gauge_results[k];
   reply.solve_ms = msSince(solve_start);
   return reply;
 }

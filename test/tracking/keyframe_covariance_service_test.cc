@@ -20,6 +20,9 @@
 #include <gtest/gtest.h>
 #include <Eigen/Eigenvalues>
 
+#include "core/covariance/reduced_camera_matrix.h"
+#include "core/optimization/ba_linearization.h"
+#include "core/tracking/map_ba_problem.h"
 #include "core/tracking/slam_system.h"
 #include "drivers/open_frame_source.h"
 
@@ -129,7 +132,7 @@ TEST_F(KeyframeCovarianceServiceTest, SolversAgreeAndNeighboursAreMoreCertainTha
 TEST_F(KeyframeCovarianceServiceTest, BadPairsGetTheirOwnErrors) {
   const std::vector<uint64_t> ids = keyframeIds();
   KeyframeCovarianceRequest request;
-  request.pairs = {{ids[2], ids[2]}, {999999, ids[1]}, {ids[2], ids[0]}, {ids[2], ids[1]}};
+  request.pairs = {{ids[2], ids[2]}, {999999, ids[1]}, {ids[0], ids[2]}, {ids[2], ids[1]}};
   for (const CovarianceMethod method :
        {CovarianceMethod::kBatch, CovarianceMethod::kConstrainedOrdering,
         CovarianceMethod::kKaessRecovery}) {
@@ -140,12 +143,44 @@ TEST_F(KeyframeCovarianceServiceTest, BadPairsGetTheirOwnErrors) {
         << reply.results[0].error;
     EXPECT_FALSE(reply.results[1].ok);
     EXPECT_NE(reply.results[1].error.find("999999"), std::string::npos) << reply.results[1].error;
-    // ids[0] is the gauge: held fixed, it has no block.
+    // ids[0] is the gauge: held fixed, it has no block (as i; as j see below).
     EXPECT_FALSE(reply.results[2].ok);
     EXPECT_NE(reply.results[2].error.find("not in the BA linearization"), std::string::npos)
         << reply.results[2].error;
     EXPECT_TRUE(reply.results[3].ok)
         << covarianceMethodName(method) << ": " << reply.results[3].error;
+  }
+}
+
+// Given the gauge keyframe (held fixed by the BA) a keyframe's covariance is its marginal,
+// [S^-1]_ii: checked against the dense inverse of the same S, for every method.
+TEST_F(KeyframeCovarianceServiceTest, GivenTheGaugeKeyframeTheAnswerIsTheMarginal) {
+  const std::vector<uint64_t> ids = keyframeIds();
+  const MapBaProblem map_problem =
+      buildMapBaProblem(slam_->map(), *camera_, slam_->pyramid(), nullptr);
+  const ReducedCameraMatrix S = reduceCameraMatrix(linearizeBundleAdjustment(
+      map_problem.problem, {}, KeyframeCovarianceServiceConfig{}.linearization));
+  const Eigen::MatrixXd inverse = Eigen::MatrixXd(S.matrix).inverse();
+  KeyframeCovarianceRequest request;
+  request.pairs = {{ids[5], ids[0]}, {ids.back(), ids[0]}, {ids[5], ids[4]}};
+  for (const CovarianceMethod method :
+       {CovarianceMethod::kBatch, CovarianceMethod::kConstrainedOrdering,
+        CovarianceMethod::kKaessRecovery}) {
+    const KeyframeCovarianceReply reply = computeWith(method, request);
+    ASSERT_EQ(reply.results.size(), 3u);
+    for (size_t k = 0; k < 2; ++k) {
+      const ConditionalCovariance& r = reply.results[k];
+      ASSERT_TRUE(r.ok) << r.error;
+      const int b = S.blockOf(request.pairs[k].i);
+      ASSERT_GE(b, 0);
+      const Eigen::Matrix<double, 6, 6> expected = inverse.block<6, 6>(6 * b, 6 * b);
+      EXPECT_LT(relativeDifference(r.sigma, expected), 1e-9) << covarianceMethodName(method);
+    }
+    // Conditioning on a neighbour as well can only shrink it.
+    ASSERT_TRUE(reply.results[2].ok) << reply.results[2].error;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> shrink(reply.results[0].sigma -
+                                                                            reply.results[2].sigma);
+    EXPECT_GT(shrink.eigenvalues().minCoeff(), -1e-12 * reply.results[0].sigma.norm());
   }
 }
 

@@ -210,4 +210,19 @@ Eigen::MatrixXd trailingFactorBlock(const cholmod_factor& L, int t) {
   return M;
 }
 
+CholmodFactorOutcome factorizeSimplicialWithPermutation(
+    CholmodCommon& common, CholmodSymmetricMatrix& A, std::span<const int> perm,
+    const CholmodFactorConfig& config, std::span<const std::uint64_t> keyframe_ids) {
+  CholmodFactorOutcome f = factorizeWithPermutation(common, A, perm, config, keyframe_ids);
+  if (!f.ok) return f;
+  cholmod_factor* L = f.factor.get();
+  if ((L->is_super || !L->is_ll) &&
+      !cholmod_change_factor(CHOLMOD_REAL, 1, 0, 1, 1, L, common.get())) {
+    f.factor.reset();
+    f.ok = false;
+    f.error = "CHOLMOD could not convert the factor to simplicial LL^T";
+  }
+  return f;
+}
+
 }  // namespace cblox

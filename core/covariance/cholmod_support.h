@@ -119,6 +119,14 @@ CholmodFactorOutcome factorizeWithPermutation(CholmodCommon& common, CholmodSymm
                                               const CholmodFactorConfig& config,
                                               std::span<const std::uint64_t> keyframe_ids);
 
+/// factorizeWithPermutation() followed, on success, by the conversion of the factor to a
+/// simplicial, packed, monotonic LL^T (column c of L is rows i[p[c]..p[c] + nz[c]), diagonal
+/// first), which the sparse-inverse and sparse-solve solvers walk column by column. A failed
+/// conversion gives ok = false with its own message. Not thread-safe (uses `common`).
+CholmodFactorOutcome factorizeSimplicialWithPermutation(
+    CholmodCommon& common, CholmodSymmetricMatrix& A, std::span<const int> perm,
+    const CholmodFactorConfig& config, std::span<const std::uint64_t> keyframe_ids);
+
 /// The trailing t x t block of L (rows and columns n - t .. n - 1), lower triangular, read
 /// directly from a supernodal factor's supernodes or from a simplicial LL^T factor.
 /// Precondition: `L` is a numeric LL^T factor (supernodal, or simplicial with is_ll).

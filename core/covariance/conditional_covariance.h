@@ -75,6 +75,28 @@ std::string pairIdError(const ReducedCameraMatrix& S, const KeyframePair& pair);
 /// A failed result for `pair` with `error`. Thread-safe (pure).
 ConditionalCovariance failedPair(const KeyframePair& pair, std::string error);
 
+/// The loop of the solvers that factorise once: per pair, pairIdError's message if the ids are
+/// bad, else `factor_error` if the factorisation failed (non-empty), else compute(pair).
+/// Thread-safe if compute is.
+template <typename Compute>
+std::vector<ConditionalCovariance> computeValidPairs(const ReducedCameraMatrix& S,
+                                                     std::span<const KeyframePair> pairs,
+                                                     const std::string& factor_error,
+                                                     Compute&& compute) {
+  std::vector<ConditionalCovariance> out;
+  out.reserve(pairs.size());
+  for (const KeyframePair& pair : pairs) {
+    if (std::string e = pairIdError(S, pair); !e.empty()) {
+      out.push_back(failedPair(pair, std::move(e)));
+    } else if (!factor_error.empty()) {
+      out.push_back(failedPair(pair, factor_error));
+    } else {
+      out.push_back(compute(pair));
+    }
+  }
+  return out;
+}
+
 /// The result from the lower-triangular 6x6 factor block `a` of keyframe i when the pair's
 /// marginal information is factored with i before j: Sigma_{i|j} = (a a^T)^-1 (computed as
 /// a^-T a^-1, symmetrised), q from its largest eigenvalue. Thread-safe (pure).

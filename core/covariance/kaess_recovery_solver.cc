@@ -15,21 +15,12 @@ KaessRecoverySolver::KaessRecoverySolver(ReducedCameraMatrix S,
     : S_(std::move(S)), config_(validatedConfig(config, "KaessRecoverySolver")), A_(S_.matrix) {
   const std::vector<int> perm = expandBlockPermutation(blockAmdOrdering(S_));
   CholmodFactorOutcome f =
-      factorizeWithPermutation(common_, A_, perm, config_.factor, S_.keyframe_ids);
+      factorizeSimplicialWithPermutation(common_, A_, perm, config_.factor, S_.keyframe_ids);
   if (!f.ok) {
     factor_error_ = std::move(f.error);
     return;
   }
   factor_ = std::move(f.factor);
-  if (factor_.get()->is_super || !factor_.get()->is_ll) {
-    // To simplicial LL^T, packed and monotonic: column c of L is rows i[p[c]..p[c+1]),
-    // diagonal first.
-    if (!cholmod_change_factor(CHOLMOD_REAL, 1, 0, 1, 1, factor_.get(), common_.get())) {
-      factor_error_ = "CHOLMOD could not convert the factor to simplicial LL^T";
-      factor_.reset();
-      return;
-    }
-  }
   position_.assign(perm.size(), 0);
   for (size_t k = 0; k < perm.size(); ++k) position_[perm[k]] = static_cast<int>(k);
 }
@@ -89,17 +80,7 @@ double KaessRecoverySolver::covarianceEntry(int row, int col) {
 
 std::vector<ConditionalCovariance> KaessRecoverySolver::compute(
     std::span<const KeyframePair> pairs) {
-  std::vector<ConditionalCovariance> out;
-  out.reserve(pairs.size());
-  for (const KeyframePair& pair : pairs) {
-    if (std::string e = pairIdError(S_, pair); !e.empty()) {
-      out.push_back(failedPair(pair, std::move(e)));
-      continue;
-    }
-    if (!factor_) {
-      out.push_back(failedPair(pair, factor_error_));
-      continue;
-    }
+  return computeValidPairs(S_, pairs, factor_error_, [&](const KeyframePair& pair) {
     if (!config_.cache_across_pairs) cache_.clear();
     const int a = 6 * S_.blockOf(pair.i);
     const int b = 6 * S_.blockOf(pair.j);
@@ -112,9 +93,8 @@ std::vector<ConditionalCovariance> KaessRecoverySolver::compute(
         jj(r, c) = jj(c, r) = permutedEntry(position_[b + r], position_[b + c]);
       }
     }
-    out.push_back(conditionalFromCovarianceBlocks(pair, ii, ij, jj));
-  }
-  return out;
+    return conditionalFromCovarianceBlocks(pair, ii, ij, jj);
+  });
 }
 
 }  // namespace cblox

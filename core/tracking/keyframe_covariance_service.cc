@@ -15,6 +15,7 @@
 #include "core/covariance/cholmod_support.h"
 #include "core/covariance/constrained_ordering_solver.h"
 #include "core/covariance/kaess_recovery_solver.h"
+#include "core/covariance/sparse_solve_solver.h"
 #include "core/tracking/map_ba_problem.h"
 
 namespace cblox {
@@ -27,6 +28,8 @@ const char* covarianceMethodName(CovarianceMethod method) {
       return "batch";
     case CovarianceMethod::kKaessRecovery:
       return "kaess_recovery";
+    case CovarianceMethod::kSparseSolve:
+      return "sparse_solve";
   }
   return "?";
 }
@@ -55,6 +58,8 @@ std::unique_ptr<ConditionalCovarianceSolver> makeSolver(CovarianceMethod method,
       return std::make_unique<ConstrainedOrderingSolver>(std::move(S));
     case CovarianceMethod::kKaessRecovery:
       return std::make_unique<KaessRecoverySolver>(std::move(S));
+    case CovarianceMethod::kSparseSolve:
+      return std::make_unique<SparseSolveCovarianceSolver>(std::move(S));
     case CovarianceMethod::kBatch:
       break;
   }

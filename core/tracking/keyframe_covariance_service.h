@@ -23,8 +23,9 @@ enum class CovarianceMethod {
   kConstrainedOrdering,  ///< the paper's: one CAMD ordering + factorisation per pair
   kBatch,                ///< all keyframes of the request last in one factorisation
   kKaessRecovery,        ///< one AMD factorisation, Kaess & Dellaert recovery per pair
+  kSparseSolve,          ///< one AMD factorisation, sparse forward solves per keyframe
 };
-/// "constrained_ordering", "batch", "kaess_recovery". Thread-safe.
+/// "constrained_ordering", "batch", "kaess_recovery", "sparse_solve". Thread-safe.
 const char* covarianceMethodName(CovarianceMethod method);
 
 struct KeyframeCovarianceServiceConfig {

@@ -271,7 +271,8 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
     readOptionalEnum(covariance, "covariance", "method",
                      {{"constrained_ordering", CovarianceMethod::kConstrainedOrdering},
                       {"batch", CovarianceMethod::kBatch},
-                      {"kaess_recovery", CovarianceMethod::kKaessRecovery}},
+                      {"kaess_recovery", CovarianceMethod::kKaessRecovery},
+                      {"sparse_solve", CovarianceMethod::kSparseSolve}},
                      &t.covariance.method);
     readInteger(covariance, "covariance", "max_queued_requests", 1, 1024,
                 &t.covariance.max_queued_requests);

@@ -2,7 +2,9 @@
 
 // Sigma_{i|j} from ceres::Covariance on the same BA problem (the reference of the tests
 // and the benchmark): the observations included in the linearization, ReprojectionCost,
-// SE3Manifold on the free keyframes, fixed keyframes constant, no loss function.
+// SE3Manifold on the free keyframes, fixed keyframes constant; no loss function, or Ceres'
+// HuberLoss with apply_loss_function when the linearization applied the robust loss (Ceres'
+// Corrector then scales the rows exactly as linearizeBundleAdjustment does).
 
 #include <array>
 #include <memory>
@@ -11,6 +13,7 @@
 #include <vector>
 
 #include <ceres/covariance.h>
+#include <ceres/loss_function.h>
 #include <ceres/problem.h>
 
 #include "core/covariance/conditional_covariance.h"
@@ -22,8 +25,9 @@ namespace cblox::test {
 
 class CeresCovarianceReference {
  public:
-  CeresCovarianceReference(const BundleAdjustmentProblem& problem, const BaLinearization& lin)
-      : problem_(problem) {
+  CeresCovarianceReference(const BundleAdjustmentProblem& problem, const BaLinearization& lin,
+                           const BaLinearizationConfig& config = {})
+      : problem_(problem), robust_(config.apply_robust_loss) {
     ceres::Problem::Options options;
     options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres_ = std::make_unique<ceres::Problem>(options);
@@ -37,7 +41,12 @@ class CeresCovarianceReference {
     for (size_t o = 0; o < problem.observations.size(); ++o) {
       if (lin.observation_rows[o] < 0) continue;
       const BaObservation& obs = problem.observations[o];
-      ceres_->AddResidualBlock(newReprojectionCost(problem.camera, obs), nullptr,
+      ceres::LossFunction* loss = nullptr;  // owned by ceres_
+      if (robust_) {
+        loss = new ceres::HuberLoss(obs.dimension() == 3 ? config.huber_delta_stereo
+                                                         : config.huber_delta_mono);
+      }
+      ceres_->AddResidualBlock(newReprojectionCost(problem.camera, obs), loss,
                                poses_[obs.keyframe].data(), points_[obs.landmark].data());
       used[obs.keyframe] = 1;
     }
@@ -60,7 +69,7 @@ class CeresCovarianceReference {
     ceres::Covariance::Options options;
     options.algorithm_type = algorithm;
     options.num_threads = num_threads;
-    options.apply_loss_function = false;
+    options.apply_loss_function = robust_;
     ceres::Covariance covariance(options);
     std::vector<std::pair<const double*, const double*>> blocks;
     for (const KeyframePair& p : pairs) {
@@ -95,6 +104,7 @@ class CeresCovarianceReference {
   }
 
   const BundleAdjustmentProblem& problem_;
+  bool robust_ = false;
   SE3Manifold manifold_;
   std::vector<PoseParameters> poses_;
   std::vector<std::array<double, 3>> points_;

@@ -11,6 +11,7 @@
 #include "core/covariance/cholmod_support.h"
 #include "core/covariance/constrained_ordering_solver.h"
 #include "core/covariance/kaess_recovery_solver.h"
+#include "core/covariance/sparse_solve_solver.h"
 #include "test/covariance/covariance_test_util.h"
 #include "test/covariance/loop_scene.h"
 
@@ -18,9 +19,10 @@ namespace cblox {
 namespace {
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using test::loopS;
 using test::relativeError;
 
-enum class Method { kPerPair, kKaess, kKaessNoCache, kBatch };
+enum class Method { kPerPair, kKaess, kKaessNoCache, kBatch, kSparseSolve };
 
 struct Variant {
   Method method;
@@ -41,6 +43,9 @@ std::unique_ptr<ConditionalCovarianceSolver> makeSolver(const Variant& v,
       return std::make_unique<KaessRecoverySolver>(S, KaessRecoverySolverConfig{factor, false});
     case Method::kBatch:
       return std::make_unique<BatchCovarianceSolver>(S, BatchCovarianceSolverConfig{factor});
+    case Method::kSparseSolve:
+      return std::make_unique<SparseSolveCovarianceSolver>(
+          S, SparseSolveCovarianceSolverConfig{factor});
   }
   return nullptr;
 }
@@ -48,7 +53,8 @@ std::unique_ptr<ConditionalCovarianceSolver> makeSolver(const Variant& v,
 // Every solver with every factor kind.
 std::vector<Variant> allVariants() {
   std::vector<Variant> variants;
-  for (const Method m : {Method::kPerPair, Method::kKaess, Method::kKaessNoCache, Method::kBatch}) {
+  for (const Method m : {Method::kPerPair, Method::kKaess, Method::kKaessNoCache, Method::kBatch,
+                         Method::kSparseSolve}) {
     for (const CholmodFactorKind kind : {CholmodFactorKind::kAuto, CholmodFactorKind::kSupernodal,
                                          CholmodFactorKind::kSimplicial}) {
       variants.push_back({m, kind});
@@ -64,14 +70,6 @@ std::string name(const Variant& v) {
 
 ReducedCameraMatrix smallS(std::uint32_t seed) {
   const test::BaScene scene = test::smallGaugedScene(10, 200, seed);
-  return reduceCameraMatrix(linearizeBundleAdjustment(scene.problem, {}));
-}
-
-ReducedCameraMatrix loopS(int keyframes) {
-  test::LoopSceneOptions o;
-  o.keyframes = keyframes;
-  o.landmarks_per_keyframe = 20;
-  const test::BaScene scene = test::makeLoopBaScene(o);
   return reduceCameraMatrix(linearizeBundleAdjustment(scene.problem, {}));
 }
 
@@ -230,6 +228,10 @@ TEST(ConditionalCovariance, UngaugedProblemGivesNotPositiveDefiniteForEveryPair)
   KaessRecoverySolver kaess(S);
   EXPECT_NE(kaess.factorError(), "");
   EXPECT_THROW(kaess.covarianceEntry(0, 0), std::logic_error);
+  SparseSolveCovarianceSolver sparse(S);
+  EXPECT_EQ(sparse.factorError().rfind(kNotPositiveDefiniteError, 0), 0u) << sparse.factorError();
+  EXPECT_EQ(sparse.factorNonZeros(), 0);
+  EXPECT_THROW(sparse.covarianceBlock(S.keyframe_ids[0], S.keyframe_ids[1]), std::logic_error);
 }
 
 TEST(ConditionalCovariance, BadIdsArePerPairErrors) {
@@ -264,9 +266,11 @@ TEST(ConditionalCovariance, InvalidConfigsAreRejected) {
     EXPECT_NE(validate(ConstrainedOrderingSolverConfig{f}), "");
     EXPECT_NE(validate(KaessRecoverySolverConfig{f, true}), "");
     EXPECT_NE(validate(BatchCovarianceSolverConfig{f}), "");
+    EXPECT_NE(validate(SparseSolveCovarianceSolverConfig{f}), "");
     EXPECT_THROW(ConstrainedOrderingSolver(S, {f}), std::invalid_argument);
     EXPECT_THROW(KaessRecoverySolver(S, {f, true}), std::invalid_argument);
     EXPECT_THROW(BatchCovarianceSolver(S, {f}), std::invalid_argument);
+    EXPECT_THROW(SparseSolveCovarianceSolver(S, {f}), std::invalid_argument);
   }
   CholmodFactorConfig f;
   f.kind = static_cast<CholmodFactorKind>(7);

@@ -7,6 +7,7 @@
 #include "core/covariance/conditional_covariance.h"
 #include "core/covariance/reduced_camera_matrix.h"
 #include "core/optimization/ba_linearization.h"
+#include "test/covariance/loop_scene.h"
 #include "test/optimization/synthetic_scenes.h"
 
 namespace cblox::test {
@@ -27,6 +28,15 @@ inline BaScene smallGaugedScene(int keyframes, int landmarks, std::uint32_t seed
   BaScene scene = makeBaScene(o);
   scene.problem.keyframes[0].fixed = true;
   return scene;
+}
+
+/// S of a small two-lap loop scene (20 landmarks per keyframe), linearised at the truth.
+inline ReducedCameraMatrix loopS(int keyframes) {
+  LoopSceneOptions o;
+  o.keyframes = keyframes;
+  o.landmarks_per_keyframe = 20;
+  const BaScene scene = makeLoopBaScene(o);
+  return reduceCameraMatrix(linearizeBundleAdjustment(scene.problem, {}));
 }
 
 /// Every ordered pair (i, j), i != j, of S's keyframes.

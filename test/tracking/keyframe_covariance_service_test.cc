@@ -95,6 +95,7 @@ TEST_F(KeyframeCovarianceServiceTest, SolversAgreeAndNeighboursAreMoreCertainTha
   const KeyframeCovarianceReply per_pair =
       computeWith(CovarianceMethod::kConstrainedOrdering, request);
   const KeyframeCovarianceReply kaess = computeWith(CovarianceMethod::kKaessRecovery, request);
+  const KeyframeCovarianceReply sparse = computeWith(CovarianceMethod::kSparseSolve, request);
   EXPECT_EQ(batch.request_id, 7);
   EXPECT_EQ(batch.keyframes, static_cast<int>(ids.size()) - 1);  // the gauge has no block
   EXPECT_GT(batch.landmarks, 500);
@@ -113,6 +114,8 @@ TEST_F(KeyframeCovarianceServiceTest, SolversAgreeAndNeighboursAreMoreCertainTha
     EXPECT_EQ(r.j, request.pairs[k].j);
     EXPECT_LT(relativeDifference(per_pair.results[k].sigma, r.sigma), 1e-9);
     EXPECT_LT(relativeDifference(kaess.results[k].sigma, r.sigma), 1e-9);
+    ASSERT_TRUE(sparse.results[k].ok) << sparse.results[k].error;
+    EXPECT_LT(relativeDifference(sparse.results[k].sigma, r.sigma), 1e-9);
     // Symmetric positive definite, q = 1 / lambda_max.
     EXPECT_LT((r.sigma - r.sigma.transpose()).norm(), 1e-12 * r.sigma.norm());
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(r.sigma);
@@ -135,7 +138,7 @@ TEST_F(KeyframeCovarianceServiceTest, BadPairsGetTheirOwnErrors) {
   request.pairs = {{ids[2], ids[2]}, {999999, ids[1]}, {ids[0], ids[2]}, {ids[2], ids[1]}};
   for (const CovarianceMethod method :
        {CovarianceMethod::kBatch, CovarianceMethod::kConstrainedOrdering,
-        CovarianceMethod::kKaessRecovery}) {
+        CovarianceMethod::kKaessRecovery, CovarianceMethod::kSparseSolve}) {
     const KeyframeCovarianceReply reply = computeWith(method, request);
     ASSERT_EQ(reply.results.size(), 4u);
     EXPECT_FALSE(reply.results[0].ok);
@@ -165,7 +168,7 @@ TEST_F(KeyframeCovarianceServiceTest, GivenTheGaugeKeyframeTheAnswerIsTheMargina
   request.pairs = {{ids[5], ids[0]}, {ids.back(), ids[0]}, {ids[5], ids[4]}};
   for (const CovarianceMethod method :
        {CovarianceMethod::kBatch, CovarianceMethod::kConstrainedOrdering,
-        CovarianceMethod::kKaessRecovery}) {
+        CovarianceMethod::kKaessRecovery, CovarianceMethod::kSparseSolve}) {
     const KeyframeCovarianceReply reply = computeWith(method, request);
     ASSERT_EQ(reply.results.size(), 3u);
     for (size_t k = 0; k < 2; ++k) {

@@ -9,10 +9,12 @@
 //              q_min of the sweep, each with its own covariance service on the live map).
 // At the end every map is meshed (the projection of its subvolumes into one volume) and
 // compared with the scene's exact surface: vertex RMSE and median, and the map's size in
-// TSDF blocks (over all subvolumes).
+// TSDF blocks (over all subvolumes). Maps made with the tracker's poses are first aligned
+// (SE(3), final keyframe positions to the true ones, as for ATE). --depth-noise K adds the
+// sensor model's depth noise sigma = K z^2 (metres; the stereo images stay clean).
 //
 //   cblox-bench-maintenance [--scene room|hall|town] [--laps 2] [--frames N]
-//                           [--voxel 0.05] [--keyframes-per-subvolume 10]
+//                           [--voxel 0.05] [--keyframes-per-subvolume 10] [--depth-noise K]
 //                           [--q-min 3e3,1e4,3e4,1e5] [--out DIR]
 //
 // Mappers integrate every frame (no time budget, waited for) so the comparison does not
@@ -26,6 +28,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -36,6 +39,7 @@
 #include "core/eval/json_writer.h"
 #include "core/eval/mesh_accuracy.h"
 #include "core/eval/scatter_plot.h"
+#include "core/eval/umeyama.h"
 #include "core/raycast/triangle_mesh_raycaster.h"
 #include "core/submap/submap_fusion.h"
 #include "core/tracking/keyframe_covariance_service.h"
@@ -92,6 +96,7 @@ int run(int argc, char** argv) {
   size_t max_frames = 0;
   float voxel = 0.05f;
   int keyframes_per_subvolume = MapperConfig{}.creation.max_keyframes_per_subvolume;
+  double depth_noise = 0.0;
   std::vector<double> sweep = {3e3, 1e4, 3e4, 1e5};
 #ifdef CBLOX_DEFAULT_VOCABULARY
   vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
@@ -115,6 +120,8 @@ int run(int argc, char** argv) {
       voxel = static_cast<float>(std::atof(value().c_str()));
     } else if (flag == "--keyframes-per-subvolume") {
       keyframes_per_subvolume = std::atoi(value().c_str());
+    } else if (flag == "--depth-noise") {
+      depth_noise = std::atof(value().c_str());
     } else if (flag == "--q-min") {
       sweep = parseList(value());
     } else if (flag == "--out") {
@@ -140,6 +147,7 @@ int run(int argc, char** argv) {
   options.trajectory = "loop";
   options.laps = laps;
   options.max_frames = max_frames;
+  options.sim.noise.depth_noise_per_m2 = depth_noise;  // the stereo pair stays clean
   auto source = openFrameSource("sim:" + scene, options, &error);
   if (!source) {
     std::fprintf(stderr, "%s\n", error.c_str());
@@ -209,9 +217,11 @@ int run(int argc, char** argv) {
   add("off", Kind::kOff, 0.0);
   for (const double q : sweep) {
     char name[32];
-    std::snprintf(name, sizeof(name), "on q>=%.0e", q);
+    std::snprintf(name, sizeof(name), "on q>=%.0g", q);
     add(name, Kind::kOn, q);
   }
+
+  std::map<uint64_t, Transformationd> truth_by_frame;  // for the trajectory alignment
 
   // SLAM outputs, from its threads, handed to the tracker-mode mappers by the main loop.
   std::mutex mutex;
@@ -255,6 +265,7 @@ int run(int argc, char** argv) {
   CaptureFrame frame;
   size_t n = 0, lost = 0;
   while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+    truth_by_frame[static_cast<uint64_t>(frame.frame_id)] = *frame.T_G_C;
     const TrackingResult r =
         slam.trackStereo(static_cast<uint64_t>(frame.frame_id), frame.timestamp_ns, frame.left,
                          frame.right, frame.T_G_C->inverse());
@@ -323,7 +334,22 @@ int run(int argc, char** argv) {
   }
   MeshAccuracyOptions accuracy_options;
   accuracy_options.max_surface_samples = 200000;
+  // The tracker's frame G starts at the first frame's true pose but its gauge drifts; maps
+  // built with its poses are compared after the SE(3) alignment of the final keyframe
+  // positions to the true ones (as ATE is).
+  std::vector<Eigen::Vector3d> estimated, true_positions;
+  for (const Keyframe* k : slam.map().keyframes()) {
+    const auto it = truth_by_frame.find(k->frame_id);
+    if (it == truth_by_frame.end()) continue;
+    estimated.push_back(k->T_G_C().translation());
+    true_positions.push_back(it->second.translation());
+  }
+  const std::optional<Alignment> alignment =
+      umeyamaAlign(estimated, true_positions, AlignmentType::kSE3, &error);
+  if (!alignment) std::fprintf(stderr, "alignment: %s (maps compared unaligned)\n", error.c_str());
   for (auto& v : variants) {
+    accuracy_options.T_G_R.reset();
+    if (v->kind != Kind::kGroundTruth && alignment) accuracy_options.T_G_R = *alignment;
     const MapperConfig& config = v->mapper->config();
     const Mesh mesh = meshCollection(v->mapper->collection(), config.layer, config.fusion,
                                      config.mesh, /*include_active=*/true);
@@ -347,16 +373,23 @@ int run(int argc, char** argv) {
     if (v->kind != Kind::kOn) continue;
     std::printf("covisibility edges (shared / |L_a| / |L_b|):");
     for (const CovisibilityCandidate& e : v->mapper->covisibilityEdges()) {
-      std::printf(" %lld-%lld %d/%zu/%zu", static_cast<long long>(e.a),
-                  static_cast<long long>(e.b), e.shared, e.landmarks_a, e.landmarks_b);
+      std::printf(" %lld-%lld %d/%zu/%zu", static_cast<long long>(e.a), static_cast<long long>(e.b),
+                  e.shared, e.landmarks_a, e.landmarks_b);
     }
     std::printf("\n");
     break;
   }
   const Variant& gt = *variants[0];
   const Variant& off = *variants[2];
-  std::printf("scene %s x%d, %zu frames (%zu not tracked), %zu keyframes, voxel %.3f m\n",
-              scene.c_str(), laps, n, lost, slam.map().numKeyframes(), voxel);
+  std::printf(
+      "scene %s x%d, %zu frames (%zu not tracked), %zu keyframes, voxel %.3f m, "
+      "depth noise %.4f z^2, %d keyframes per subvolume; alignment of the tracker's "
+      "frame: %.1f mm, %.3f deg\n",
+      scene.c_str(), laps, n, lost, slam.map().numKeyframes(), voxel, depth_noise,
+      keyframes_per_subvolume, alignment ? 1e3 * alignment->T_A_B.translation().norm() : 0.0,
+      alignment ? alignment->T_A_B.rotation().angularDistance(Eigen::Quaterniond::Identity()) *
+                      180.0 / M_PI
+                : 0.0);
   std::printf(
       "| map | subvolumes | blocks | size / OFF | RMSE (mm) | RMSE / GT | median (mm) | "
       "candidates | requested | fused | rejected by q |\n");
@@ -403,10 +436,19 @@ int run(int argc, char** argv) {
     plot.title = "map maintenance on " + scene + ": size vs accuracy";
     plot.x_label = "map size [TSDF blocks]";
     plot.y_label = "vertex RMSE [mm]";
+    // Variants that end with the same map share one marker and one label.
     std::vector<ScatterPoint> points;
     for (const auto& v : variants) {
-      points.push_back(ScatterPoint{static_cast<double>(v->blocks), 1e3 * v->rmse_m, v->name,
-                                    v->kind == Kind::kOn ? 1 : 0});
+      const ScatterPoint point{static_cast<double>(v->blocks), 1e3 * v->rmse_m, v->name,
+                               v->kind == Kind::kOn ? 1 : 0};
+      auto same = std::find_if(points.begin(), points.end(), [&](const ScatterPoint& p) {
+        return p.x == point.x && p.y == point.y && p.series == point.series;
+      });
+      if (same == points.end()) {
+        points.push_back(point);
+      } else {
+        same->label += ", " + point.label.substr(point.label.find('>') + 2);
+      }
     }
     const std::string path = out_dir + "/maintenance_" + scene + "_sweep.png";
     if (!writeScatterPlotPng(path, points, plot, &error)) {

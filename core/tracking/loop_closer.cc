@@ -317,7 +317,7 @@ std::optional<LoopCloser::Verified> LoopCloser::verify(Keyframe* keyframe,
     Verified v;
     v.matches.assign(f.size(), nullptr);
     for (size_t k = 0; k < all_index.size(); ++k) {
-      if (checked.inlier[k]) v.matches[all_index[k]] = probe.landmarks[all_index[k]].get();
+      if (checked.inlier[k]) v.matches[all_index[k]] = probe.landmarks[all_index[k]];
     }
     v.candidate = candidate;
     v.T_C_G = checked.T_C_G;
@@ -363,7 +363,7 @@ void LoopCloser::correct(Keyframe* keyframe, const Verified& loop) {
     }
     // 2. Fuse the loop's landmarks into the group (duplicates merge).
     for (size_t i = 0; i < loop.matches.size(); ++i) {
-      Landmark* loop_landmark = loop.matches[i];
+      Landmark* loop_landmark = loop.matches[i].get();
       if (loop_landmark == nullptr || loop_landmark->bad()) continue;
       Landmark* current = keyframe->landmark(i);
       if (current == loop_landmark) continue;

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -114,8 +115,11 @@ class LoopCloser {
  private:
   struct Verified {
     Keyframe* candidate = nullptr;
-    Transformationd T_C_G;           // corrected pose of the query keyframe
-    std::vector<Landmark*> matches;  // per query feature: the loop landmark, or null
+    Transformationd T_C_G;  // corrected pose of the query keyframe
+    // Per query feature: the loop landmark, or null. Held, not borrowed: between verify()
+    // (shared lock) and correct() (exclusive lock) local mapping may retire one, and a raw
+    // pointer would then dangle (a std::bad_weak_ptr abort on the town, end of lap 1).
+    std::vector<std::shared_ptr<Landmark>> matches;
     int inliers = 0;
   };
   std::vector<Keyframe*> detect(Keyframe* keyframe);

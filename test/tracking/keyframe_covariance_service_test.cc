@@ -30,7 +30,7 @@ namespace cblox {
 namespace {
 
 class KeyframeCovarianceServiceTest : public ::testing::Test {
- protected:
+ public:
   static void SetUpTestSuite() {
     std::string error;
     vocabulary_ = new BinaryVocabulary(*BinaryVocabulary::load(CBLOX_DEFAULT_VOCABULARY, &error));
@@ -84,18 +84,19 @@ double relativeDifference(const Eigen::Matrix<double, 6, 6>& a,
   return (a - b).norm() / b.norm();
 }
 
-TEST_F(KeyframeCovarianceServiceTest, SolversAgreeAndNeighboursAreMoreCertainThanFarKeyframes) {
-  const std::vector<uint64_t> ids = keyframeIds();
+void SolversAgreeAndNeighboursAreMoreCertainThanFarKeyframes() {
+  using T = KeyframeCovarianceServiceTest;
+  const std::vector<uint64_t> ids = T::keyframeIds();
   ASSERT_GE(ids.size(), 8u);
   const uint64_t last = ids.back(), before_last = ids[ids.size() - 2], second = ids[1];
   KeyframeCovarianceRequest request;
   request.request_id = 7;
   request.pairs = {{last, before_last}, {last, second}, {second, last}, {ids[3], ids[4]}};
-  const KeyframeCovarianceReply batch = computeWith(CovarianceMethod::kBatch, request);
+  const KeyframeCovarianceReply batch = T::computeWith(CovarianceMethod::kBatch, request);
   const KeyframeCovarianceReply per_pair =
-      computeWith(CovarianceMethod::kConstrainedOrdering, request);
-  const KeyframeCovarianceReply kaess = computeWith(CovarianceMethod::kKaessRecovery, request);
-  const KeyframeCovarianceReply sparse = computeWith(CovarianceMethod::kSparseSolve, request);
+      T::computeWith(CovarianceMethod::kConstrainedOrdering, request);
+  const KeyframeCovarianceReply kaess = T::computeWith(CovarianceMethod::kKaessRecovery, request);
+  const KeyframeCovarianceReply sparse = T::computeWith(CovarianceMethod::kSparseSolve, request);
   EXPECT_EQ(batch.request_id, 7);
   EXPECT_EQ(batch.keyframes, static_cast<int>(ids.size()) - 1);  // the gauge has no block
   EXPECT_GT(batch.landmarks, 500);
@@ -132,14 +133,15 @@ TEST_F(KeyframeCovarianceServiceTest, SolversAgreeAndNeighboursAreMoreCertainTha
   EXPECT_GT(batch.results[0].q, 2.0 * batch.results[1].q);
 }
 
-TEST_F(KeyframeCovarianceServiceTest, BadPairsGetTheirOwnErrors) {
-  const std::vector<uint64_t> ids = keyframeIds();
+void BadPairsGetTheirOwnErrors() {
+  using T = KeyframeCovarianceServiceTest;
+  const std::vector<uint64_t> ids = T::keyframeIds();
   KeyframeCovarianceRequest request;
   request.pairs = {{ids[2], ids[2]}, {999999, ids[1]}, {ids[0], ids[2]}, {ids[2], ids[1]}};
   for (const CovarianceMethod method :
        {CovarianceMethod::kBatch, CovarianceMethod::kConstrainedOrdering,
         CovarianceMethod::kKaessRecovery, CovarianceMethod::kSparseSolve}) {
-    const KeyframeCovarianceReply reply = computeWith(method, request);
+    const KeyframeCovarianceReply reply = T::computeWith(method, request);
     ASSERT_EQ(reply.results.size(), 4u);
     EXPECT_FALSE(reply.results[0].ok);
     EXPECT_NE(reply.results[0].error.find("same keyframe"), std::string::npos)
@@ -157,10 +159,11 @@ TEST_F(KeyframeCovarianceServiceTest, BadPairsGetTheirOwnErrors) {
 
 // Given the gauge keyframe (held fixed by the BA) a keyframe's covariance is its marginal,
 // [S^-1]_ii: checked against the dense inverse of the same S, for every method.
-TEST_F(KeyframeCovarianceServiceTest, GivenTheGaugeKeyframeTheAnswerIsTheMarginal) {
-  const std::vector<uint64_t> ids = keyframeIds();
+void GivenTheGaugeKeyframeTheAnswerIsTheMarginal() {
+  using T = KeyframeCovarianceServiceTest;
+  const std::vector<uint64_t> ids = T::keyframeIds();
   const MapBaProblem map_problem =
-      buildMapBaProblem(slam_->map(), *camera_, slam_->pyramid(), nullptr);
+      buildMapBaProblem(T::slam_->map(), *T::camera_, T::slam_->pyramid(), nullptr);
   const ReducedCameraMatrix S = reduceCameraMatrix(linearizeBundleAdjustment(
       map_problem.problem, {}, KeyframeCovarianceServiceConfig{}.linearization));
   const Eigen::MatrixXd inverse = Eigen::MatrixXd(S.matrix).inverse();
@@ -169,7 +172,7 @@ TEST_F(KeyframeCovarianceServiceTest, GivenTheGaugeKeyframeTheAnswerIsTheMargina
   for (const CovarianceMethod method :
        {CovarianceMethod::kBatch, CovarianceMethod::kConstrainedOrdering,
         CovarianceMethod::kKaessRecovery, CovarianceMethod::kSparseSolve}) {
-    const KeyframeCovarianceReply reply = computeWith(method, request);
+    const KeyframeCovarianceReply reply = T::computeWith(method, request);
     ASSERT_EQ(reply.results.size(), 3u);
     for (size_t k = 0; k < 2; ++k) {
       const ConditionalCovariance& r = reply.results[k];
@@ -187,14 +190,15 @@ TEST_F(KeyframeCovarianceServiceTest, GivenTheGaugeKeyframeTheAnswerIsTheMargina
   }
 }
 
-TEST_F(KeyframeCovarianceServiceTest, TheThreadAnswersEveryRequestOnceAndDropsTheOldest) {
-  const std::vector<uint64_t> ids = keyframeIds();
+void TheThreadAnswersEveryRequestOnceAndDropsTheOldest() {
+  using T = KeyframeCovarianceServiceTest;
+  const std::vector<uint64_t> ids = T::keyframeIds();
   std::mutex mutex;
   std::map<int64_t, KeyframeCovarianceReply> replies;
   std::atomic<int> duplicates{0};
   KeyframeCovarianceServiceConfig config;
   config.max_queued_requests = 1;
-  KeyframeCovarianceService service(slam_->map(), *camera_, slam_->pyramid(), config,
+  KeyframeCovarianceService service(T::slam_->map(), *T::camera_, T::slam_->pyramid(), config,
                                     [&](const KeyframeCovarianceReply& r) {
                                       std::lock_guard<std::mutex> lock(mutex);
                                       if (!replies.emplace(r.request_id, r).second) ++duplicates;
@@ -230,6 +234,27 @@ TEST_F(KeyframeCovarianceServiceTest, TheThreadAnswersEveryRequestOnceAndDropsTh
   EXPECT_EQ(stats.dropped, 4u);
   EXPECT_EQ(stats.pairs_ok, 1u);
   EXPECT_EQ(stats.pairs_failed, 4u);
+}
+
+// One ctest case (the fixture's SLAM run takes most of the time; ctest runs every case in
+// a process of its own).
+TEST_F(KeyframeCovarianceServiceTest, AnswersFromTheLiveRoomMap) {
+  {
+    SCOPED_TRACE("solvers agree, neighbours more certain");
+    SolversAgreeAndNeighboursAreMoreCertainThanFarKeyframes();
+  }
+  {
+    SCOPED_TRACE("bad pairs");
+    BadPairsGetTheirOwnErrors();
+  }
+  {
+    SCOPED_TRACE("given the gauge: the marginal");
+    GivenTheGaugeKeyframeTheAnswerIsTheMarginal();
+  }
+  {
+    SCOPED_TRACE("the service thread");
+    TheThreadAnswersEveryRequestOnceAndDropsTheOldest();
+  }
 }
 
 TEST(KeyframeCovarianceServiceConfigTest, BadValuesAreNamed) {

@@ -29,8 +29,10 @@ struct FusionSchedulerConfig {
   /// At most this many pairs per covariance request (>= 1).
   int max_pairs_per_request = 8;
   /// A request without a reply is abandoned after this long, seconds (> 0); its pairs may be
-  /// requested again.
-  double reply_timeout_s = 2.0;
+  /// requested again. The tracker relinearises its whole map per request: 0.3 s median and
+  /// 1.2 s at most at 290 keyframes on the town, several seconds at 1000 (measured with
+  /// cblox-bench-maintenance), so a short timeout only repeats the work.
+  double reply_timeout_s = 10.0;
   /// A pair rejected (q too small, or an error) is not requested again for this long,
   /// seconds (>= 0): BA may make it certain later, but not within a few keyframes.
   double retry_after_s = 5.0;

@@ -15,6 +15,7 @@
 //
 //   cblox-bench-maintenance [--scene room|hall|town] [--laps 2] [--frames N]
 //                           [--voxel 0.05] [--keyframes-per-subvolume 10] [--depth-noise K]
+//                           [--min-shared-landmarks 30] [--min-shared-ratio 0.1]
 //                           [--q-min 3e3,1e4,3e4,1e5] [--out DIR]
 //
 // Mappers integrate every frame (no time budget, waited for) so the comparison does not
@@ -97,6 +98,7 @@ int run(int argc, char** argv) {
   float voxel = 0.05f;
   int keyframes_per_subvolume = MapperConfig{}.creation.max_keyframes_per_subvolume;
   double depth_noise = 0.0;
+  CovisibilityGraphConfig candidates;
   std::vector<double> sweep = {3e3, 1e4, 3e4, 1e5};
 #ifdef CBLOX_DEFAULT_VOCABULARY
   vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
@@ -120,6 +122,10 @@ int run(int argc, char** argv) {
       voxel = static_cast<float>(std::atof(value().c_str()));
     } else if (flag == "--keyframes-per-subvolume") {
       keyframes_per_subvolume = std::atoi(value().c_str());
+    } else if (flag == "--min-shared-ratio") {
+      candidates.min_shared_ratio = std::atof(value().c_str());
+    } else if (flag == "--min-shared-landmarks") {
+      candidates.min_shared_landmarks = std::atoi(value().c_str());
     } else if (flag == "--depth-noise") {
       depth_noise = std::atof(value().c_str());
     } else if (flag == "--q-min") {
@@ -166,6 +172,10 @@ int run(int argc, char** argv) {
       std::filesystem::temp_directory_path() / ("cblox_bench_maintenance_" + scene);
   std::filesystem::create_directories(work);
   std::vector<std::unique_ptr<Variant>> variants;
+  // Covariance answers: errors by message (first 60 characters) and times per request.
+  std::mutex errors_mutex;
+  std::map<std::string, int> errors;
+  std::vector<double> build_ms;
   auto add = [&](std::string name, Kind kind, double q_min) {
     auto v = std::make_unique<Variant>();
     v->name = std::move(name);
@@ -179,6 +189,7 @@ int run(int argc, char** argv) {
       config.pose_source = PoseSource::kTracker;
       config.creation.max_keyframes_per_subvolume = keyframes_per_subvolume;
       config.maintenance.enabled = kind == Kind::kOn;
+      config.maintenance.candidates = candidates;
       if (kind == Kind::kOn) config.maintenance.q_min = q_min;
     }
     v->mapper = std::make_unique<Mapper>(config, [](const std::string&) {});
@@ -186,8 +197,15 @@ int run(int argc, char** argv) {
       Mapper* mapper = v->mapper.get();
       v->covariance = std::make_unique<KeyframeCovarianceService>(
           slam.map(), camera, slam.pyramid(), KeyframeCovarianceServiceConfig{},
-          [mapper](const KeyframeCovarianceReply& reply) {
+          [mapper, &errors_mutex, &errors, &build_ms](const KeyframeCovarianceReply& reply) {
             std::vector<FusionCovarianceAnswer> answers;
+            {
+              std::lock_guard<std::mutex> lock(errors_mutex);
+              build_ms.push_back(reply.build_ms + reply.solve_ms);
+              for (const ConditionalCovariance& r : reply.results) {
+                if (!r.ok) ++errors[r.error.substr(0, 60)];
+              }
+            }
             for (const ConditionalCovariance& r : reply.results) {
               answers.push_back(FusionCovarianceAnswer{r.ok, r.error, r.q});
             }
@@ -379,30 +397,47 @@ int run(int argc, char** argv) {
     std::printf("\n");
     break;
   }
+  {
+    std::lock_guard<std::mutex> lock(errors_mutex);
+    std::sort(build_ms.begin(), build_ms.end());
+    if (!build_ms.empty()) {
+      std::printf("covariance requests: %zu, time per request median %.0f ms, max %.0f ms\n",
+                  build_ms.size(), build_ms[build_ms.size() / 2], build_ms.back());
+    }
+    for (const auto& [message, count] : errors) {
+      std::printf("covariance error x%d: %s\n", count, message.c_str());
+    }
+  }
   const Variant& gt = *variants[0];
   const Variant& off = *variants[2];
   std::printf(
-      "scene %s x%d, %zu frames (%zu not tracked), %zu keyframes, voxel %.3f m, "
+      "scene %s x%d, %zu frames (%zu not tracked), %zu keyframes, %llu loops closed, voxel "
+      "%.3f m, "
       "depth noise %.4f z^2, %d keyframes per subvolume; alignment of the tracker's "
       "frame: %.1f mm, %.3f deg\n",
-      scene.c_str(), laps, n, lost, slam.map().numKeyframes(), voxel, depth_noise,
+      scene.c_str(), laps, n, lost, slam.map().numKeyframes(),
+      static_cast<unsigned long long>(slam.loopClosingStats().loops_closed), voxel, depth_noise,
       keyframes_per_subvolume, alignment ? 1e3 * alignment->T_A_B.translation().norm() : 0.0,
       alignment ? alignment->T_A_B.rotation().angularDistance(Eigen::Quaterniond::Identity()) *
                       180.0 / M_PI
                 : 0.0);
   std::printf(
       "| map | subvolumes | blocks | size / OFF | RMSE (mm) | RMSE / GT | median (mm) | "
-      "candidates | requested | fused | rejected by q |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "candidates | requested | fused | rejected by q | errors / timed out |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& v : variants) {
-    std::printf("| %s | %zu | %zu | %.0f %% | %.1f | %.2f | %.2f | %llu | %llu | %llu | %llu |\n",
-                v->name.c_str(), v->subvolumes, v->blocks,
-                100.0 * static_cast<double>(v->blocks) / static_cast<double>(off.blocks),
-                1e3 * v->rmse_m, v->rmse_m / gt.rmse_m, 1e3 * v->median_m,
-                static_cast<unsigned long long>(v->fusion.candidates),
-                static_cast<unsigned long long>(v->fusion.requested),
-                static_cast<unsigned long long>(v->fusion.fused),
-                static_cast<unsigned long long>(v->fusion.rejected_by_q));
+    std::printf(
+        "| %s | %zu | %zu | %.0f %% | %.1f | %.2f | %.2f | %llu | %llu | %llu | %llu | "
+        "%llu / %llu |\n",
+        v->name.c_str(), v->subvolumes, v->blocks,
+        100.0 * static_cast<double>(v->blocks) / static_cast<double>(off.blocks), 1e3 * v->rmse_m,
+        v->rmse_m / gt.rmse_m, 1e3 * v->median_m,
+        static_cast<unsigned long long>(v->fusion.candidates),
+        static_cast<unsigned long long>(v->fusion.requested),
+        static_cast<unsigned long long>(v->fusion.fused),
+        static_cast<unsigned long long>(v->fusion.rejected_by_q),
+        static_cast<unsigned long long>(v->fusion.covariance_errors),
+        static_cast<unsigned long long>(v->fusion.requests_timed_out));
   }
 
   if (!out_dir.empty()) {

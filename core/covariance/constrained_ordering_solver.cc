@@ -22,17 +22,29 @@ std::vector<ConditionalCovariance> ConstrainedOrderingSolver::compute(
   return out;
 }
 
+CholmodFactorOutcome ConstrainedOrderingSolver::factorWithLast(std::initializer_list<int> last) {
+  std::vector<int> constraint(S_.numBlocks(), 0);
+  int set = 0;
+  for (const int block : last) constraint[block] = ++set;
+  const std::vector<int> perm = expandBlockPermutation(constrainedBlockOrdering(S_, constraint));
+  return factorizeWithPermutation(common_, A_, perm, config_.factor, S_.keyframe_ids);
+}
+
 ConditionalCovariance ConstrainedOrderingSolver::computePair(const KeyframePair& pair) {
   if (std::string e = pairIdError(S_, pair); !e.empty()) return failedPair(pair, std::move(e));
-  std::vector<int> constraint(S_.numBlocks(), 0);
-  constraint[S_.blockOf(pair.i)] = 1;
-  constraint[S_.blockOf(pair.j)] = 2;
-  const std::vector<int> perm = expandBlockPermutation(constrainedBlockOrdering(S_, constraint));
-  CholmodFactorOutcome f =
-      factorizeWithPermutation(common_, A_, perm, config_.factor, S_.keyframe_ids);
+  CholmodFactorOutcome f = factorWithLast({S_.blockOf(pair.i), S_.blockOf(pair.j)});
   if (!f.ok) return failedPair(pair, std::move(f.error));
   const Eigen::MatrixXd L22 = trailingFactorBlock(*f.factor.get(), 12);
   return conditionalFromFactorBlock(pair, L22.topLeftCorner<6, 6>());
+}
+
+ConditionalCovariance ConstrainedOrderingSolver::marginal(const KeyframePair& pair) {
+  if (std::string e = pairIdError(S_, KeyframePair{pair.i, pair.i}); S_.blockOf(pair.i) < 0) {
+    return failedPair(pair, std::move(e));
+  }
+  CholmodFactorOutcome f = factorWithLast({S_.blockOf(pair.i)});
+  if (!f.ok) return failedPair(pair, std::move(f.error));
+  return conditionalFromFactorBlock(pair, trailingFactorBlock(*f.factor.get(), 6));
 }
 
 }  // namespace cblox

@@ -42,9 +42,17 @@ class ConstrainedOrderingSolver final : public ConditionalCovarianceSolver {
   using ConditionalCovarianceSolver::compute;
   /// One factorisation per valid pair. Not thread-safe.
   std::vector<ConditionalCovariance> compute(std::span<const KeyframePair> pairs) override;
+  /// The marginal [S^-1]_ii of keyframe pair.i, i.e. its covariance given only the BA's
+  /// fixed keyframes: i's block alone ordered last, Sigma = (c c^T)^-1 from the trailing
+  /// 6x6 block c. pair.j is not used (it names, in the result, what i is conditioned on,
+  /// e.g. the gauge keyframe, which has no block). Errors as compute(). Not thread-safe.
+  ConditionalCovariance marginal(const KeyframePair& pair);
 
  private:
   ConditionalCovariance computePair(const KeyframePair& pair);
+  // CAMD with `last` (block indices, in order) after every other block, forced through
+  // CHOLMOD; the factor or its error.
+  CholmodFactorOutcome factorWithLast(std::initializer_list<int> last);
 
   ReducedCameraMatrix S_;
   ConstrainedOrderingSolverConfig config_;

@@ -11,8 +11,6 @@
 #include <utility>
 
 #include "core/covariance/batch_covariance_solver.h"
-#include "core/covariance/block_ordering.h"
-#include "core/covariance/cholmod_support.h"
 #include "core/covariance/constrained_ordering_solver.h"
 #include "core/covariance/kaess_recovery_solver.h"
 #include "core/covariance/sparse_solve_solver.h"
@@ -64,28 +62,6 @@ std::unique_ptr<ConditionalCovarianceSolver> makeSolver(CovarianceMethod method,
       break;
   }
   return std::make_unique<BatchCovarianceSolver>(std::move(S));
-}
-
-// Sigma_{i|g} for the gauge keyframe g: g is held fixed in the BA, so S^-1 is already the
-// covariance given g and the answer is the marginal [S^-1]_ii. With i's block alone ordered
-// last (CAMD constraint sets {others} < {i}), the trailing 6x6 block c of L gives i's
-// marginal information c c^T, and Sigma = (c c^T)^-1 (conditionalFromFactorBlock).
-ConditionalCovariance covarianceGivenGauge(const ReducedCameraMatrix& S, const KeyframePair& pair) {
-  const int block = S.blockOf(pair.i);
-  if (block < 0) {
-    return failedPair(pair, "keyframe " + std::to_string(pair.i) +
-                                " is not in the BA linearization (fixed, culled or unknown)");
-  }
-  std::vector<int> constraint(static_cast<size_t>(S.numBlocks()), 0);
-  constraint[static_cast<size_t>(block)] = 1;
-  const std::vector<int> perm = expandBlockPermutation(constrainedBlockOrdering(S, constraint));
-  CholmodCommon common;
-  CholmodSymmetricMatrix A(S.matrix);
-  const CholmodFactorOutcome outcome =
-      factorizeWithPermutation(common, A, perm, CholmodFactorConfig{}, S.keyframe_ids);
-  if (!outcome.ok) return failedPair(pair, outcome.error);
-  const Eigen::Matrix<double, 6, 6> c = trailingFactorBlock(*outcome.factor.get(), 6);
-  return conditionalFromFactorBlock(pair, c);
 }
 
 std::vector<ConditionalCovariance> failAll(std::span<const KeyframePair> pairs,
@@ -175,11 +151,15 @@ KeyframeCovarianceReply KeyframeCovarianceService::compute(
     for (const BaKeyframe& k : map_problem.problem.keyframes) {
       if (k.fixed) gauge = k.id;
     }
+    // Given the gauge g (held fixed, so S^-1 is already conditioned on it) the answer is
+    // the marginal [S^-1]_ii.
+    std::optional<ConstrainedOrderingSolver> marginals;
     for (size_t p = 0; p < request.pairs.size(); ++p) {
       const KeyframePair& pair = request.pairs[p];
       if (pair.j == gauge && pair.i != gauge) {
+        if (!marginals) marginals.emplace(S);
         gauge_pairs.push_back(p);
-        gauge_results.push_back(covarianceGivenGauge(S, pair));
+        gauge_results.push_back(marginals->marginal(pair));
       } else {
         other_pairs.push_back(p);
       }

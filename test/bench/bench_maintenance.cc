@@ -48,6 +48,7 @@
 #include "daemon/mapper/mapper.h"
 #include "drivers/open_frame_source.h"
 #include "drivers/sim/builtin_scenes.h"
+#include "test/bench/bench_flags.h"
 
 namespace cblox {
 namespace {
@@ -105,13 +106,7 @@ int run(int argc, char** argv) {
 #endif
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "%s needs a value\n", flag.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
+    auto value = [&] { return flagValue(argc, argv, &i); };
     if (flag == "--scene") {
       scene = value();
     } else if (flag == "--laps") {

@@ -35,6 +35,7 @@
 #include "core/eval/trajectory_plot.h"
 #include "core/tracking/slam_system.h"
 #include "drivers/open_frame_source.h"
+#include "test/bench/bench_flags.h"
 
 namespace cblox {
 namespace {
@@ -84,13 +85,7 @@ int run(int argc, char** argv) {
 #endif
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "%s needs a value\n", flag.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
+    auto value = [&] { return flagValue(argc, argv, &i); };
     if (flag == "--scene")
       scene = value();
     else if (flag == "--trajectory")
@@ -262,9 +257,8 @@ int run(int argc, char** argv) {
       "  loops: %zu closed (%zu false), %lu rejected after verification (%lu candidates by "
       "the drift gate); correction median %.1f ms; global BA %lu (last %.0f ms)\n",
       loops.size(), false_loops, static_cast<unsigned long>(lc.loops_rejected),
-      static_cast<unsigned long>(lc.loops_rejected_drift),
-      percentile(correction_ms, 0.5), static_cast<unsigned long>(lc.global_bundle_adjustments),
-      lc.last_global_ba_ms);
+      static_cast<unsigned long>(lc.loops_rejected_drift), percentile(correction_ms, 0.5),
+      static_cast<unsigned long>(lc.global_bundle_adjustments), lc.last_global_ba_ms);
   std::printf("  CPU: %.2f cores over %.1f s\n", cpu_s / wall_s, wall_s);
   std::printf(
       "  ATE RMSE: frames before the first loop %.4f m (%.2f %% of path), all frames as "

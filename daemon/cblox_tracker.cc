@@ -254,6 +254,8 @@ class TrackerLcmNode {
     add("covariance_requests", s.covariance_requests);
     add("covariance_pairs_ok", s.covariance_pairs_ok);
     add("covariance_pairs_failed", s.covariance_pairs_failed);
+    add("covariance_linearizations", s.covariance_linearizations);
+    add("covariance_reused", s.covariance_reused);
     add_us("covariance_build_us", s.covariance_build_ms);
     add_us("covariance_solve_us", s.covariance_solve_ms);
     add_us("tracking_median_us", s.tracking_ms_median);

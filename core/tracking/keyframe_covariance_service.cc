@@ -5,8 +5,10 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <memory>
 #include <optional>
+#include <shared_mutex>
 #include <stdexcept>
 #include <utility>
 
@@ -34,6 +36,9 @@ const char* covarianceMethodName(CovarianceMethod method) {
 
 std::string KeyframeCovarianceServiceConfig::validate() const {
   if (max_queued_requests < 1) return "max_queued_requests must be >= 1";
+  if (!(max_linearization_age_s >= 0.0) || !std::isfinite(max_linearization_age_s)) {
+    return "max_linearization_age_s must be finite and >= 0";
+  }
   if (niceness < 0 || niceness > 19) {
     return "niceness must be in [0, 19], got " + std::to_string(niceness);
   }
@@ -127,58 +132,117 @@ void KeyframeCovarianceService::submit(KeyframeCovarianceRequest request) {
   }
 }
 
-KeyframeCovarianceReply KeyframeCovarianceService::compute(
-    const KeyframeCovarianceRequest& request) const {
+struct KeyframeCovarianceService::Linearization {
+  std::chrono::steady_clock::time_point built;
+  int change_index = 0;
+  std::string error;   // non-empty: every pair fails with it (the map cannot be linearised)
+  uint64_t gauge = 0;  // the keyframe held fixed
+  int keyframes = 0, landmarks = 0;
+  double build_ms = 0.0;
+  ReducedCameraMatrix S;  // kept for the gauge marginals, built on first use
+  std::unique_ptr<ConditionalCovarianceSolver> solver;
+  std::optional<ConstrainedOrderingSolver> marginals;
+};
+
+std::unique_ptr<KeyframeCovarianceService::Linearization> KeyframeCovarianceService::linearize()
+    const {
+  auto lin = std::make_unique<Linearization>();
+  const auto start = std::chrono::steady_clock::now();
+  lin->built = start;
+  const MapBaProblem map_problem = buildMapBaProblem(map_, camera_, pyramid_, nullptr);
+  lin->change_index = map_problem.change_index;
+  lin->landmarks = static_cast<int>(map_problem.problem.landmarks.size());
+  if (map_problem.problem.keyframes.size() < 2 || map_problem.problem.observations.empty()) {
+    lin->error = "the map has fewer than two keyframes";
+    return lin;
+  }
+  for (const BaKeyframe& k : map_problem.problem.keyframes) {
+    if (k.fixed) lin->gauge = k.id;
+  }
+  lin->S = reduceCameraMatrix(
+      linearizeBundleAdjustment(map_problem.problem, {}, config_.linearization), config_.reduction);
+  lin->keyframes = lin->S.numBlocks();
+  lin->solver = makeSolver(config_.method, lin->S);
+  lin->build_ms = msSince(start);
+  return lin;
+}
+
+bool KeyframeCovarianceService::reusable(const Linearization& lin,
+                                         const KeyframeCovarianceRequest& request) const {
+  if (!lin.error.empty()) return false;
+  if (std::chrono::duration<double>(std::chrono::steady_clock::now() - lin.built).count() >
+      config_.max_linearization_age_s) {
+    return false;
+  }
+  for (const KeyframePair& pair : request.pairs) {
+    for (const uint64_t id : {pair.i, pair.j}) {
+      if (id != lin.gauge && lin.S.blockOf(id) < 0) return false;
+    }
+  }
+  // No loop closure or global BA since, and no keyframe asked about culled since.
+  std::shared_lock<std::shared_mutex> map_lock(map_.mutex());
+  if (map_.changeIndex() != lin.change_index) return false;
+  for (const KeyframePair& pair : request.pairs) {
+    for (const uint64_t id : {pair.i, pair.j}) {
+      const Keyframe* k = map_.keyframe(static_cast<KeyframeId>(id));
+      if (k == nullptr || k->bad()) return false;
+    }
+  }
+  return true;
+}
+
+KeyframeCovarianceReply KeyframeCovarianceService::answer(const KeyframeCovarianceRequest& request,
+                                                          Linearization& lin) const {
   KeyframeCovarianceReply reply;
   reply.request_id = request.request_id;
-  const auto start = std::chrono::steady_clock::now();
-  std::unique_ptr<ConditionalCovarianceSolver> solver;
-  // Pairs conditioned on the gauge keyframe are answered apart (it has no block in S).
+  reply.keyframes = lin.keyframes;
+  reply.landmarks = lin.landmarks;
+  if (!lin.error.empty()) {
+    reply.results = failAll(request.pairs, lin.error);
+    return reply;
+  }
+  const auto solve_start = std::chrono::steady_clock::now();
+  reply.linearization_age_ms =
+      std::chrono::duration<double, std::milli>(solve_start - lin.built).count();
+  // Pairs conditioned on the gauge keyframe are answered apart (it has no block in S): given
+  // the gauge g (held fixed, so S^-1 is already conditioned on it) the answer is the
+  // marginal [S^-1]_ii.
   std::vector<size_t> gauge_pairs, other_pairs;
-  std::vector<ConditionalCovariance> gauge_results;
+  std::vector<KeyframePair> others;
+  reply.results.resize(request.pairs.size());
+  for (size_t p = 0; p < request.pairs.size(); ++p) {
+    const KeyframePair& pair = request.pairs[p];
+    if (pair.j == lin.gauge && pair.i != lin.gauge) {
+      if (!lin.marginals) lin.marginals.emplace(lin.S);
+      reply.results[p] = lin.marginals->marginal(pair);
+    } else {
+      other_pairs.push_back(p);
+      others.push_back(pair);
+    }
+  }
+  if (!others.empty()) {
+    const std::vector<ConditionalCovariance> other_results = lin.solver->compute(others);
+    for (size_t k = 0; k < other_pairs.size(); ++k) {
+      reply.results[other_pairs[k]] = other_results[k];
+    }
+  }
+  reply.solve_ms = msSince(solve_start);
+  return reply;
+}
+
+KeyframeCovarianceReply KeyframeCovarianceService::compute(
+    const KeyframeCovarianceRequest& request) const {
+  std::unique_ptr<Linearization> lin;
   try {
-    const MapBaProblem map_problem = buildMapBaProblem(map_, camera_, pyramid_, nullptr);
-    reply.landmarks = static_cast<int>(map_problem.problem.landmarks.size());
-    if (map_problem.problem.keyframes.size() < 2 || map_problem.problem.observations.empty()) {
-      reply.results = failAll(request.pairs, "the map has fewer than two keyframes");
-      return reply;
-    }
-    ReducedCameraMatrix S = reduceCameraMatrix(
-        linearizeBundleAdjustment(map_problem.problem, {}, config_.linearization),
-        config_.reduction);
-    reply.keyframes = S.numBlocks();
-    uint64_t gauge = 0;
-    for (const BaKeyframe& k : map_problem.problem.keyframes) {
-      if (k.fixed) gauge = k.id;
-    }
-    // Given the gauge g (held fixed, so S^-1 is already conditioned on it) the answer is
-    // the marginal [S^-1]_ii.
-    std::optional<ConstrainedOrderingSolver> marginals;
-    for (size_t p = 0; p < request.pairs.size(); ++p) {
-      const KeyframePair& pair = request.pairs[p];
-      if (pair.j == gauge && pair.i != gauge) {
-        if (!marginals) marginals.emplace(S);
-        gauge_pairs.push_back(p);
-        gauge_results.push_back(marginals->marginal(pair));
-      } else {
-        other_pairs.push_back(p);
-      }
-    }
-    solver = makeSolver(config_.method, std::move(S));
+    lin = linearize();
   } catch (const std::exception& e) {
+    KeyframeCovarianceReply reply;
+    reply.request_id = request.request_id;
     reply.results = failAll(request.pairs, std::string("linearization failed: ") + e.what());
     return reply;
   }
-  reply.build_ms = msSince(start);
-  const auto solve_start = std::chrono::steady_clock::now();
-  std::vector<KeyframePair> others;
-  for (const size_t p : other_pairs) others.push_back(request.pairs[p]);
-  const std::vector<ConditionalCovariance> other_results =
-      others.empty() ? std::vector<ConditionalCovariance>{} : solver->compute(others);
-  reply.results.resize(request.pairs.size());
-  for (size_t k = 0; k < other_pairs.size(); ++k) reply.results[other_pairs[k]] = other_results[k];
-  for (size_t k = 0; k < gauge_pairs.size(); ++k) reply.results[gauge_pairs[k]] = gauge_results[k];
-  reply.solve_ms = msSince(solve_start);
+  KeyframeCovarianceReply reply = answer(request, *lin);
+  reply.build_ms = lin->build_ms;
   return reply;
 }
 
@@ -194,12 +258,29 @@ void KeyframeCovarianceService::loop() {
     const KeyframeCovarianceRequest request = std::move(queue_.front());
     queue_.pop_front();
     lock.unlock();
-    const KeyframeCovarianceReply reply = compute(request);
+    KeyframeCovarianceReply reply;
+    bool fresh = false;
+    if (!kept_ || !reusable(*kept_, request)) {
+      kept_.reset();
+      try {
+        kept_ = linearize();
+        fresh = true;
+      } catch (const std::exception& e) {
+        reply.request_id = request.request_id;
+        reply.results = failAll(request.pairs, std::string("linearization failed: ") + e.what());
+      }
+    }
+    if (kept_) {
+      reply = answer(request, *kept_);
+      reply.reused = !fresh;
+      if (fresh) reply.build_ms = kept_->build_ms;
+    }
     lock.lock();
     ++stats_.answered;
+    if (kept_) ++(fresh ? stats_.linearizations : stats_.reused);
     for (const ConditionalCovariance& r : reply.results)
       ++(r.ok ? stats_.pairs_ok : stats_.pairs_failed);
-    stats_.last_build_ms = reply.build_ms;
+    if (fresh) stats_.last_build_ms = reply.build_ms;
     stats_.last_solve_ms = reply.solve_ms;
     lock.unlock();
     if (reply_) reply_(reply);

@@ -35,6 +35,13 @@ struct KeyframeCovarianceServiceConfig {
   /// Niceness the service thread gives itself (setpriority on its thread id), [0, 19]; the
   /// tracking thread keeps its own. 0 = leave it.
   int niceness = 10;
+  /// A linearization (S and the solver's factorisation) answers later requests while it is
+  /// at most this old, the map has had no loop closure or global BA since
+  /// (SparseMap::changeIndex), and every keyframe asked about has a block in it and is not
+  /// culled since; otherwise the map is read and linearised again (so errors on ids are
+  /// always those of the current map). 0 = a fresh linearization per request.
+  /// Local BA moves poses in the meantime: this bounds how stale an answer can be.
+  double max_linearization_age_s = 5.0;
   /// The linearization: Huber reweighting on (observations that BA would call outliers
   /// count less instead of inflating the certainty).
   BaLinearizationConfig linearization{true};
@@ -57,8 +64,11 @@ struct KeyframeCovarianceReply {
   std::vector<ConditionalCovariance> results;
   int keyframes = 0;      ///< free keyframes of the linearization (blocks of S)
   int landmarks = 0;      ///< landmarks of the problem
-  double build_ms = 0.0;  ///< map -> BA problem -> Jacobian -> S
+  double build_ms = 0.0;  ///< map -> BA problem -> Jacobian -> S (0 when reused)
   double solve_ms = 0.0;  ///< the solver over all pairs
+  bool reused = false;    ///< answered from an earlier request's linearization
+  /// From reading the map to solving (about build_ms for a fresh linearization).
+  double linearization_age_ms = 0.0;
 };
 
 /// Counters since start. Exact.
@@ -68,6 +78,8 @@ struct KeyframeCovarianceServiceStats {
   uint64_t dropped = 0;   ///< answered with an error because the queue was full
   uint64_t pairs_ok = 0;
   uint64_t pairs_failed = 0;
+  uint64_t linearizations = 0;  ///< map read, linearised and reduced
+  uint64_t reused = 0;          ///< requests answered from an earlier linearization
   double last_build_ms = 0.0;
   double last_solve_ms = 0.0;
 };
@@ -76,11 +88,13 @@ struct KeyframeCovarianceServiceStats {
 /// answers requests for conditional keyframe covariances from the current sparse map, on a
 /// thread of its own at low priority, so it never delays tracking.
 ///
-/// Per request: the whole map as a BA problem (buildMapBaProblem, the first keyframe fixed as
-/// the gauge, as in DESIGN: conditioning on it too) read under the map's shared lock (which
-/// the tracking thread also only reads under; local mapping and loop closing wait for the
+/// Per linearization: the whole map as a BA problem (buildMapBaProblem, the first keyframe
+/// fixed as the gauge, as in DESIGN: conditioning on it too) read under the map's shared lock
+/// (which the tracking thread also only reads under; local mapping and loop closing wait for the
 /// read, a few ms), linearised at the map's current estimate (the latest local / global BA
-/// solution) with Huber reweighting, S = reduceCameraMatrix, then the configured solver.
+/// solution) with Huber reweighting, S = reduceCameraMatrix, and the configured solver on S
+/// (which factorises once for kKaessRecovery / kSparseSolve). A linearization is kept and
+/// answers later requests under max_linearization_age_s's rules.
 /// Units and convention: core/covariance/conditional_covariance.h (m^2, m*rad, rad^2;
 /// tangent [rho; phi] of T_C_G's left perturbation = T_G_C's right perturbation).
 /// A pair conditioned on the gauge keyframe (j = the first keyframe, which the BA holds
@@ -111,13 +125,24 @@ class KeyframeCovarianceService {
   void stop();
   /// Queues a request. Never blocks on the computation. Thread-safe.
   void submit(KeyframeCovarianceRequest request);
-  /// Computes a reply on the calling thread (what the service thread does per request).
-  /// Thread-safe with respect to the map (shared lock); not counted in stats().
+  /// Computes a reply on the calling thread (what the service thread does per request),
+  /// with a fresh linearization, neither using nor filling the kept one. Thread-safe with
+  /// respect to the map (shared lock); not counted in stats().
   KeyframeCovarianceReply compute(const KeyframeCovarianceRequest& request) const;
   KeyframeCovarianceServiceStats stats() const;
 
+  /// A linearization of the map and the solvers built on it (opaque).
+  struct Linearization;
+
  private:
   void loop();
+  /// The reply from `lin` (requested ids already checked against it or not: errors per pair).
+  KeyframeCovarianceReply answer(const KeyframeCovarianceRequest& request,
+                                 Linearization& lin) const;
+  /// Reads and linearises the map; throws std::exception on failure.
+  std::unique_ptr<Linearization> linearize() const;
+  /// Whether `lin` may answer `request` now (age, change index, ids).
+  bool reusable(const Linearization& lin, const KeyframeCovarianceRequest& request) const;
 
   const SparseMap& map_;
   const TrackingCamera camera_;
@@ -131,6 +156,7 @@ class KeyframeCovarianceService {
   KeyframeCovarianceServiceStats stats_;
   bool stop_ = false, started_ = false;
   std::thread thread_;
+  std::unique_ptr<Linearization> kept_;  // the service thread's only
 };
 
 }  // namespace cblox

@@ -267,7 +267,9 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
   loadLocalMapping(root["local_mapping"], &t.slam.local_mapping);
   loadLoopClosing(root["loop_closing"], &t.slam);
   const YAML::Node covariance = root["covariance"];
-  if (readSection(covariance, "covariance", {}, {"method", "max_queued_requests", "niceness"})) {
+  if (readSection(covariance, "covariance",
+                  {{"max_linearization_age_s", &t.covariance.max_linearization_age_s}},
+                  {"method", "max_queued_requests", "niceness"})) {
     readOptionalEnum(covariance, "covariance", "method",
                      {{"constrained_ordering", CovarianceMethod::kConstrainedOrdering},
                       {"batch", CovarianceMethod::kBatch},

@@ -402,6 +402,8 @@ TrackerStatus TrackerNode::status() const {
       s.covariance_requests = c.requests;
       s.covariance_pairs_ok = c.pairs_ok;
       s.covariance_pairs_failed = c.pairs_failed;
+      s.covariance_linearizations = c.linearizations;
+      s.covariance_reused = c.reused;
       s.covariance_build_ms = c.last_build_ms;
       s.covariance_solve_ms = c.last_solve_ms;
     }

@@ -115,10 +115,12 @@ struct TrackerStatus {
   uint64_t local_bundle_adjustments = 0;
   uint64_t global_bundle_adjustments = 0;
   /// Covariance service: requests, pairs answered with a covariance / with an error, and
-  /// the last request's build (map -> S) and solve times, milliseconds.
+  /// the last linearization's build (map -> S) and last request's solve times, milliseconds.
   uint64_t covariance_requests = 0;
   uint64_t covariance_pairs_ok = 0;
   uint64_t covariance_pairs_failed = 0;
+  /// Linearizations of the map, and requests answered from a kept one.
+  uint64_t covariance_linearizations = 0, covariance_reused = 0;
   double covariance_build_ms = 0.0, covariance_solve_ms = 0.0;
   /// Tracking time of a frame (TrackingResult::time_ms) and the whole frame (features,
   /// stereo matching and tracking), milliseconds, over the last timing_window frames.

@@ -45,6 +45,7 @@ TEST(TrackerConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.covariance.method, b.covariance.method);
   EXPECT_EQ(a.covariance.max_queued_requests, b.covariance.max_queued_requests);
   EXPECT_EQ(a.covariance.niceness, b.covariance.niceness);
+  EXPECT_EQ(a.covariance.max_linearization_age_s, b.covariance.max_linearization_age_s);
   EXPECT_EQ(shipped.calibration_source, defaults.calibration_source);
   EXPECT_EQ(shipped.calibration_file, defaults.calibration_file);
   EXPECT_FALSE(a.calibration.has_value());
@@ -148,7 +149,8 @@ TEST(TrackerConfigTest, ReadsOverrides) {
       "channels: {stereo: S, depth: D, ground_truth_pose: G, frame_pose: F, keyframe: K,\n"
       "           keyframe_poses: P, heartbeat: H, covariance_request: CQ,\n"
       "           covariance_reply: CR}\n"
-      "covariance: {method: kaess_recovery, max_queued_requests: 2, niceness: 0}\n"
+      "covariance: {method: kaess_recovery, max_queued_requests: 2, niceness: 0,\n"
+      "             max_linearization_age_s: 1.5}\n"
       "camera: {close_depth_baselines: 35, rgbd_baseline_m: 0.07}\n"
       "frames: {orb: {num_features: 1500, num_levels: 6}, stereo: {min_depth_m: 0.5},\n"
       "         parallel_stereo_extraction: false}\n"
@@ -179,6 +181,7 @@ TEST(TrackerConfigTest, ReadsOverrides) {
   EXPECT_EQ(t.covariance.method, CovarianceMethod::kKaessRecovery);
   EXPECT_EQ(t.covariance.max_queued_requests, 2u);
   EXPECT_EQ(t.covariance.niceness, 0);
+  EXPECT_EQ(t.covariance.max_linearization_age_s, 1.5);
   EXPECT_EQ(t.close_depth_baselines, 35.0);
   EXPECT_EQ(t.rgbd_baseline_m, 0.07);
   EXPECT_EQ(t.slam.frames.orb.num_features, 1500);

@@ -2,17 +2,20 @@
 // simulated room loop, tracked and mapped by the SLAM system. All three solvers give the same
 // Sigma_{i|j} (1e-9 relative); a keyframe is more certain given its neighbour than given a
 // keyframe far away; bad pairs get their own error; the service thread answers every
-// request exactly once, the ones pushed out of its queue with an error.
+// request exactly once, the ones pushed out of its queue with an error; a kept
+// linearization answers later requests as a fresh one would, until the map changes.
 
 #include "core/tracking/keyframe_covariance_service.h"
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <shared_mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -236,6 +239,99 @@ void TheThreadAnswersEveryRequestOnceAndDropsTheOldest() {
   EXPECT_EQ(stats.pairs_failed, 4u);
 }
 
+// A linearization answers later requests while it is young enough, the map has not changed
+// index (loop closure, global BA) and it has every keyframe asked about; its answers are
+// those of a fresh linearization of the same (here unchanging) map.
+void AKeptLinearizationAnswersLaterRequests() {
+  using T = KeyframeCovarianceServiceTest;
+  const std::vector<uint64_t> ids = T::keyframeIds();
+  std::mutex mutex;
+  std::condition_variable cv;
+  std::vector<KeyframeCovarianceReply> replies;
+  KeyframeCovarianceServiceConfig config;
+  config.method = CovarianceMethod::kSparseSolve;  // factorises once: reused too
+  config.max_linearization_age_s = 600.0;
+  KeyframeCovarianceService service(T::slam_->map(), *T::camera_, T::slam_->pyramid(), config,
+                                    [&](const KeyframeCovarianceReply& r) {
+                                      std::lock_guard<std::mutex> lock(mutex);
+                                      replies.push_back(r);
+                                      cv.notify_all();
+                                    });
+  service.start();
+  const auto ask = [&](KeyframeCovarianceRequest request) {
+    service.submit(request);
+    std::unique_lock<std::mutex> lock(mutex);
+    const size_t n = replies.size() + 1;
+    EXPECT_TRUE(cv.wait_for(lock, std::chrono::seconds(60), [&] { return replies.size() >= n; }));
+    return replies.back();
+  };
+  const KeyframeCovarianceRequest first{1, {{ids[3], ids[2]}}};
+  const KeyframeCovarianceRequest second{2, {{ids[6], ids[5]}, {ids[5], ids[0]}}};
+  const KeyframeCovarianceReply a = ask(first);
+  EXPECT_FALSE(a.reused);
+  EXPECT_GT(a.build_ms, 0.0);
+  const KeyframeCovarianceReply b = ask(second);
+  EXPECT_TRUE(b.reused);
+  EXPECT_EQ(b.build_ms, 0.0);
+  EXPECT_GE(b.linearization_age_ms, a.linearization_age_ms);
+  const KeyframeCovarianceReply fresh = service.compute(second);
+  ASSERT_EQ(b.results.size(), 2u);
+  for (size_t k = 0; k < 2; ++k) {
+    ASSERT_TRUE(b.results[k].ok) << b.results[k].error;
+    EXPECT_LT(relativeDifference(b.results[k].sigma, fresh.results[k].sigma), 1e-12);
+  }
+  // A loop closure (or global BA) bumps the map's change index: linearised again.
+  {
+    // What the loop closer does (the SLAM system, stopped, exposes its map read-only).
+    SparseMap& map = const_cast<SparseMap&>(T::slam_->map());
+    std::unique_lock<std::shared_mutex> lock(map.mutex());
+    map.bumpChangeIndex();
+  }
+  EXPECT_FALSE(ask(first).reused);
+  EXPECT_TRUE(ask(first).reused);
+  // A keyframe the kept linearization has no block for: linearised again (it may be new).
+  const KeyframeCovarianceReply unknown = ask({5, {{999999, ids[1]}}});
+  EXPECT_FALSE(unknown.reused);
+  ASSERT_EQ(unknown.results.size(), 1u);
+  EXPECT_FALSE(unknown.results[0].ok);
+  // A keyframe culled since: linearised again, and the answer is the current map's error.
+  EXPECT_TRUE(ask(first).reused);
+  {
+    SparseMap& map = const_cast<SparseMap&>(T::slam_->map());
+    std::unique_lock<std::shared_mutex> lock(map.mutex());
+    map.cullKeyframe(map.keyframe(static_cast<KeyframeId>(ids[3])));
+  }
+  const KeyframeCovarianceReply culled = ask(first);
+  EXPECT_FALSE(culled.reused);
+  ASSERT_EQ(culled.results.size(), 1u);
+  EXPECT_FALSE(culled.results[0].ok);
+  EXPECT_NE(culled.results[0].error.find("not in the BA linearization"), std::string::npos)
+      << culled.results[0].error;
+  service.stop();
+  const KeyframeCovarianceServiceStats stats = service.stats();
+  EXPECT_EQ(stats.linearizations, 4u);
+  EXPECT_EQ(stats.reused, 3u);
+
+  // Age 0: every request is linearised afresh.
+  config.max_linearization_age_s = 0.0;
+  std::atomic<int> strict_replies{0};
+  KeyframeCovarianceService strict(T::slam_->map(), *T::camera_, T::slam_->pyramid(), config,
+                                   [&](const KeyframeCovarianceReply& r) {
+                                     EXPECT_FALSE(r.reused);
+                                     ++strict_replies;
+                                   });
+  strict.start();
+  strict.submit(second);
+  strict.submit(second);
+  for (int i = 0; i < 6000 && strict_replies.load() < 2; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  strict.stop();
+  EXPECT_EQ(strict_replies.load(), 2);
+  EXPECT_EQ(strict.stats().linearizations, 2u);
+  EXPECT_EQ(strict.stats().reused, 0u);
+}
+
 // One ctest case (the fixture's SLAM run takes most of the time; ctest runs every case in
 // a process of its own).
 TEST_F(KeyframeCovarianceServiceTest, AnswersFromTheLiveRoomMap) {
@@ -255,6 +351,10 @@ TEST_F(KeyframeCovarianceServiceTest, AnswersFromTheLiveRoomMap) {
     SCOPED_TRACE("the service thread");
     TheThreadAnswersEveryRequestOnceAndDropsTheOldest();
   }
+  {
+    SCOPED_TRACE("a kept linearization");
+    AKeptLinearizationAnswersLaterRequests();
+  }
 }
 
 TEST(KeyframeCovarianceServiceConfigTest, BadValuesAreNamed) {
@@ -265,6 +365,9 @@ TEST(KeyframeCovarianceServiceConfigTest, BadValuesAreNamed) {
   config = KeyframeCovarianceServiceConfig{};
   config.niceness = 20;
   EXPECT_NE(config.validate().find("niceness"), std::string::npos);
+  config = KeyframeCovarianceServiceConfig{};
+  config.max_linearization_age_s = -1.0;
+  EXPECT_NE(config.validate().find("max_linearization_age_s"), std::string::npos);
   config = KeyframeCovarianceServiceConfig{};
   config.reduction.landmark_min_relative_eigenvalue = 1.0;
   EXPECT_NE(config.validate().find("reduction."), std::string::npos);

@@ -27,25 +27,53 @@ SparseSolveCovarianceSolver::SparseSolveCovarianceSolver(
     return;
   }
   factor_ = std::move(f.factor);
+  position_.assign(S_.numBlocks(), 0);
+  for (int k = 0; k < S_.numBlocks(); ++k) position_[block_perm[k]] = k;
+  storeBlocks();
+  cache_slot_.assign(S_.numBlocks(), -1);
+  work_.assign(S_.numBlocks(), Matrix6d::Zero());
+}
+
+void SparseSolveCovarianceSolver::storeBlocks() {
   const cholmod_factor& L = *factor_.get();
-  const int n = static_cast<int>(L.n);
+  const int nb = S_.numBlocks();
   const int* p = static_cast<const int*>(L.p);
   const int* row = static_cast<const int*>(L.i);
   const int* nz = static_cast<const int*>(L.nz);
-  // The parent of column c in the elimination tree is its first off-diagonal row (the
-  // smallest: rows are not assumed sorted).
-  parent_.assign(n, -1);
-  for (int c = 0; c < n; ++c) {
-    int parent = n;
-    for (int q = p[c] + 1; q < p[c] + nz[c]; ++q) parent = std::min(parent, row[q]);
-    parent_[c] = parent < n ? parent : -1;
-    factor_nnz_ += nz[c];
+  const double* x = static_cast<const double*>(L.x);
+  diagonal_.assign(nb, Matrix6d::Zero());
+  block_parent_.assign(nb, -1);
+  below_ptr_.assign(nb + 1, 0);
+  below_row_.clear();
+  below_.clear();
+  std::vector<int> slot(nb, -1);  // row block -> index into below_ within the current column
+  for (int B = 0; B < nb; ++B) {
+    const int first = static_cast<int>(below_.size());
+    for (int q = 0; q < 6; ++q) {
+      const int c = 6 * B + q;
+      factor_nnz_ += nz[c];
+      for (int e = p[c]; e < p[c] + nz[c]; ++e) {
+        const int R = row[e] / 6;
+        if (R == B) {
+          diagonal_[B](row[e] % 6, q) = x[e];
+          continue;
+        }
+        if (slot[R] < 0) {
+          slot[R] = static_cast<int>(below_.size());
+          below_row_.push_back(R);
+          below_.push_back(Matrix6d::Zero());
+        }
+        below_[slot[R]](row[e] % 6, q) = x[e];
+      }
+    }
+    int parent = nb;
+    for (size_t k = first; k < below_.size(); ++k) {
+      parent = std::min(parent, below_row_[k]);
+      slot[below_row_[k]] = -1;
+    }
+    block_parent_[B] = parent < nb ? parent : -1;
+    below_ptr_[B + 1] = static_cast<int>(below_.size());
   }
-  first_pivot_.assign(S_.numBlocks(), 0);
-  for (int k = 0; k < S_.numBlocks(); ++k) first_pivot_[block_perm[k]] = 6 * k;
-  cache_slot_.assign(S_.numBlocks(), -1);
-  work_.setZero(n, 6);
-  marked_.assign(n, 0);
 }
 
 void SparseSolveCovarianceSolver::clearCache() {
@@ -60,65 +88,48 @@ const SparseSolveCovarianceSolver::Solution& SparseSolveCovarianceSolver::soluti
 }
 
 const SparseSolveCovarianceSolver::Solution& SparseSolveCovarianceSolver::solve(int block) {
-  const cholmod_factor& L = *factor_.get();
-  const int* p = static_cast<const int*>(L.p);
-  const int* row = static_cast<const int*>(L.i);
-  const int* nz = static_cast<const int*>(L.nz);
-  const double* x = static_cast<const double*>(L.x);
-
-  // Reach of the block's 6 pivot columns: the union of their etree paths to the root.
+  // Reach of the block column: its path to the root of the block elimination tree (parents
+  // have larger indices, so the path is already in topological, increasing order).
   Solution& y = cache_.emplace_back();
-  const int c0 = first_pivot_[block];
-  for (int q = 0; q < 6; ++q) {
-    for (int c = c0 + q; c >= 0 && !marked_[c]; c = parent_[c]) {
-      marked_[c] = 1;
-      y.rows.push_back(c);
-    }
-  }
-  // Parents have larger indices than their children: increasing order is topological.
-  std::sort(y.rows.begin(), y.rows.end());
+  for (int B = position_[block]; B >= 0; B = block_parent_[B]) y.blocks.push_back(B);
 
-  // L Y = P E_a column by column over the reach, the 6 right-hand sides at once.
-  for (int q = 0; q < 6; ++q) work_(c0 + q, q) = 1.0;
-  std::int64_t entries = 0;
-  for (const int c : y.rows) {
-    const int begin = p[c];
-    const int end = p[c] + nz[c];
-    work_.row(c) /= x[begin];
-    const Eigen::Matrix<double, 1, 6> yc = work_.row(c);
-    for (int q = begin + 1; q < end; ++q) work_.row(row[q]) -= x[q] * yc;
-    entries += end - begin;
+  // L Y = P E_a over the reach, the 6 right-hand sides at once, block by block.
+  work_[y.blocks.front()].setIdentity();
+  std::int64_t stored_blocks = 0;
+  for (const int B : y.blocks) {
+    diagonal_[B].triangularView<Eigen::Lower>().solveInPlace(work_[B]);
+    const Matrix6d& yb = work_[B];
+    for (int k = below_ptr_[B]; k < below_ptr_[B + 1]; ++k) {
+      work_[below_row_[k]].noalias() -= below_[k] * yb;
+    }
+    stored_blocks += 1 + below_ptr_[B + 1] - below_ptr_[B];
   }
-  y.values.resize(static_cast<Eigen::Index>(y.rows.size()), 6);
-  for (size_t k = 0; k < y.rows.size(); ++k) {
-    const int c = y.rows[k];
-    y.values.row(static_cast<Eigen::Index>(k)) = work_.row(c);
-    work_.row(c).setZero();
-    marked_[c] = 0;
+  y.values.reserve(y.blocks.size());
+  for (const int B : y.blocks) {
+    y.values.push_back(work_[B]);
+    work_[B].setZero();
   }
   cache_slot_[block] = static_cast<int>(cache_.size()) - 1;
   ++stats_.keyframes_solved;
-  stats_.reached_columns += static_cast<std::int64_t>(y.rows.size());
-  stats_.flops += 12.0 * static_cast<double>(entries);
+  stats_.reached_columns += 6 * static_cast<std::int64_t>(y.blocks.size());
+  stats_.flops += 432.0 * static_cast<double>(stored_blocks);
   return y;
 }
 
 namespace {
 
-// Y_a^T Y_b over the rows both reach (sorted lists: a merge).
+// Y_a^T Y_b over the blocks both reach (sorted lists: a merge).
 template <typename Solution>
 Matrix6d crossProduct(const Solution& a, const Solution& b) {
-  if (&a == &b) return a.values.transpose() * a.values;
   Matrix6d sum = Matrix6d::Zero();
   size_t ka = 0, kb = 0;
-  while (ka < a.rows.size() && kb < b.rows.size()) {
-    if (a.rows[ka] < b.rows[kb]) {
+  while (ka < a.blocks.size() && kb < b.blocks.size()) {
+    if (a.blocks[ka] < b.blocks[kb]) {
       ++ka;
-    } else if (b.rows[kb] < a.rows[ka]) {
+    } else if (b.blocks[kb] < a.blocks[ka]) {
       ++kb;
     } else {
-      sum.noalias() += a.values.row(static_cast<Eigen::Index>(ka)).transpose() *
-                       b.values.row(static_cast<Eigen::Index>(kb));
+      sum.noalias() += a.values[ka].transpose() * b.values[kb];
       ++ka;
       ++kb;
     }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/StdVector>
 
 #include "core/covariance/cholmod_support.h"
 #include "core/covariance/conditional_covariance.h"
@@ -27,8 +28,9 @@ std::string validate(const SparseSolveCovarianceSolverConfig& config);
 /// the solver until the next compute()).
 struct SparseSolveStats {
   int keyframes_solved = 0;          ///< distinct keyframes whose Y_a was computed
-  std::int64_t reached_columns = 0;  ///< sum over those of |reach| (columns of L visited)
-  double flops = 0.0;                ///< multiply-adds * 2 of the solves (not the dot products)
+  std::int64_t reached_columns = 0;  ///< sum over those of 6 |block reach| (columns visited)
+  /// Multiply-adds * 2 of the solves (not the dot products), over the stored 6 x 6 blocks.
+  double flops = 0.0;
 };
 
 /// One AMD ordering and ONE factorisation at construction, then per keyframe a sparse
@@ -39,13 +41,17 @@ struct SparseSolveStats {
 /// covariance blocks are Sigma_ab = Y_a^T Y_b with Y_a = L^-1 (P E_a), E_a the 6 unit
 /// columns of keyframe a. P E_a has its nonzeros in the 6 pivot columns of a, so Y_a is
 /// nonzero only on their reach in the elimination tree of L (the union of their etree paths
-/// to the root; Gilbert & Peierls): the solve visits only those columns, 6 right-hand sides
-/// at once (cost 12 * sum of nnz(L(:, c)) over the reach). Sigma_ii = Y_i^T Y_i,
-/// Sigma_ij = Y_i^T Y_j over the common reached rows, Sigma_jj = Y_j^T Y_j, then
+/// to the root; Gilbert & Peierls). Because the ordering keeps each keyframe's 6 pivots
+/// together, L is stored once more by 6 x 6 blocks (block column = keyframe, with its
+/// lower-triangular diagonal block and the dense 6 x 6 blocks below it, zero-filled where
+/// CHOLMOD stores no entry) and the solve walks the BLOCK elimination tree: per reached
+/// block column B, Y_B <- L_BB^-1 Y_B, then Y_R -= L_RB Y_B for each block below (fixed-size
+/// 6 x 6 products; cost 432 flops per stored block). Sigma_ii = Y_i^T Y_i,
+/// Sigma_ij = Y_i^T Y_j over the common reached blocks, Sigma_jj = Y_j^T Y_j, then
 /// conditionalFromCovarianceBlocks. Y_a is cached per keyframe for the pairs of one
 /// compute() call (a keyframe in several pairs is solved once). Per pair the cost is that of
 /// two path solves, independent of the number of pairs; the reach of a keyframe ends in the
-/// dense separator columns at the top of the etree, which dominate it on loopy maps.
+/// dense separator at the top of the etree, which dominates it on loopy maps.
 class SparseSolveCovarianceSolver final : public ConditionalCovarianceSolver {
  public:
   /// Orders and factorises S (a failure is remembered and reported per pair). Takes S by
@@ -71,14 +77,17 @@ class SparseSolveCovarianceSolver final : public ConditionalCovarianceSolver {
   std::int64_t factorNonZeros() const { return factor_nnz_; }
 
  private:
-  // Y_a of one keyframe: the reached pivot columns (increasing) and Y's rows on them.
+  using Matrix6d = Eigen::Matrix<double, 6, 6>;
+  // Y_a of one keyframe: the reached block columns (increasing) and Y's 6 x 6 block on each.
   struct Solution {
-    std::vector<int> rows;
-    Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> values;
+    std::vector<int> blocks;
+    std::vector<Matrix6d, Eigen::aligned_allocator<Matrix6d>> values;
   };
   const Solution& solutionOf(int block);
   const Solution& solve(int block);
   void clearCache();
+  // L by 6 x 6 blocks from the simplicial factor (see the class comment).
+  void storeBlocks();
 
   ReducedCameraMatrix S_;
   SparseSolveCovarianceSolverConfig config_;
@@ -87,14 +96,17 @@ class SparseSolveCovarianceSolver final : public ConditionalCovarianceSolver {
   CholmodFactor factor_;  // simplicial LL^T
   std::string factor_error_;
   std::int64_t factor_nnz_ = 0;
-  std::vector<int> first_pivot_;  // first_pivot_[block] = pivot index of its first column
-  std::vector<int> parent_;       // elimination tree of L (-1 at a root)
-  std::vector<int> cache_slot_;   // per block: index into cache_, or -1
-  std::deque<Solution> cache_;    // a deque: references stay valid as it grows
+  std::vector<int> position_;      // position_[block] = its pivot block column in L
+  std::vector<int> block_parent_;  // block elimination tree of L (-1 at a root)
+  std::vector<Matrix6d, Eigen::aligned_allocator<Matrix6d>> diagonal_;  // L_BB, lower
+  std::vector<int> below_ptr_;  // block column B's blocks below: [below_ptr_[B], [B + 1])
+  std::vector<int> below_row_;  // their row block
+  std::vector<Matrix6d, Eigen::aligned_allocator<Matrix6d>> below_;  // their L_RB
+  std::vector<int> cache_slot_;  // per block: index into cache_, or -1
+  std::deque<Solution> cache_;   // a deque: references stay valid as it grows
   SparseSolveStats stats_;
-  // Workspace: n x 6 row-major, zero outside a solve; reach marks.
-  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> work_;
-  std::vector<std::uint8_t> marked_;
+  // Workspace: one 6 x 6 block per block column, zero outside a solve.
+  std::vector<Matrix6d, Eigen::aligned_allocator<Matrix6d>> work_;
 };
 
 }  // namespace cblox

@@ -29,7 +29,9 @@ enum class CovarianceMethod {
 const char* covarianceMethodName(CovarianceMethod method);
 
 struct KeyframeCovarianceServiceConfig {
-  CovarianceMethod method = CovarianceMethod::kBatch;
+  /// kSparseSolve factorises once per linearization, so a kept linearization answers later
+  /// requests with forward solves only; kBatch and kConstrainedOrdering factorise per request.
+  CovarianceMethod method = CovarianceMethod::kSparseSolve;
   /// Requests waiting (the oldest is answered with an error when more arrive), >= 1.
   size_t max_queued_requests = 4;
   /// Niceness the service thread gives itself (setpriority on its thread id), [0, 19]; the

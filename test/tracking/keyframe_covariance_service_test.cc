@@ -259,9 +259,13 @@ void AKeptLinearizationAnswersLaterRequests() {
                                     });
   service.start();
   const auto ask = [&](KeyframeCovarianceRequest request) {
+    size_t n = 0;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      n = replies.size() + 1;
+    }
     service.submit(request);
     std::unique_lock<std::mutex> lock(mutex);
-    const size_t n = replies.size() + 1;
     EXPECT_TRUE(cv.wait_for(lock, std::chrono::seconds(60), [&] { return replies.size() >= n; }));
     return replies.back();
   };

@@ -8,7 +8,7 @@
 # exact mesh.
 #
 # Usage: scripts/run_pipeline.sh [--scene room|hall|town] [--trajectory orbit|loop|...]
-#                                [--rate HZ] [--frames N] [--out DIR] [--name NAME]
+#                                [--laps N] [--rate HZ] [--frames N] [--out DIR] [--name NAME]
 #                                [--poses tracker|ground_truth]   (default tracker)
 #                                [--mapper-config FILE]   (default config/mapper.yaml)
 #                                [--tracker-config FILE]  (default config/tracker.yaml)
@@ -17,12 +17,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
-scene=room trajectory=orbit rate=20 frames=0 out=out name="" mapper_config=config/mapper.yaml
+scene=room trajectory=orbit laps=1 rate=20 frames=0 out=out name="" mapper_config=config/mapper.yaml
 poses=tracker tracker_config=config/tracker.yaml
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --scene) scene=$2; shift 2 ;;
     --trajectory) trajectory=$2; shift 2 ;;
+    --laps) laps=$2; shift 2 ;;
     --rate) rate=$2; shift 2 ;;
     --frames) frames=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
@@ -43,7 +44,7 @@ out=$(cd "$out" && pwd)
 bin=$(cd "$BUILD_DIR/daemon" && pwd)
 
 if [[ "${CBLOX_IN_NETNS:-}" != "1" ]]; then
-  CBLOX_IN_NETNS=1 exec scripts/netns-run.sh "$0" --scene "$scene" --trajectory "$trajectory" \
+  CBLOX_IN_NETNS=1 exec scripts/netns-run.sh "$0" --scene "$scene" --trajectory "$trajectory" --laps "$laps" \
     --rate "$rate" --frames "$frames" --out "$out" --name "$name" \
     --mapper-config "$mapper_config" --tracker-config "$tracker_config" --poses "$poses"
 fi
@@ -63,7 +64,7 @@ start_ns=$(date +%s%N)
 sleep 1
 echo "pipeline: capture sim:$scene ($trajectory) at $rate Hz ->" \
   "$([[ -n $tracker ]] && echo "cblox-tracker -> ")cblox-mapper ($poses poses)"
-"$bin/cblox-capture" --source "sim:$scene" --trajectory "$trajectory" --rate "$rate" \
+"$bin/cblox-capture" --source "sim:$scene" --trajectory "$trajectory" --laps "$laps" --rate "$rate" \
   --frames "$frames" --lcm-url "$url"
 sleep 2  # let the tracker and the mapper finish the last frames
 "$bin/cblox-ctl" --lcm-url "$url" --timeout 30 status

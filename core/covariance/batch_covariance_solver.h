@@ -37,6 +37,7 @@ class BatchCovarianceSolver final : public ConditionalCovarianceSolver {
   /// One factorisation for all valid pairs (none if there is no valid pair). If it fails,
   /// every valid pair gets its error. Not thread-safe.
   std::vector<ConditionalCovariance> compute(std::span<const KeyframePair> pairs) override;
+  const ReducedCameraMatrix& reducedCameraMatrix() const override { return S_; }
 
  private:
   ReducedCameraMatrix S_;

@@ -55,6 +55,8 @@ class ConditionalCovarianceSolver {
     const KeyframePair pair{i, j};
     return compute(std::span<const KeyframePair>(&pair, 1)).front();
   }
+  /// The reduced camera matrix the solver answers from (its own copy). Thread-safe (const).
+  virtual const ReducedCameraMatrix& reducedCameraMatrix() const = 0;
 };
 
 /// `config` if validate(config) is empty, else throws std::invalid_argument("<who>: config:

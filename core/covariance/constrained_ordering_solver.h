@@ -42,6 +42,7 @@ class ConstrainedOrderingSolver final : public ConditionalCovarianceSolver {
   using ConditionalCovarianceSolver::compute;
   /// One factorisation per valid pair. Not thread-safe.
   std::vector<ConditionalCovariance> compute(std::span<const KeyframePair> pairs) override;
+  const ReducedCameraMatrix& reducedCameraMatrix() const override { return S_; }
   /// The marginal [S^-1]_ii of keyframe pair.i, i.e. its covariance given only the BA's
   /// fixed keyframes: i's block alone ordered last, Sigma = (c c^T)^-1 from the trailing
   /// 6x6 block c. pair.j is not used (it names, in the result, what i is conditioned on,

@@ -46,6 +46,7 @@ class KaessRecoverySolver final : public ConditionalCovarianceSolver {
   using ConditionalCovarianceSolver::compute;
   /// Recovery only (no factorisation). Not thread-safe (fills the cache).
   std::vector<ConditionalCovariance> compute(std::span<const KeyframePair> pairs) override;
+  const ReducedCameraMatrix& reducedCameraMatrix() const override { return S_; }
 
   /// Empty if the factorisation succeeded, else its error. Thread-safe (const).
   const std::string& factorError() const { return factor_error_; }

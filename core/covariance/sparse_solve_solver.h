@@ -63,6 +63,7 @@ class SparseSolveCovarianceSolver final : public ConditionalCovarianceSolver {
   /// Sparse solves and dot products only (no factorisation); clears the Y cache first.
   /// Not thread-safe.
   std::vector<ConditionalCovariance> compute(std::span<const KeyframePair> pairs) override;
+  const ReducedCameraMatrix& reducedCameraMatrix() const override { return S_; }
 
   /// Empty if the factorisation succeeded, else its error. Thread-safe (const).
   const std::string& factorError() const { return factor_error_; }

@@ -139,8 +139,8 @@ struct KeyframeCovarianceService::Linearization {
   uint64_t gauge = 0;  // the keyframe held fixed
   int keyframes = 0, landmarks = 0;
   double build_ms = 0.0;
-  ReducedCameraMatrix S;  // kept for the gauge marginals, built on first use
-  std::unique_ptr<ConditionalCovarianceSolver> solver;
+  std::unique_ptr<ConditionalCovarianceSolver> solver;  // holds S
+  const ReducedCameraMatrix& S() const { return solver->reducedCameraMatrix(); }
   std::optional<ConstrainedOrderingSolver> marginals;
 };
 
@@ -159,10 +159,11 @@ std::unique_ptr<KeyframeCovarianceService::Linearization> KeyframeCovarianceServ
   for (const BaKeyframe& k : map_problem.problem.keyframes) {
     if (k.fixed) lin->gauge = k.id;
   }
-  lin->S = reduceCameraMatrix(
-      linearizeBundleAdjustment(map_problem.problem, {}, config_.linearization), config_.reduction);
-  lin->keyframes = lin->S.numBlocks();
-  lin->solver = makeSolver(config_.method, lin->S);
+  lin->solver = makeSolver(
+      config_.method,
+      reduceCameraMatrix(linearizeBundleAdjustment(map_problem.problem, {}, config_.linearization),
+                         config_.reduction));
+  lin->keyframes = lin->S().numBlocks();
   lin->build_ms = msSince(start);
   return lin;
 }
@@ -176,7 +177,7 @@ bool KeyframeCovarianceService::reusable(const Linearization& lin,
   }
   for (const KeyframePair& pair : request.pairs) {
     for (const uint64_t id : {pair.i, pair.j}) {
-      if (id != lin.gauge && lin.S.blockOf(id) < 0) return false;
+      if (id != lin.gauge && lin.S().blockOf(id) < 0) return false;
     }
   }
   // No loop closure or global BA since, and no keyframe asked about culled since.
@@ -207,13 +208,13 @@ KeyframeCovarianceReply KeyframeCovarianceService::answer(const KeyframeCovarian
   // Pairs conditioned on the gauge keyframe are answered apart (it has no block in S): given
   // the gauge g (held fixed, so S^-1 is already conditioned on it) the answer is the
   // marginal [S^-1]_ii.
-  std::vector<size_t> gauge_pairs, other_pairs;
+  std::vector<size_t> other_pairs;
   std::vector<KeyframePair> others;
   reply.results.resize(request.pairs.size());
   for (size_t p = 0; p < request.pairs.size(); ++p) {
     const KeyframePair& pair = request.pairs[p];
     if (pair.j == lin.gauge && pair.i != lin.gauge) {
-      if (!lin.marginals) lin.marginals.emplace(lin.S);
+      if (!lin.marginals) lin.marginals.emplace(lin.S());
       reply.results[p] = lin.marginals->marginal(pair);
     } else {
       other_pairs.push_back(p);

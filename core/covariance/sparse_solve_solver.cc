@@ -154,6 +154,17 @@ Matrix6d SparseSolveCovarianceSolver::covarianceBlock(std::uint64_t a, std::uint
   return crossProduct(ya, yb);
 }
 
+ConditionalCovariance SparseSolveCovarianceSolver::marginal(const KeyframePair& pair) {
+  const int block = S_.blockOf(pair.i);
+  if (block < 0) return failedPair(pair, pairIdError(S_, KeyframePair{pair.i, pair.i}));
+  if (!factor_) return failedPair(pair, factor_error_);
+  const Solution& y = solutionOf(block);
+  // Given the fixed keyframe: Sigma_ij = 0, so Sigma_{i|j} = Sigma_ii (any positive definite
+  // Sigma_jj).
+  return conditionalFromCovarianceBlocks(pair, crossProduct(y, y), Matrix6d::Zero(),
+                                         Matrix6d::Identity());
+}
+
 std::vector<ConditionalCovariance> SparseSolveCovarianceSolver::compute(
     std::span<const KeyframePair> pairs) {
   clearCache();

@@ -214,8 +214,12 @@ KeyframeCovarianceReply KeyframeCovarianceService::answer(const KeyframeCovarian
   for (size_t p = 0; p < request.pairs.size(); ++p) {
     const KeyframePair& pair = request.pairs[p];
     if (pair.j == lin.gauge && pair.i != lin.gauge) {
-      if (!lin.marginals) lin.marginals.emplace(lin.S());
-      reply.results[p] = lin.marginals->marginal(pair);
+      if (auto* sparse = dynamic_cast<SparseSolveCovarianceSolver*>(lin.solver.get())) {
+        reply.results[p] = sparse->marginal(pair);  // from its factor
+      } else {
+        if (!lin.marginals) lin.marginals.emplace(lin.S());  // a copy of S and a factorisation
+        reply.results[p] = lin.marginals->marginal(pair);
+      }
     } else {
       other_pairs.push_back(p);
       others.push_back(pair);

@@ -78,6 +78,26 @@ TEST(SparseSolve, EveryCovarianceBlockEqualsDenseInverse) {
   }
 }
 
+// Given a keyframe held fixed (no block: the gauge), the answer is the marginal [S^-1]_ii.
+TEST(SparseSolve, MarginalGivenTheGaugeEqualsTheDenseInverseDiagonalBlock) {
+  const ReducedCameraMatrix S = loopS(12);
+  const Eigen::MatrixXd sigma = Eigen::MatrixXd(S.matrix).inverse();
+  SparseSolveCovarianceSolver solver(S);
+  const std::uint64_t gauge = 9999;  // no block in S
+  ASSERT_LT(S.blockOf(gauge), 0);
+  for (int b = 0; b < S.numBlocks(); ++b) {
+    const ConditionalCovariance r = solver.marginal({S.keyframe_ids[b], gauge});
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_EQ(r.i, S.keyframe_ids[b]);
+    EXPECT_EQ(r.j, gauge);
+    EXPECT_LT(relativeError(r.sigma, sigma.block<6, 6>(6 * b, 6 * b)), 1e-9) << b;
+    EXPECT_NEAR(r.q, certaintyOf(r.sigma), 1e-12 * r.q);
+  }
+  const ConditionalCovariance unknown = solver.marginal({gauge, S.keyframe_ids[0]});
+  EXPECT_FALSE(unknown.ok);
+  EXPECT_NE(unknown.error.find("9999"), std::string::npos) << unknown.error;
+}
+
 TEST(SparseSolve, EachKeyframeIsSolvedOncePerCallOnItsEtreeReach) {
   const ReducedCameraMatrix S = loopS(24);
   const int n = static_cast<int>(S.matrix.rows());

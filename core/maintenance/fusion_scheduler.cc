@@ -18,6 +18,8 @@ std::string FusionSchedulerConfig::validate() const {
     error << "reply_timeout_s must be finite and > 0, got " << reply_timeout_s;
   } else if (!(retry_after_s >= 0.0) || !std::isfinite(retry_after_s)) {
     error << "retry_after_s must be finite and >= 0, got " << retry_after_s;
+  } else if (!(max_retry_after_s >= retry_after_s) || !std::isfinite(max_retry_after_s)) {
+    error << "max_retry_after_s must be finite and >= retry_after_s, got " << max_retry_after_s;
   }
   return error.str();
 }
@@ -104,7 +106,10 @@ std::vector<FusionPair> FusionScheduler::onReply(int64_t request_id,
     }
     if (!(answers[k].q >= config_.q_min)) {
       ++stats_.rejected_by_q;
-      retry_at_[key] = now_s + config_.retry_after_s;
+      const int times = ++rejections_[key];
+      retry_at_[key] =
+          now_s + std::min(config_.retry_after_s * std::ldexp(1.0, std::min(times - 1, 30)),
+                           config_.max_retry_after_s);
       continue;
     }
     // Removed or taken by another fusion since the request: not fused, not a rejection.
@@ -113,6 +118,7 @@ std::vector<FusionPair> FusionScheduler::onReply(int64_t request_id,
       continue;
     }
     retry_at_.erase(key);
+    rejections_.erase(key);
     fusing_.insert(pair.older);
     fusing_.insert(pair.newer);
     ++fusing_pairs_;

@@ -29,13 +29,17 @@ struct FusionSchedulerConfig {
   /// At most this many pairs per covariance request (>= 1).
   int max_pairs_per_request = 8;
   /// A request without a reply is abandoned after this long, seconds (> 0); its pairs may be
-  /// requested again. The tracker relinearises its whole map per request: 0.3 s median and
-  /// 1.2 s at most at 290 keyframes on the town, several seconds at 1000 (measured with
+  /// requested again. A fresh linearization of the tracker's whole map takes 0.1-0.5 s at
+  /// 1000 town keyframes on an idle core and up to seconds on a loaded one (measured with
   /// cblox-bench-maintenance), so a short timeout only repeats the work.
   double reply_timeout_s = 10.0;
   /// A pair rejected (q too small, or an error) is not requested again for this long,
   /// seconds (>= 0): BA may make it certain later, but not within a few keyframes.
   double retry_after_s = 5.0;
+  /// A pair rejected by q k times in a row waits retry_after_s * 2^(k-1), at most this long,
+  /// seconds (>= retry_after_s): pairs that stay uncertain are asked less and less often.
+  /// Errors and failed fusions wait retry_after_s and do not count.
+  double max_retry_after_s = 60.0;
 
   /// Empty when valid, else a message naming the first bad field. Thread-safe.
   std::string validate() const;
@@ -86,7 +90,8 @@ struct FusionSchedulerStats {
 /// Rules:
 /// - Candidates are the graph's edges that meet `candidates`, strongest first, excluding the
 ///   active subvolume (never fused while integrated), subvolumes that are part of a fusion
-///   in progress, pairs rejected less than retry_after_s ago, and subvolumes already used by
+///   in progress, pairs still waiting after a rejection (retry_after_s, doubling per rejection
+///   by q up to max_retry_after_s), and subvolumes already used by
 ///   an earlier pair of the same request (each appears at most once per request, so one
 ///   fusion cannot remove a subvolume another pair of the batch needs).
 /// - At most one request is in flight; nextRequest() returns nothing until its reply came
@@ -145,6 +150,7 @@ class FusionScheduler {
   absl::flat_hash_map<int64_t, int64_t> anchors_;  // subvolume -> anchor keyframe
   absl::flat_hash_set<int64_t> fusing_;            // subvolumes in an accepted pair
   absl::flat_hash_map<PairKey, double> retry_at_;  // pair -> earliest next request
+  absl::flat_hash_map<PairKey, int> rejections_;   // pair -> rejections by q in a row
   absl::flat_hash_set<PairKey> proposed_;          // pairs ever requested
   std::optional<InFlight> in_flight_;
   int64_t next_request_id_ = 1;

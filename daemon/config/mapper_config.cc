@@ -52,9 +52,10 @@ SubmapFusionConfig loadFusion(const YAML::Node& node) {
 
 FusionSchedulerConfig loadMaintenance(const YAML::Node& node) {
   const std::string path = "maintenance";
-  requireKnownKeys(node, path,
-                   {"enabled", "min_shared_landmarks", "min_shared_ratio", "q_min",
-                    "max_pairs_per_request", "reply_timeout_s", "retry_after_s"});
+  requireKnownKeys(
+      node, path,
+      {"enabled", "min_shared_landmarks", "min_shared_ratio", "q_min", "max_pairs_per_request",
+       "reply_timeout_s", "retry_after_s", "max_retry_after_s"});
   FusionSchedulerConfig m;
   if (!isAbsent(node)) {
     readOptional(node, path, "enabled", &m.enabled);
@@ -64,6 +65,7 @@ FusionSchedulerConfig loadMaintenance(const YAML::Node& node) {
     readOptional(node, path, "max_pairs_per_request", &m.max_pairs_per_request);
     readOptional(node, path, "reply_timeout_s", &m.reply_timeout_s);
     readOptional(node, path, "retry_after_s", &m.retry_after_s);
+    readOptional(node, path, "max_retry_after_s", &m.max_retry_after_s);
   }
   if (const std::string e = m.validate(); !e.empty()) throw ConfigError(path + "." + e);
   return m;

@@ -56,6 +56,7 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.maintenance.max_pairs_per_request, b.maintenance.max_pairs_per_request);
   EXPECT_EQ(a.maintenance.reply_timeout_s, b.maintenance.reply_timeout_s);
   EXPECT_EQ(a.maintenance.retry_after_s, b.maintenance.retry_after_s);
+  EXPECT_EQ(a.maintenance.max_retry_after_s, b.maintenance.max_retry_after_s);
   EXPECT_EQ(a.creation.max_keyframes_per_subvolume, b.creation.max_keyframes_per_subvolume);
   EXPECT_EQ(a.keyframe_every_n_frames, b.keyframe_every_n_frames);
   EXPECT_EQ(a.pose_buffer.max_gap_s, b.pose_buffer.max_gap_s);
@@ -100,7 +101,8 @@ TEST(MapperConfigTest, ReadsOverrides) {
       "status: {period_s: 0.5, progress_period_s: 2, timing_window: 10, log_interval_s: 1}\n"
       "fusion: {num_threads: 1}\nmesh: {use_color: false}\n"
       "maintenance: {enabled: false, min_shared_landmarks: 50, min_shared_ratio: 0.5, q_min: "
-      "2500, max_pairs_per_request: 3, reply_timeout_s: 1, retry_after_s: 9}\n"));
+      "2500, max_pairs_per_request: 3, reply_timeout_s: 1, retry_after_s: 9, "
+      "max_retry_after_s: 30}\n"));
   const MapperConfig& m = config.mapper;
   EXPECT_EQ(m.pose_source, PoseSource::kTracker);
   EXPECT_EQ(m.output_dir, "/data/maps");
@@ -134,6 +136,7 @@ TEST(MapperConfigTest, ReadsOverrides) {
   EXPECT_EQ(m.maintenance.max_pairs_per_request, 3);
   EXPECT_EQ(m.maintenance.reply_timeout_s, 1.0);
   EXPECT_EQ(m.maintenance.retry_after_s, 9.0);
+  EXPECT_EQ(m.maintenance.max_retry_after_s, 30.0);
   EXPECT_EQ(config.covariance_request_channel, "REQ");
   EXPECT_EQ(config.covariance_reply_channel, "REP");
 }
@@ -150,6 +153,7 @@ TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"maintenance: {q_min: 0}\n", "maintenance.q_min"},
       {"maintenance: {min_shared_ratio: 1.5}\n", "maintenance.candidates.min_shared_ratio"},
       {"maintenance: {qmin: 5}\n", "qmin"},
+      {"maintenance: {max_retry_after_s: 1}\n", "maintenance.max_retry_after_s"},
       {"layer: {voxel_size: -1}\n", "voxel_size"},
       {"integrator: {truncation_distance_m: 0.01}\n", "truncation"},  // < one 4 cm voxel
       {"integrator: {type: magic}\n", "integrator.type"},

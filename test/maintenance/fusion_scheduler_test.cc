@@ -151,6 +151,44 @@ TEST(FusionSchedulerTest, RejectedAndFailedPairsWaitBeforeTheyAreAskedAgain) {
   EXPECT_EQ(after_failure->pairs[0].older, 1);
 }
 
+// A pair rejected by q again and again waits 5, 10, then the 12 s cap; an error waits the
+// base time and does not count; acceptance clears the count.
+TEST(FusionSchedulerTest, PairsRejectedByQAgainWaitLongerUpToTheCap) {
+  FusionSchedulerConfig config = testConfig();
+  config.candidates.min_shared_ratio = 0.5;  // (0, 1) alone: (1, 2) shares 40 %
+  config.max_retry_after_s = 12.0;
+  FusionScheduler s = threeSubvolumes(config);
+  const std::vector<FusionCovarianceAnswer> low{answer(1.0)};
+  const auto reject = [&](double now) {
+    const auto request = s.nextRequest(-1, now);
+    ASSERT_TRUE(request.has_value()) << now;
+    ASSERT_EQ(request->pairs.size(), 1u);
+    EXPECT_TRUE(s.onReply(request->request_id, low, now).empty());
+  };
+  reject(0.0);  // 1st: waits 5 s
+  EXPECT_FALSE(s.nextRequest(-1, 4.99).has_value());
+  reject(5.0);  // 2nd: 10 s
+  EXPECT_FALSE(s.nextRequest(-1, 14.99).has_value());
+  reject(15.0);  // 3rd: 20 s, capped at 12
+  EXPECT_FALSE(s.nextRequest(-1, 26.99).has_value());
+  const auto after_cap = s.nextRequest(-1, 27.0);
+  ASSERT_TRUE(after_cap.has_value());
+  const std::vector<FusionCovarianceAnswer> error{FusionCovarianceAnswer{false, "stale", 0.0}};
+  EXPECT_TRUE(s.onReply(after_cap->request_id, error, 27.0).empty());  // waits 5 s
+  EXPECT_EQ(s.stats().rejected_by_q, 3u);
+  reject(32.0);  // 4th in a row: capped at 12
+  EXPECT_FALSE(s.nextRequest(-1, 43.99).has_value());
+  const auto accepted = s.nextRequest(-1, 44.0);
+  ASSERT_TRUE(accepted.has_value());
+  const std::vector<FusionCovarianceAnswer> high{answer(1e9)};
+  const std::vector<FusionPair> fuse = s.onReply(accepted->request_id, high, 44.0);
+  ASSERT_EQ(fuse.size(), 1u);
+  s.onFusionFailed(fuse[0], 45.0);  // not a rejection: the base wait, and the count was reset
+  reject(50.0);                     // 1st again: 5 s
+  EXPECT_FALSE(s.nextRequest(-1, 54.99).has_value());
+  EXPECT_TRUE(s.nextRequest(-1, 55.0).has_value());
+}
+
 TEST(FusionSchedulerTest, MalformedRepliesAndVanishedSubvolumesFuseNothing) {
   FusionScheduler s = threeSubvolumes();
   auto request = s.nextRequest(-1, 0.0);
@@ -197,6 +235,9 @@ TEST(FusionSchedulerTest, InvalidConfigsAreRejected) {
   c = testConfig();
   c.retry_after_s = -1.0;
   EXPECT_NE(message(c).find("retry_after_s"), std::string::npos);
+  c = testConfig();
+  c.max_retry_after_s = 4.0;  // < retry_after_s
+  EXPECT_NE(message(c).find("max_retry_after_s"), std::string::npos);
   c = testConfig();
   c.candidates.min_shared_ratio = 2.0;
   EXPECT_NE(message(c).find("candidates.min_shared_ratio"), std::string::npos);

@@ -26,16 +26,14 @@ SparseSolveCovarianceSolver::SparseSolveCovarianceSolver(
     factor_error_ = std::move(f.error);
     return;
   }
-  factor_ = std::move(f.factor);
   position_.assign(S_.numBlocks(), 0);
   for (int k = 0; k < S_.numBlocks(); ++k) position_[block_perm[k]] = k;
-  storeBlocks();
+  storeBlocks(*f.factor.get());  // CHOLMOD's copy is freed on return
   cache_slot_.assign(S_.numBlocks(), -1);
   work_.assign(S_.numBlocks(), Matrix6d::Zero());
 }
 
-void SparseSolveCovarianceSolver::storeBlocks() {
-  const cholmod_factor& L = *factor_.get();
+void SparseSolveCovarianceSolver::storeBlocks(const cholmod_factor& L) {
   const int nb = S_.numBlocks();
   const int* p = static_cast<const int*>(L.p);
   const int* row = static_cast<const int*>(L.i);
@@ -140,7 +138,9 @@ Matrix6d crossProduct(const Solution& a, const Solution& b) {
 }  // namespace
 
 Matrix6d SparseSolveCovarianceSolver::covarianceBlock(std::uint64_t a, std::uint64_t b) {
-  if (!factor_) throw std::logic_error("SparseSolveCovarianceSolver: " + factor_error_);
+  if (!factor_error_.empty()) {
+    throw std::logic_error("SparseSolveCovarianceSolver: " + factor_error_);
+  }
   const int block_a = S_.blockOf(a);
   const int block_b = S_.blockOf(b);
   for (const auto& [id, block] : {std::pair{a, block_a}, std::pair{b, block_b}}) {
@@ -157,7 +157,7 @@ Matrix6d SparseSolveCovarianceSolver::covarianceBlock(std::uint64_t a, std::uint
 ConditionalCovariance SparseSolveCovarianceSolver::marginal(const KeyframePair& pair) {
   const int block = S_.blockOf(pair.i);
   if (block < 0) return failedPair(pair, pairIdError(S_, KeyframePair{pair.i, pair.i}));
-  if (!factor_) return failedPair(pair, factor_error_);
+  if (!factor_error_.empty()) return failedPair(pair, factor_error_);
   const Solution& y = solutionOf(block);
   // Given the fixed keyframe: Sigma_ij = 0, so Sigma_{i|j} = Sigma_ii (any positive definite
   // Sigma_jj).

@@ -42,7 +42,7 @@ struct SparseSolveStats {
 /// columns of keyframe a. P E_a has its nonzeros in the 6 pivot columns of a, so Y_a is
 /// nonzero only on their reach in the elimination tree of L (the union of their etree paths
 /// to the root; Gilbert & Peierls). Because the ordering keeps each keyframe's 6 pivots
-/// together, L is stored once more by 6 x 6 blocks (block column = keyframe, with its
+/// together, L is copied out of CHOLMOD by 6 x 6 blocks (block column = keyframe, with its
 /// lower-triangular diagonal block and the dense 6 x 6 blocks below it, zero-filled where
 /// CHOLMOD stores no entry) and the solve walks the BLOCK elimination tree: per reached
 /// block column B, Y_B <- L_BB^-1 Y_B, then Y_R -= L_RB Y_B for each block below (fixed-size
@@ -94,13 +94,12 @@ class SparseSolveCovarianceSolver final : public ConditionalCovarianceSolver {
   const Solution& solve(int block);
   void clearCache();
   // L by 6 x 6 blocks from the simplicial factor (see the class comment).
-  void storeBlocks();
+  void storeBlocks(const cholmod_factor& L);
 
   ReducedCameraMatrix S_;
   SparseSolveCovarianceSolverConfig config_;
   CholmodCommon common_;
   CholmodSymmetricMatrix A_;
-  CholmodFactor factor_;  // simplicial LL^T
   std::string factor_error_;
   std::int64_t factor_nnz_ = 0;
   std::vector<int> position_;      // position_[block] = its pivot block column in L

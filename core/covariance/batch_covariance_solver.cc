@@ -31,22 +31,14 @@ std::vector<ConditionalCovariance> BatchCovarianceSolver::compute(
   }
   if (m == 0) return out;
 
-  const std::vector<int> block_perm = constrainedBlockOrdering(S_, constraint);
-  CholmodFactorOutcome f = factorizeWithPermutation(common_, A_, expandBlockPermutation(block_perm),
-                                                    config_.factor, S_.keyframe_ids);
-  if (!f.ok) {
+  Eigen::MatrixXd sigma_TT;
+  std::vector<int> slot;
+  if (std::string e = trailingCovariance(constraint, m, &sigma_TT, &slot); !e.empty()) {
     for (size_t p = 0; p < pairs.size(); ++p) {
-      if (out[p].error.empty()) out[p] = failedPair(pairs[p], f.error);
+      if (out[p].error.empty()) out[p] = failedPair(pairs[p], e);
     }
     return out;
   }
-  // Slot of each constrained block in the trailing m blocks.
-  std::vector<int> slot(K, -1);
-  for (int s = 0; s < m; ++s) slot[block_perm[K - m + s]] = s;
-  const Eigen::MatrixXd L_TT = trailingFactorBlock(*f.factor.get(), 6 * m);
-  const Eigen::MatrixXd X =
-      L_TT.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(6 * m, 6 * m));
-  const Eigen::MatrixXd sigma_TT = X.transpose() * X;
   for (size_t p = 0; p < pairs.size(); ++p) {
     if (!out[p].error.empty()) continue;
     const int a = 6 * slot[S_.blockOf(pairs[p].i)];
@@ -56,6 +48,36 @@ std::vector<ConditionalCovariance> BatchCovarianceSolver::compute(
                                         sigma_TT.block<6, 6>(a, b), sigma_TT.block<6, 6>(b, b));
   }
   return out;
+}
+
+ConditionalCovariance BatchCovarianceSolver::marginal(const KeyframePair& pair) {
+  if (std::string e = marginalIdError(S_, pair); !e.empty()) return failedPair(pair, std::move(e));
+  std::vector<int> constraint(S_.numBlocks(), 0);
+  constraint[S_.blockOf(pair.i)] = 1;
+  Eigen::MatrixXd sigma_TT;
+  std::vector<int> slot;
+  if (std::string e = trailingCovariance(constraint, 1, &sigma_TT, &slot); !e.empty()) {
+    return failedPair(pair, std::move(e));
+  }
+  return conditionalGivenFixed(pair, sigma_TT.topLeftCorner<6, 6>());
+}
+
+std::string BatchCovarianceSolver::trailingCovariance(const std::vector<int>& constraint, int m,
+                                                      Eigen::MatrixXd* sigma_TT,
+                                                      std::vector<int>* slot) {
+  const int K = S_.numBlocks();
+  const std::vector<int> block_perm = constrainedBlockOrdering(S_, constraint);
+  CholmodFactorOutcome f = factorizeWithPermutation(common_, A_, expandBlockPermutation(block_perm),
+                                                    config_.factor, S_.keyframe_ids);
+  if (!f.ok) return f.error;
+  // Slot of each constrained block in the trailing m blocks.
+  slot->assign(K, -1);
+  for (int s = 0; s < m; ++s) (*slot)[block_perm[K - m + s]] = s;
+  const Eigen::MatrixXd L_TT = trailingFactorBlock(*f.factor.get(), 6 * m);
+  const Eigen::MatrixXd X =
+      L_TT.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(6 * m, 6 * m));
+  *sigma_TT = X.transpose() * X;
+  return {};
 }
 
 }  // namespace cblox

@@ -37,9 +37,17 @@ class BatchCovarianceSolver final : public ConditionalCovarianceSolver {
   /// One factorisation for all valid pairs (none if there is no valid pair). If it fails,
   /// every valid pair gets its error. Not thread-safe.
   std::vector<ConditionalCovariance> compute(std::span<const KeyframePair> pairs) override;
+  /// i alone constrained last: one factorisation.
+  ConditionalCovariance marginal(const KeyframePair& pair) override;
   const ReducedCameraMatrix& reducedCameraMatrix() const override { return S_; }
 
  private:
+  // Sigma_TT of the m blocks with constraint[block] = 1, ordered last in one factorisation,
+  // and each such block's slot in it (-1 elsewhere). Empty string, or the factorisation's
+  // error.
+  std::string trailingCovariance(const std::vector<int>& constraint, int m,
+                                 Eigen::MatrixXd* sigma_TT, std::vector<int>* slot);
+
   ReducedCameraMatrix S_;
   BatchCovarianceSolverConfig config_;
   CholmodCommon common_;

@@ -22,6 +22,10 @@ std::string pairIdError(const ReducedCameraMatrix& S, const KeyframePair& pair) 
   return {};
 }
 
+std::string marginalIdError(const ReducedCameraMatrix& S, const KeyframePair& pair) {
+  return S.blockOf(pair.i) < 0 ? pairIdError(S, KeyframePair{pair.i, pair.i}) : std::string();
+}
+
 ConditionalCovariance failedPair(const KeyframePair& pair, std::string error) {
   ConditionalCovariance r;
   r.i = pair.i;
@@ -52,6 +56,10 @@ ConditionalCovariance succeeded(const KeyframePair& pair, const Matrix6d& sigma)
 }
 
 }  // namespace
+
+ConditionalCovariance conditionalGivenFixed(const KeyframePair& pair, const Matrix6d& ii) {
+  return succeeded(pair, ii);
+}
 
 ConditionalCovariance conditionalFromFactorBlock(const KeyframePair& pair, const Matrix6d& a) {
   const Matrix6d a_inv = a.triangularView<Eigen::Lower>().solve(Matrix6d::Identity());

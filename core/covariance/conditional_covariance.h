@@ -55,6 +55,11 @@ class ConditionalCovarianceSolver {
     const KeyframePair pair{i, j};
     return compute(std::span<const KeyframePair>(&pair, 1)).front();
   }
+  /// The marginal covariance [S^-1]_ii of keyframe pair.i: its answer given a keyframe the
+  /// BA holds fixed (pair.j names it in the result; it has no block in S, which is already
+  /// conditioned on it). Errors: pair.i without a block (marginalIdError), a failed
+  /// factorisation. Not thread-safe.
+  virtual ConditionalCovariance marginal(const KeyframePair& pair) = 0;
   /// The reduced camera matrix the solver answers from (its own copy). Thread-safe (const).
   virtual const ReducedCameraMatrix& reducedCameraMatrix() const = 0;
 };
@@ -73,6 +78,10 @@ const Config& validatedConfig(const Config& config, const char* who) {
 /// or unknown)" or "i and j are the same keyframe (17)"; empty if both ids have blocks in
 /// S and differ. Thread-safe (pure).
 std::string pairIdError(const ReducedCameraMatrix& S, const KeyframePair& pair);
+
+/// marginal()'s id error: pairIdError's message for pair.i if it has no block in S, else
+/// empty (pair.j is not looked up). Thread-safe (pure).
+std::string marginalIdError(const ReducedCameraMatrix& S, const KeyframePair& pair);
 
 /// A failed result for `pair` with `error`. Thread-safe (pure).
 ConditionalCovariance failedPair(const KeyframePair& pair, std::string error);
@@ -111,6 +120,11 @@ ConditionalCovariance conditionalFromCovarianceBlocks(const KeyframePair& pair,
                                                       const Eigen::Matrix<double, 6, 6>& ii,
                                                       const Eigen::Matrix<double, 6, 6>& ij,
                                                       const Eigen::Matrix<double, 6, 6>& jj);
+
+/// The result for pair.i given a keyframe held fixed (pair.j): Sigma_{i|j} = Sigma_ii, the
+/// marginal covariance (symmetrised, q from its largest eigenvalue). Thread-safe (pure).
+ConditionalCovariance conditionalGivenFixed(const KeyframePair& pair,
+                                            const Eigen::Matrix<double, 6, 6>& ii);
 
 /// 1 / lambda_max(sigma) for a symmetric positive definite sigma. Thread-safe (pure).
 double certaintyOf(const Eigen::Matrix<double, 6, 6>& sigma);

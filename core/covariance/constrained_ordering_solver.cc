@@ -39,9 +39,7 @@ ConditionalCovariance ConstrainedOrderingSolver::computePair(const KeyframePair&
 }
 
 ConditionalCovariance ConstrainedOrderingSolver::marginal(const KeyframePair& pair) {
-  if (std::string e = pairIdError(S_, KeyframePair{pair.i, pair.i}); S_.blockOf(pair.i) < 0) {
-    return failedPair(pair, std::move(e));
-  }
+  if (std::string e = marginalIdError(S_, pair); !e.empty()) return failedPair(pair, std::move(e));
   CholmodFactorOutcome f = factorWithLast({S_.blockOf(pair.i)});
   if (!f.ok) return failedPair(pair, std::move(f.error));
   return conditionalFromFactorBlock(pair, trailingFactorBlock(*f.factor.get(), 6));

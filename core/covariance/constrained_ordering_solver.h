@@ -43,11 +43,9 @@ class ConstrainedOrderingSolver final : public ConditionalCovarianceSolver {
   /// One factorisation per valid pair. Not thread-safe.
   std::vector<ConditionalCovariance> compute(std::span<const KeyframePair> pairs) override;
   const ReducedCameraMatrix& reducedCameraMatrix() const override { return S_; }
-  /// The marginal [S^-1]_ii of keyframe pair.i, i.e. its covariance given only the BA's
-  /// fixed keyframes: i's block alone ordered last, Sigma = (c c^T)^-1 from the trailing
-  /// 6x6 block c. pair.j is not used (it names, in the result, what i is conditioned on,
-  /// e.g. the gauge keyframe, which has no block). Errors as compute(). Not thread-safe.
-  ConditionalCovariance marginal(const KeyframePair& pair);
+  /// i's block alone ordered last, Sigma = (c c^T)^-1 from the trailing 6x6 block c: one
+  /// factorisation.
+  ConditionalCovariance marginal(const KeyframePair& pair) override;
 
  private:
   ConditionalCovariance computePair(const KeyframePair& pair);

@@ -78,23 +78,35 @@ double KaessRecoverySolver::covarianceEntry(int row, int col) {
   return permutedEntry(position_[row], position_[col]);
 }
 
+Eigen::Matrix<double, 6, 6> KaessRecoverySolver::covarianceBlock(int a, int b) {
+  Eigen::Matrix<double, 6, 6> block;
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) {
+      if (a == b && c < r) continue;  // symmetric: the upper triangle, mirrored
+      block(r, c) = permutedEntry(position_[a + r], position_[b + c]);
+      if (a == b) block(c, r) = block(r, c);
+    }
+  }
+  return block;
+}
+
 std::vector<ConditionalCovariance> KaessRecoverySolver::compute(
     std::span<const KeyframePair> pairs) {
   return computeValidPairs(S_, pairs, factor_error_, [&](const KeyframePair& pair) {
     if (!config_.cache_across_pairs) cache_.clear();
     const int a = 6 * S_.blockOf(pair.i);
     const int b = 6 * S_.blockOf(pair.j);
-    Eigen::Matrix<double, 6, 6> ii, ij, jj;
-    for (int r = 0; r < 6; ++r) {
-      for (int c = 0; c < 6; ++c) {
-        ij(r, c) = permutedEntry(position_[a + r], position_[b + c]);
-        if (c < r) continue;
-        ii(r, c) = ii(c, r) = permutedEntry(position_[a + r], position_[a + c]);
-        jj(r, c) = jj(c, r) = permutedEntry(position_[b + r], position_[b + c]);
-      }
-    }
-    return conditionalFromCovarianceBlocks(pair, ii, ij, jj);
+    return conditionalFromCovarianceBlocks(pair, covarianceBlock(a, a), covarianceBlock(a, b),
+                                           covarianceBlock(b, b));
   });
+}
+
+ConditionalCovariance KaessRecoverySolver::marginal(const KeyframePair& pair) {
+  if (std::string e = marginalIdError(S_, pair); !e.empty()) return failedPair(pair, std::move(e));
+  if (!factor_error_.empty()) return failedPair(pair, factor_error_);
+  if (!config_.cache_across_pairs) cache_.clear();
+  const int a = 6 * S_.blockOf(pair.i);
+  return conditionalGivenFixed(pair, covarianceBlock(a, a));
 }
 
 }  // namespace cblox

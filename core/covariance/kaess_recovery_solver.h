@@ -46,6 +46,8 @@ class KaessRecoverySolver final : public ConditionalCovarianceSolver {
   using ConditionalCovarianceSolver::compute;
   /// Recovery only (no factorisation). Not thread-safe (fills the cache).
   std::vector<ConditionalCovariance> compute(std::span<const KeyframePair> pairs) override;
+  /// The 21 entries of the ii block by recovery (no factorisation).
+  ConditionalCovariance marginal(const KeyframePair& pair) override;
   const ReducedCameraMatrix& reducedCameraMatrix() const override { return S_; }
 
   /// Empty if the factorisation succeeded, else its error. Thread-safe (const).
@@ -62,6 +64,8 @@ class KaessRecoverySolver final : public ConditionalCovarianceSolver {
 
  private:
   double permutedEntry(int i, int l);  // i, l in pivot order
+  // The 6x6 block (a, b) of S^-1 (a, b: first scalar indices of two blocks of S).
+  Eigen::Matrix<double, 6, 6> covarianceBlock(int a, int b);
 
   ReducedCameraMatrix S_;
   KaessRecoverySolverConfig config_;

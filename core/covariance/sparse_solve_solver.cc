@@ -155,14 +155,10 @@ Matrix6d SparseSolveCovarianceSolver::covarianceBlock(std::uint64_t a, std::uint
 }
 
 ConditionalCovariance SparseSolveCovarianceSolver::marginal(const KeyframePair& pair) {
-  const int block = S_.blockOf(pair.i);
-  if (block < 0) return failedPair(pair, pairIdError(S_, KeyframePair{pair.i, pair.i}));
+  if (std::string e = marginalIdError(S_, pair); !e.empty()) return failedPair(pair, std::move(e));
   if (!factor_error_.empty()) return failedPair(pair, factor_error_);
-  const Solution& y = solutionOf(block);
-  // Given the fixed keyframe: Sigma_ij = 0, so Sigma_{i|j} = Sigma_ii (any positive definite
-  // Sigma_jj).
-  return conditionalFromCovarianceBlocks(pair, crossProduct(y, y), Matrix6d::Zero(),
-                                         Matrix6d::Identity());
+  const Solution& y = solutionOf(S_.blockOf(pair.i));
+  return conditionalGivenFixed(pair, crossProduct(y, y));
 }
 
 std::vector<ConditionalCovariance> SparseSolveCovarianceSolver::compute(

@@ -65,12 +65,9 @@ class SparseSolveCovarianceSolver final : public ConditionalCovarianceSolver {
   std::vector<ConditionalCovariance> compute(std::span<const KeyframePair> pairs) override;
   const ReducedCameraMatrix& reducedCameraMatrix() const override { return S_; }
 
-  /// The marginal covariance [S^-1]_ii of keyframe pair.i, as the answer for pair.i given a
-  /// keyframe held fixed by the BA (pair.j, which has no block: the gauge, on which S^-1 is
-  /// already conditioned). From the factor in hand: one forward solve, no factorisation.
-  /// Errors as compute()'s (pair.i without a block, a failed factorisation). Uses and fills
-  /// the Y cache. Not thread-safe.
-  ConditionalCovariance marginal(const KeyframePair& pair);
+  /// Y_i^T Y_i from the factor in hand: one forward solve, no factorisation. Uses and fills
+  /// the Y cache.
+  ConditionalCovariance marginal(const KeyframePair& pair) override;
   /// Empty if the factorisation succeeded, else its error. Thread-safe (const).
   const std::string& factorError() const { return factor_error_; }
   /// The joint covariance block Sigma_ab (6 x 6, rows: keyframe a's tangent, columns: b's;

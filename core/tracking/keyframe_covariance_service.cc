@@ -141,7 +141,6 @@ struct KeyframeCovarianceService::Linearization {
   double build_ms = 0.0;
   std::unique_ptr<ConditionalCovarianceSolver> solver;  // holds S
   const ReducedCameraMatrix& S() const { return solver->reducedCameraMatrix(); }
-  std::optional<ConstrainedOrderingSolver> marginals;
 };
 
 std::unique_ptr<KeyframeCovarianceService::Linearization> KeyframeCovarianceService::linearize()
@@ -214,12 +213,7 @@ KeyframeCovarianceReply KeyframeCovarianceService::answer(const KeyframeCovarian
   for (size_t p = 0; p < request.pairs.size(); ++p) {
     const KeyframePair& pair = request.pairs[p];
     if (pair.j == lin.gauge && pair.i != lin.gauge) {
-      if (auto* sparse = dynamic_cast<SparseSolveCovarianceSolver*>(lin.solver.get())) {
-        reply.results[p] = sparse->marginal(pair);  // from its factor
-      } else {
-        if (!lin.marginals) lin.marginals.emplace(lin.S());  // a copy of S and a factorisation
-        reply.results[p] = lin.marginals->marginal(pair);
-      }
+      reply.results[p] = lin.solver->marginal(pair);
     } else {
       other_pairs.push_back(p);
       others.push_back(pair);

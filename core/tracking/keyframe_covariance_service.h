@@ -101,9 +101,8 @@ struct KeyframeCovarianceServiceStats {
 /// tangent [rho; phi] of T_C_G's left perturbation = T_G_C's right perturbation).
 /// A pair conditioned on the gauge keyframe (j = the first keyframe, which the BA holds
 /// fixed) gets the marginal covariance of i, [S^-1]_ii: conditioning on the gauge is what S^-1
-/// already is (kSparseSolve: one forward solve with the factor it has; other methods: the
-/// trailing block of a factorisation with i ordered last). Other pairs go to the
-/// solver, and are conditioned on the gauge as well as on j.
+/// already is (ConditionalCovarianceSolver::marginal of the configured solver). Other pairs
+/// go to the solver's compute(), and are conditioned on the gauge as well as on j.
 /// Errors are per pair: keyframes unknown to the map, culled, or the gauge keyframe as i
 /// ("not in the BA linearization"), i == j, S not positive definite. A request that arrives
 /// when max_queued_requests are waiting pushes out the oldest, which is answered with every

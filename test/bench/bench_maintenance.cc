@@ -15,7 +15,7 @@
 //
 //   cblox-bench-maintenance [--scene room|hall|town] [--laps 2] [--frames N]
 //                           [--voxel 0.05] [--keyframes-per-subvolume 10] [--depth-noise K]
-//                           [--min-shared-landmarks 30] [--min-shared-ratio 0.1]
+//                           [--min-shared-landmarks 30] [--min-shared-ratio 0.05]
 //                           [--q-min 3e3,1e4,3e4,1e5] [--out DIR]
 //
 // Mappers integrate every frame (no time budget, waited for) so the comparison does not

@@ -36,7 +36,7 @@ StampedTrajectory orbitAroundMesh(const Mesh& mesh, const MotionProfile& motion,
   return followPath(orbitWaypoints(orbit_centre, radius), true, laps, motion, centre);
 }
 
-std::unique_ptr<FrameSource> openSim(const std::string& what, const SourceOptions& options,
+std::unique_ptr<FrameSource> openSim(const std::string& what, const SourceConfig& options,
                                      std::string* error) {
   // A built-in scene is generated once here, for its mesh and its paths.
   std::optional<BuiltinScene> builtin;
@@ -110,7 +110,7 @@ std::shared_ptr<const Mesh> loadSimSceneMesh(const std::string& spec, std::strin
   return std::make_shared<const Mesh>(std::move(*mesh));
 }
 
-std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const SourceOptions& options,
+std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const SourceConfig& options,
                                              std::string* error) {
   const size_t colon = spec.find(':');
   if (colon == std::string::npos) {

@@ -12,7 +12,7 @@
 namespace cblox {
 
 /// How to open a source named by a spec string (see openFrameSource). Plain value type.
-struct SourceOptions {
+struct SourceConfig {
   /// Simulator: the trajectory, either a kind ("loop", "orbit", "lawnmower", "figure-eight")
   /// or the path of a TUM trajectory file (poses of the left camera).
   std::string trajectory = "loop";
@@ -37,7 +37,7 @@ struct SourceOptions {
 ///   7scenes:<folder>                 7-Scenes frame folder
 /// Returns nullptr and a message (naming the file and line where there is one) when the spec
 /// is unknown or the source cannot be opened. Thread-safe (no shared state).
-std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const SourceOptions& options,
+std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const SourceConfig& options,
                                              std::string* error);
 
 /// For sim sources: the ground-truth mesh of the scene a spec names (built-in or loaded), or

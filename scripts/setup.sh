@@ -10,6 +10,7 @@ packages=(
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jdk-headless
   libembree-dev libceres-dev libsuitesparse-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libsystemd-dev libcli11-dev nlohmann-json3-dev
   iproute2 util-linux python3
 )
 if [[ "${1:-}" == "--bench" ]]; then

@@ -154,7 +154,7 @@ std::string alignmentJson(const std::optional<Alignment>& alignment) {
 
 }  // namespace
 
-std::string MeshAccuracyOptions::validate() const {
+std::string MeshAccuracyConfig::validate() const {
   if (!(completeness_threshold_m > 0.0) || !std::isfinite(completeness_threshold_m)) {
     return "mesh accuracy: completeness_threshold_m must be finite and > 0, got " +
            std::to_string(completeness_threshold_m);
@@ -193,7 +193,7 @@ Mesh alignMesh(const Mesh& mesh, const Alignment& alignment) {
 
 std::optional<MeshAccuracy> evaluateMeshAccuracy(const TriangleMeshRaycaster& ground_truth,
                                                  const Mesh& reconstruction,
-                                                 const MeshAccuracyOptions& options,
+                                                 const MeshAccuracyConfig& options,
                                                  std::string* error) {
   if (std::string message = options.validate(); !message.empty()) {
     setError(error, std::move(message));

@@ -18,7 +18,7 @@
 namespace cblox {
 
 /// Options of evaluateMeshAccuracy(). Plain value type.
-struct MeshAccuracyOptions {
+struct MeshAccuracyConfig {
   /// Distance (metres, inclusive) within which a ground-truth surface sample counts as
   /// reconstructed (completeness) and a reconstruction vertex as accurate (precision).
   /// Finite and > 0.
@@ -110,7 +110,7 @@ struct MeshAccuracy {
 /// ground truth has zero surface area. Thread-safe (reads its arguments only).
 std::optional<MeshAccuracy> evaluateMeshAccuracy(const TriangleMeshRaycaster& ground_truth,
                                                  const Mesh& reconstruction,
-                                                 const MeshAccuracyOptions& options,
+                                                 const MeshAccuracyConfig& options,
                                                  std::string* error);
 
 /// `mesh` with every vertex mapped by alignment.apply() (computed in double, stored as

@@ -65,7 +65,7 @@ Color shade(const Color& c, double factor) {
 
 // Renders pixel rows [row_begin, row_end) of the area into `image`.
 void renderRows(const TriangleMeshRaycaster& raycaster, const std::vector<double>& errors,
-                const MeshErrorRenderOptions& options, const View& view, int row_begin, int row_end,
+                const MeshErrorRenderConfig& options, const View& view, int row_begin, int row_end,
                 ColorImage* image) {
   const int ss = options.supersampling;
   const int columns = view.area.width * ss;
@@ -133,7 +133,7 @@ void renderRows(const TriangleMeshRaycaster& raycaster, const std::vector<double
 
 }  // namespace
 
-std::string MeshErrorRenderOptions::validate() const {
+std::string MeshErrorRenderConfig::validate() const {
   if (width < 200 || width > 10000) {
     return "mesh error render: width must be in [200, 10000] pixels, got " + std::to_string(width);
   }
@@ -200,7 +200,7 @@ MeshViewpoint automaticViewpoint(const Eigen::AlignedBox3d& bounds, double verti
 }
 
 std::optional<ColorImage> renderMeshError(const Mesh& mesh, std::span<const double> vertex_errors_m,
-                                          const MeshErrorRenderOptions& options,
+                                          const MeshErrorRenderConfig& options,
                                           std::string* error) {
   if (std::string message = options.validate(); !message.empty()) {
     setError(error, std::move(message));
@@ -270,7 +270,7 @@ std::optional<ColorImage> renderMeshError(const Mesh& mesh, std::span<const doub
 
 bool writeMeshErrorPng(const std::string& path, const Mesh& mesh,
                        std::span<const double> vertex_errors_m,
-                       const MeshErrorRenderOptions& options, std::string* error) {
+                       const MeshErrorRenderConfig& options, std::string* error) {
   const std::optional<ColorImage> image = renderMeshError(mesh, vertex_errors_m, options, error);
   if (!image.has_value()) return false;
   return writeColorImagePng(path, *image, error);

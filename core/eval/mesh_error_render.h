@@ -21,7 +21,7 @@ struct MeshViewpoint {
 };
 
 /// Options of renderMeshError() and writeMeshErrorPng(). Plain value type.
-struct MeshErrorRenderOptions {
+struct MeshErrorRenderConfig {
   int width = 1024;                ///< pixels, in [200, 10000]
   int height = 768;                ///< pixels, in [150, 10000]
   double vertical_fov_deg = 45.0;  ///< in [10, 120]
@@ -73,7 +73,7 @@ MeshViewpoint automaticViewpoint(const Eigen::AlignedBox3d& bounds, double verti
 /// NaN entry, or the viewpoint's eye equals its look_at point. Thread-safe (pure; uses
 /// options.num_threads threads).
 std::optional<ColorImage> renderMeshError(const Mesh& mesh, std::span<const double> vertex_errors_m,
-                                          const MeshErrorRenderOptions& options,
+                                          const MeshErrorRenderConfig& options,
                                           std::string* error);
 
 /// renderMeshError() written as an 8-bit RGB PNG file to `path` (writeColorImagePng()).
@@ -82,6 +82,6 @@ std::optional<ColorImage> renderMeshError(const Mesh& mesh, std::span<const doub
 /// concurrent writes to the same path race in the file system).
 bool writeMeshErrorPng(const std::string& path, const Mesh& mesh,
                        std::span<const double> vertex_errors_m,
-                       const MeshErrorRenderOptions& options, std::string* error);
+                       const MeshErrorRenderConfig& options, std::string* error);
 
 }  // namespace cblox

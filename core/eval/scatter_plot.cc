@@ -63,14 +63,14 @@ cv::Size textSize(const std::string& s, double scale) {
 
 }  // namespace
 
-std::string ScatterPlotOptions::validate() const {
+std::string ScatterPlotConfig::validate() const {
   if (width < 200 || width > 10000) return "width must be in [200, 10000]";
   if (height < 150 || height > 10000) return "height must be in [150, 10000]";
   return {};
 }
 
 std::optional<ColorImage> renderScatterPlot(const std::vector<ScatterPoint>& points,
-                                            const ScatterPlotOptions& options, std::string* error) {
+                                            const ScatterPlotConfig& options, std::string* error) {
   if (std::string message = options.validate(); !message.empty()) {
     setError(error, "scatter plot: " + message);
     return std::nullopt;
@@ -162,7 +162,7 @@ std::optional<ColorImage> renderScatterPlot(const std::vector<ScatterPoint>& poi
 }
 
 bool writeScatterPlotPng(const std::string& path, const std::vector<ScatterPoint>& points,
-                         const ScatterPlotOptions& options, std::string* error) {
+                         const ScatterPlotConfig& options, std::string* error) {
   const std::optional<ColorImage> image = renderScatterPlot(points, options, error);
   if (!image) return false;
   return writeColorImagePng(path, *image, error);

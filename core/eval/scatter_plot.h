@@ -10,7 +10,7 @@
 namespace cblox {
 
 /// One labelled point of a scatter plot. `series` picks its colour and whether it is joined
-/// to the other points of its series (see ScatterPlotOptions). Plain value type.
+/// to the other points of its series (see ScatterPlotConfig). Plain value type.
 struct ScatterPoint {
   double x = 0.0;
   double y = 0.0;
@@ -19,7 +19,7 @@ struct ScatterPoint {
 };
 
 /// Options of renderScatterPlot(). Plain value type.
-struct ScatterPlotOptions {
+struct ScatterPlotConfig {
   int width = 1000;   ///< pixels, in [200, 10000]
   int height = 700;   ///< pixels, in [150, 10000]
   std::string title;  ///< one centred line above the plot; none if empty
@@ -41,11 +41,11 @@ struct ScatterPlotOptions {
 /// message for invalid options, no point, a non-finite coordinate or a negative series.
 /// Thread-safe (pure).
 std::optional<ColorImage> renderScatterPlot(const std::vector<ScatterPoint>& points,
-                                            const ScatterPlotOptions& options, std::string* error);
+                                            const ScatterPlotConfig& options, std::string* error);
 
 /// renderScatterPlot() written as a PNG (writeColorImagePng). False with a message on its
 /// errors or when the file cannot be written. Thread-safe (no shared state).
 bool writeScatterPlotPng(const std::string& path, const std::vector<ScatterPoint>& points,
-                         const ScatterPlotOptions& options, std::string* error);
+                         const ScatterPlotConfig& options, std::string* error);
 
 }  // namespace cblox

@@ -22,7 +22,7 @@ double rotationAngle(const Eigen::Quaterniond& q) {
 
 std::vector<AssociatedPose> associateNearest(const StampedTrajectory& ground_truth,
                                              const StampedTrajectory& estimate,
-                                             const AssociationOptions& options) {
+                                             const AssociationConfig& options) {
   struct Candidate {
     double difference;
     size_t estimate_index;
@@ -65,7 +65,7 @@ std::vector<AssociatedPose> associateNearest(const StampedTrajectory& ground_tru
 
 std::vector<AssociatedPose> associateInterpolated(const StampedTrajectory& ground_truth,
                                                   const StampedTrajectory& estimate,
-                                                  const AssociationOptions& options) {
+                                                  const AssociationConfig& options) {
   std::vector<AssociatedPose> pairs;
   for (const StampedPose& pose : estimate) {
     const std::optional<Transformationd> truth =
@@ -88,7 +88,7 @@ const char* associationMethodName(AssociationMethod method) {
   return "unknown";
 }
 
-std::string AssociationOptions::validate() const {
+std::string AssociationConfig::validate() const {
   if (!(max_difference_s >= 0.0) || !std::isfinite(max_difference_s)) {
     return "association.max_difference_s must be finite and >= 0, got " +
            std::to_string(max_difference_s);
@@ -101,7 +101,7 @@ std::string AssociationOptions::validate() const {
 
 std::vector<AssociatedPose> associateTrajectories(const StampedTrajectory& ground_truth,
                                                   const StampedTrajectory& estimate,
-                                                  const AssociationOptions& options) {
+                                                  const AssociationConfig& options) {
   if (!options.validate().empty()) return {};
   switch (options.method) {
     case AssociationMethod::kNearest:
@@ -173,7 +173,7 @@ std::optional<AteResult> computeAte(const std::vector<AssociatedPose>& pairs,
   return result;
 }
 
-std::string RpeOptions::validate() const {
+std::string RpeConfig::validate() const {
   if (!(delta > 0.0) || !std::isfinite(delta)) {
     return "rpe.delta must be finite and > 0, got " + std::to_string(delta);
   }
@@ -187,7 +187,7 @@ std::string RpeOptions::validate() const {
 }
 
 std::optional<RpeResult> computeRpe(const std::vector<AssociatedPose>& pairs,
-                                    const RpeOptions& options, std::string* error) {
+                                    const RpeConfig& options, std::string* error) {
   if (const std::string message = options.validate(); !message.empty()) {
     setError(error, "RPE: " + message);
     return std::nullopt;
@@ -229,7 +229,7 @@ std::optional<RpeResult> computeRpe(const std::vector<AssociatedPose>& pairs,
   return result;
 }
 
-std::string TrajectoryEvaluationOptions::validate() const {
+std::string TrajectoryEvaluationConfig::validate() const {
   if (std::string message = association.validate(); !message.empty()) return message;
   if (std::string message = rpe.validate(); !message.empty()) return message;
   return "";
@@ -285,7 +285,7 @@ std::string TrajectoryEvaluation::toJson() const {
 
 std::optional<TrajectoryEvaluation> evaluateTrajectory(const StampedTrajectory& ground_truth,
                                                        const StampedTrajectory& estimate,
-                                                       const TrajectoryEvaluationOptions& options,
+                                                       const TrajectoryEvaluationConfig& options,
                                                        std::string* error) {
   if (const std::string message = options.validate(); !message.empty()) {
     setError(error, "trajectory evaluation: " + message);
@@ -319,7 +319,7 @@ std::optional<TrajectoryEvaluation> evaluateTrajectory(const StampedTrajectory& 
   std::optional<AteResult> ate = computeAte(pairs, options.alignment, error);
   if (!ate.has_value()) return std::nullopt;
   evaluation.ate = std::move(*ate);
-  RpeOptions rpe_options = options.rpe;
+  RpeConfig rpe_options = options.rpe;
   if (options.alignment == AlignmentType::kSim3) {
     rpe_options.estimate_scale = evaluation.ate.alignment.scale;
   }

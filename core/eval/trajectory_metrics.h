@@ -30,7 +30,7 @@ enum class AssociationMethod {
 const char* associationMethodName(AssociationMethod method);
 
 /// Options of associateTrajectories(). Plain value type.
-struct AssociationOptions {
+struct AssociationConfig {
   AssociationMethod method = AssociationMethod::kNearest;
   /// kNearest: largest |t_gt - (t_est + time_offset_s)| accepted (inclusive), seconds.
   /// kInterpolate: largest gap between the two ground-truth poses interpolated, and the
@@ -57,7 +57,7 @@ struct AssociatedPose {
 /// within max_difference_s, kInterpolate O(n log m). Thread-safe (pure).
 std::vector<AssociatedPose> associateTrajectories(const StampedTrajectory& ground_truth,
                                                   const StampedTrajectory& estimate,
-                                                  const AssociationOptions& options);
+                                                  const AssociationConfig& options);
 
 /// Summary of a set of non-negative errors. All zero when count == 0.
 struct ErrorStatistics {
@@ -101,7 +101,7 @@ enum class RpeDeltaUnit {
 };
 
 /// Options of computeRpe(). Plain value type.
-struct RpeOptions {
+struct RpeConfig {
   double delta = 1.0;  ///< > 0; a whole number for kFrames
   RpeDeltaUnit unit = RpeDeltaUnit::kFrames;
   /// Multiplies the estimate's relative translations (P_i^-1 P_j) before comparing; pass the
@@ -118,7 +118,7 @@ struct RpeOptions {
 /// angle of E (degrees, in [0, 180]). Independent of the estimate's world frame, so no
 /// alignment is needed.
 struct RpeResult {
-  RpeOptions options;
+  RpeConfig options;
   ErrorStatistics translation_m;
   ErrorStatistics rotation_deg;
 };
@@ -127,13 +127,13 @@ struct RpeResult {
 /// std::nullopt with a message for invalid options or when no pair (i, j) is delta apart.
 /// Thread-safe (pure).
 std::optional<RpeResult> computeRpe(const std::vector<AssociatedPose>& pairs,
-                                    const RpeOptions& options, std::string* error);
+                                    const RpeConfig& options, std::string* error);
 
 /// Options of evaluateTrajectory(). Plain value type.
-struct TrajectoryEvaluationOptions {
-  AssociationOptions association;
+struct TrajectoryEvaluationConfig {
+  AssociationConfig association;
   AlignmentType alignment = AlignmentType::kSE3;
-  RpeOptions rpe;  ///< rpe.estimate_scale is replaced by the ATE scale for kSim3
+  RpeConfig rpe;  ///< rpe.estimate_scale is replaced by the ATE scale for kSim3
 
   /// Empty when valid, else a message naming the bad field. Thread-safe.
   std::string validate() const;
@@ -144,7 +144,7 @@ struct TrajectoryEvaluation {
   size_t ground_truth_poses = 0;
   size_t estimate_poses = 0;
   size_t matched_poses = 0;  ///< associated pairs
-  AssociationOptions association;
+  AssociationConfig association;
   AteResult ate;
   RpeResult rpe;
 
@@ -168,7 +168,7 @@ struct TrajectoryEvaluation {
 /// fails (see computeAte() and computeRpe()). Thread-safe (pure).
 std::optional<TrajectoryEvaluation> evaluateTrajectory(const StampedTrajectory& ground_truth,
                                                        const StampedTrajectory& estimate,
-                                                       const TrajectoryEvaluationOptions& options,
+                                                       const TrajectoryEvaluationConfig& options,
                                                        std::string* error);
 
 /// `trajectory` mapped through `alignment` (e.g. AteResult::alignment, to draw the estimate

@@ -184,7 +184,7 @@ void drawLegend(cv::Mat& view, const Projection& project, const std::vector<Lege
 
 }  // namespace
 
-std::string TrajectoryPlotOptions::validate() const {
+std::string TrajectoryPlotConfig::validate() const {
   if (width < 200 || width > 10000) {
     return "trajectory plot: width must be in [200, 10000] pixels, got " + std::to_string(width);
   }
@@ -200,7 +200,7 @@ std::string TrajectoryPlotOptions::validate() const {
 
 std::optional<ColorImage> renderTrajectoryPlot(const StampedTrajectory& ground_truth,
                                                const StampedTrajectory& estimate,
-                                               const TrajectoryPlotOptions& options,
+                                               const TrajectoryPlotConfig& options,
                                                std::string* error) {
   if (std::string message = options.validate(); !message.empty()) {
     setError(error, std::move(message));
@@ -315,7 +315,7 @@ bool writeColorImagePng(const std::string& path, const ColorImage& image, std::s
 }
 
 bool writeTrajectoryPlotPng(const std::string& path, const StampedTrajectory& ground_truth,
-                            const StampedTrajectory& estimate, const TrajectoryPlotOptions& options,
+                            const StampedTrajectory& estimate, const TrajectoryPlotConfig& options,
                             std::string* error) {
   const std::optional<ColorImage> image =
       renderTrajectoryPlot(ground_truth, estimate, options, error);

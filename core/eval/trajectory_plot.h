@@ -10,7 +10,7 @@
 namespace cblox {
 
 /// Options of renderTrajectoryPlot() and writeTrajectoryPlotPng(). Plain value type.
-struct TrajectoryPlotOptions {
+struct TrajectoryPlotConfig {
   int width = 1000;   ///< pixels, in [200, 10000]
   int height = 800;   ///< pixels, in [150, 10000]
   std::string title;  ///< one line centred above the plot (e.g. "ATE RMSE 0.034 m"); none if empty
@@ -39,7 +39,7 @@ struct TrajectoryPlotOptions {
 /// Thread-safe (pure).
 std::optional<ColorImage> renderTrajectoryPlot(const StampedTrajectory& ground_truth,
                                                const StampedTrajectory& estimate,
-                                               const TrajectoryPlotOptions& options,
+                                               const TrajectoryPlotConfig& options,
                                                std::string* error);
 
 /// renderTrajectoryPlot() written as an 8-bit RGB PNG file to `path` (PNG whatever the file
@@ -47,7 +47,7 @@ std::optional<ColorImage> renderTrajectoryPlot(const StampedTrajectory& ground_t
 /// of renderTrajectoryPlot() or when the file cannot be written. Thread-safe (no shared state;
 /// concurrent writes to the same path race in the file system).
 bool writeTrajectoryPlotPng(const std::string& path, const StampedTrajectory& ground_truth,
-                            const StampedTrajectory& estimate, const TrajectoryPlotOptions& options,
+                            const StampedTrajectory& estimate, const TrajectoryPlotConfig& options,
                             std::string* error);
 
 /// Writes `image` as an 8-bit RGB PNG file to `path` (PNG whatever the extension). Returns

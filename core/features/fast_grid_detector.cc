@@ -6,7 +6,7 @@
 namespace cblox {
 
 std::vector<LevelCorner> FastGridDetector::detect(const cv::Mat& level,
-                                                  const FastGridParams& params) {
+                                                  const FastGridConfig& params) {
   std::vector<LevelCorner> corners;
   const int e = params.edge_threshold;
   if (level.cols < 2 * e + 1 || level.rows < 2 * e + 1) return corners;

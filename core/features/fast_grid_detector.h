@@ -16,7 +16,7 @@ struct LevelCorner {
 };
 
 /// Where and how ORB-SLAM2 looks for FAST corners on one pyramid level.
-struct FastGridParams {
+struct FastGridConfig {
   /// Corners lie at least this many pixels from every border of the level (ORB-SLAM2's
   /// EDGE_THRESHOLD = 19: room for the orientation patch (15) and rotated BRIEF (< 19)).
   int edge_threshold = 19;
@@ -47,7 +47,7 @@ struct FastGridParams {
 /// Thread-safety: not thread-safe (reuses buffers); one detector per thread.
 class FastGridDetector {
  public:
-  std::vector<LevelCorner> detect(const cv::Mat& level, const FastGridParams& params);
+  std::vector<LevelCorner> detect(const cv::Mat& level, const FastGridConfig& params);
 
  private:
   FastDetector fast_;

@@ -87,7 +87,7 @@ ExtractedFeatures OrbExtractor::extract(const cv::Mat& image) {
   out.keypoints.reserve(static_cast<size_t>(config_.num_features));
   out.descriptors.reserve(static_cast<size_t>(config_.num_features));
 
-  FastGridParams grid;
+  FastGridConfig grid;
   grid.edge_threshold = OrbExtractorConfig::kEdgeThreshold;
   grid.cell_size = OrbExtractorConfig::kCellSize;
   grid.initial_threshold = config_.initial_fast_threshold;

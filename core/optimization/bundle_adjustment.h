@@ -9,7 +9,7 @@
 #include <Eigen/Core>
 
 #include "core/geometry/se3.h"
-#include "core/optimization/ceres_solver_settings.h"
+#include "core/optimization/ceres_solver_config.h"
 #include "core/optimization/reprojection_error.h"
 #include "core/optimization/stereo_camera_model.h"
 
@@ -105,7 +105,7 @@ struct BundleAdjustmentConfig {
   /// faster at 10 and 60 free keyframes, SPARSE_SCHUR at 120 and 250.
   int dense_schur_max_free_keyframes = 80;
   /// Threads, time limit (for both passes together) and tolerances of Ceres.
-  CeresSolverSettings solver;
+  CeresSolverConfig solver;
 };
 
 /// Preset for global BA after loop closure (ORB-SLAM2: 10 iterations with the Huber loss

@@ -8,7 +8,7 @@
 #include <Eigen/Core>
 
 #include "core/geometry/se3.h"
-#include "core/optimization/ceres_solver_settings.h"
+#include "core/optimization/ceres_solver_config.h"
 
 namespace cblox {
 
@@ -48,7 +48,7 @@ struct PoseGraphConfig {
   /// Huber delta on sqrt(e^T information e); 0 = no robust loss (ORB-SLAM2). >= 0.
   double huber_delta = 0.0;
   /// Threads, time limit and tolerances of Ceres.
-  CeresSolverSettings solver;
+  CeresSolverConfig solver;
 };
 
 /// Empty if valid, else a message naming the first bad field. Thread-safe (pure).

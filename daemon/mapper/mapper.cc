@@ -14,9 +14,6 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "core/geometry/depth_to_point_cloud.h"
-#include "core/integrator/projective_tsdf_integrator.h"
-#include "core/integrator/ray_casting_integrator.h"
 #include "core/io/ply_io.h"
 #include "daemon/mapper/output_path.h"
 
@@ -48,10 +45,6 @@ void copyLayer(const TsdfLayer& source, TsdfLayer* target) {
 
 // ---------------------------------------------------------------------------------------------
 // Names, config, small helpers
-
-const char* poseSourceName(PoseSource source) {
-  return source == PoseSource::kGroundTruth ? "ground_truth" : "tracker";
-}
 
 const char* inputProblemName(InputProblem problem) {
   switch (problem) {
@@ -107,47 +100,6 @@ bool isFrameProblem(InputProblem problem) {
   return static_cast<int>(problem) <= static_cast<int>(InputProblem::kIntegrationFailed);
 }
 
-IntegratorConfig MapperConfig::defaultIntegratorConfig() {
-  IntegratorConfig config;
-  config.truncation_distance_m = 0.12f;  // 3 voxels of 4 cm
-  config.max_ray_length_m = 5.0f;
-  config.num_threads = 1;
-  config.max_integration_time_s = 0.08;  // per frame: keeps up at 10 Hz beside the tracker
-  return config;
-}
-
-std::string MapperConfig::validate() const {
-  if (std::string e = layer.validate(); !e.empty()) return "layer." + e;
-  if (std::string e = integrator.validate(layer.voxel_size); !e.empty()) return "integrator." + e;
-  if (std::string e = mesh.validate(); !e.empty()) return "mesh." + e;
-  if (std::string e = fusion.validate(); !e.empty()) return "fusion." + e;
-  if (std::string e = maintenance.validate(); !e.empty()) return "maintenance." + e;
-  if (std::string e = creation.validate(); !e.empty()) return "creation." + e;
-  if (std::string e = pose_buffer.validate(); !e.empty()) return "pose_buffer." + e;
-  if (keyframe_every_n_frames < 1) {
-    return "keyframe_every_n_frames must be >= 1, got " + std::to_string(keyframe_every_n_frames);
-  }
-  if (pending_capacity < 1) return "pending_capacity must be >= 1";
-  if (!(max_pose_wait_s >= 0.0) || !std::isfinite(max_pose_wait_s)) {
-    return "max_pose_wait_s must be finite and >= 0, got " + std::to_string(max_pose_wait_s);
-  }
-  if (!(restart_after_backwards_s >= 0.0) || !std::isfinite(restart_after_backwards_s)) {
-    return "restart_after_backwards_s must be finite and >= 0, got " +
-           std::to_string(restart_after_backwards_s);
-  }
-  if (maintenance_queue_capacity < 1) return "maintenance_queue_capacity must be >= 1";
-  if (command_queue_capacity < 1) return "command_queue_capacity must be >= 1";
-  if (timing_window < 1) return "timing_window must be >= 1";
-  if (output_dir.empty()) return "output_dir must not be empty";
-  if (worker_niceness < 0 || worker_niceness > 19) {
-    return "worker_niceness must be in [0, 19], got " + std::to_string(worker_niceness);
-  }
-  if (!(log_interval_s > 0.0) || !std::isfinite(log_interval_s)) {
-    return "log_interval_s must be finite and > 0, got " + std::to_string(log_interval_s);
-  }
-  return {};
-}
-
 std::string MapperReply::value(const std::string& key) const {
   for (const auto& [k, v] : values) {
     if (k == key) return v;
@@ -195,33 +147,18 @@ class Mapper::FrameIntegrator {
  public:
   FrameIntegrator(SubmapId submap_id, IntegratorType type, const IntegratorConfig& config,
                   TsdfLayer* layer)
-      : submap_id_(submap_id) {
-    if (type == IntegratorType::kProjective) {
-      projective_ = std::make_unique<ProjectiveTsdfIntegrator>(config, layer);
-    } else {
-      ray_ = std::make_unique<RayCastingIntegrator>(type == IntegratorType::kFast
-                                                        ? RayCastingIntegrator::Mode::kFast
-                                                        : RayCastingIntegrator::Mode::kSimple,
-                                                    config, layer);
-      conversion_.min_depth_m = std::max(1e-3f, config.min_ray_length_m);
-      conversion_.max_depth_m = std::max(conversion_.min_depth_m * 2.0f, config.max_ray_length_m);
-    }
-  }
+      : submap_id_(submap_id), integrator_(makeIntegrator(type, config, layer)) {}
 
   SubmapId submapId() const { return submap_id_; }
 
   IntegrationStats integrate(const Transformation& T_M_D, const DepthImage& depth,
                              const PinholeCamera& camera, const ColorImage* color) {
-    if (projective_) return projective_->integrateDepthImage(T_M_D, depth, camera, color);
-    const PointCloud cloud = depthToPointCloud(depth, camera, color, conversion_);
-    return ray_->integratePointCloud(T_M_D, cloud);
+    return integrator_->integrateDepthImage(T_M_D, depth, camera, color);
   }
 
  private:
   SubmapId submap_id_;
-  std::unique_ptr<ProjectiveTsdfIntegrator> projective_;
-  std::unique_ptr<RayCastingIntegrator> ray_;
-  DepthConversionConfig conversion_;
+  std::unique_ptr<DepthIntegrator> integrator_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -1001,7 +938,7 @@ MapperStatus Mapper::status() const {
   s.frames_received = frames_received_.load();
   s.frames_integrated = frames_integrated_.load();
   s.frames_cut_by_budget = frames_cut_by_budget_.load();
-  const PendingFrameCounters pending = pending_.counters();
+  const InTrayCounters pending = pending_.counters();
   s.frames_dropped = pending.dropped;
   s.frames_pending = pending_.size();
   s.poses_received = poses_received_.load();

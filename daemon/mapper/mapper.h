@@ -28,85 +28,19 @@
 #include "core/geometry/pinhole_camera.h"
 #include "core/geometry/se3.h"
 #include "core/integrator/integrator_config.h"
+#include "core/integrator/make_integrator.h"
 #include "core/maintenance/fusion_scheduler.h"
 #include "core/mesh/mesh_integrator.h"
 #include "core/submap/submap_collection.h"
 #include "core/submap/submap_creation_policy.h"
 #include "core/submap/submap_fusion.h"
 #include "core/tsdf/layer_config.h"
-#include "daemon/config/yaml_config.h"
-#include "daemon/mapper/pending_frames.h"
+#include "daemon/common/in_tray.h"
+#include "daemon/mapper/mapper_config.h"
 #include "daemon/mapper/pose_buffer.h"
-#include "daemon/mapper/rate_limited_log.h"
+#include "daemon/common/rate_limited_log.h"
 
 namespace cblox {
-
-/// Where the mapper's frame poses come from.
-enum class PoseSource {
-  /// Simulator / dataset ground truth (CBLOX_GT_POSE): every pose is tracked, no jumps; the
-  /// mapper synthesises a keyframe every keyframe_every_n_frames integrated frames (id = the
-  /// frame id, or the next unused id when a restarted source repeats frame ids; T_G_K = the
-  /// frame's pose), and the first frame anchors the first subvolume.
-  kGroundTruth,
-  /// The tracker (CBLOX_FRAME_POSE, CBLOX_KEYFRAME, CBLOX_KEYFRAME_POSES).
-  kTracker,
-};
-const char* poseSourceName(PoseSource source);
-
-/// Settings of a Mapper (the `mapper` part of config/mapper.yaml). Plain value type.
-/// Defaults are sized for 752x480 depth at 10-20 Hz on a 2-core computer that also tracks.
-struct MapperConfig {
-  PoseSource pose_source = PoseSource::kGroundTruth;
-
-  /// Subvolume geometry: 4 cm voxels, 8^3-voxel blocks (32 cm).
-  LayerConfig layer{0.04f, 8};
-  /// Integrator (projective by default: ~10x faster than ray casting, BENCHMARKS.md).
-  IntegratorType integrator_type = IntegratorType::kProjective;
-  /// Truncation 3 voxels, depth used up to 5 m, one thread (the other core is the tracker's).
-  IntegratorConfig integrator = defaultIntegratorConfig();
-  /// Mesh extraction for exports.
-  MeshConfig mesh;
-  /// Fusion of subvolumes (map maintenance, and export: projection of the collection into
-  /// one volume).
-  SubmapFusionConfig fusion;
-  /// Map maintenance (tracker mode): covisibility candidates, covariance requests, q_min.
-  FusionSchedulerConfig maintenance;
-  /// The paper's subvolume creation rule.
-  SubmapCreationPolicyConfig creation{10};
-  /// Frame-pose buffer: interpolation gap bound and capacity.
-  PoseBuffer::Config pose_buffer{0.25, 1024};
-
-  /// Ground-truth mode: a keyframe every this many integrated frames (>= 1).
-  int keyframe_every_n_frames = 10;
-  /// Depth frames waiting for their pose (newest wins; older ones are dropped), >= 1.
-  size_t pending_capacity = 4;
-  /// A frame newer than every pose waits at most this long for its pose, then is rejected.
-  double max_pose_wait_s = 0.5;
-  /// A depth frame or pose whose time stamp is this much older than the newest one means the
-  /// source restarted (e.g. cblox-capture run again; simulator time starts at 0): the depth
-  /// order, or the pose buffer, starts afresh (logged) instead of rejecting everything as
-  /// out of order. Smaller steps back are rejected as out of order. 0 = never restart.
-  double restart_after_backwards_s = 2.0;
-  /// Keyframes and pose batches waiting for the maintenance thread (oldest dropped), >= 1.
-  size_t maintenance_queue_capacity = 256;
-  /// Export commands waiting for the worker (more are refused as busy), >= 1.
-  size_t command_queue_capacity = 4;
-  /// Integration times kept for the median / p99 in status, >= 1.
-  size_t timing_window = 200;
-  /// Exports are confined to this directory (created at start).
-  std::string output_dir = "out";
-  /// Niceness of the fusion/export worker thread (setpriority on its thread id), [0, 19].
-  int worker_niceness = 10;
-  /// Also put the worker thread in SCHED_IDLE (runs only when a core is otherwise idle).
-  bool worker_sched_idle = true;
-  /// Minimum interval between two log lines of the same bad-input kind, seconds (> 0).
-  double log_interval_s = 10.0;
-
-  /// The default IntegratorConfig of the mapper (see `integrator`).
-  static IntegratorConfig defaultIntegratorConfig();
-  /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
-  std::string validate() const;
-};
 
 /// One depth frame as the mapper takes it (decoded from depth_frame_t). Plain value type.
 struct DepthFrame {
@@ -211,7 +145,7 @@ struct MapperStatus {
 ///
 /// Threads (all owned; started by start(), joined by stop()):
 /// - Callers (the LCM thread in cblox-mapper, or a test) call the on*() inputs. They only
-///   validate, count, and hand the input over: depth frames to the bounded PendingFrames
+///   validate, count, and hand the input over: depth frames to the bounded InTray
 ///   in-tray (newest wins), poses to the PoseBuffer, keyframes and pose batches to the
 ///   maintenance queue, export commands to the worker queue. They never block on the map.
 /// - Integrator thread: takes the newest pending frame whose pose the PoseBuffer can give
@@ -241,7 +175,7 @@ struct MapperStatus {
 /// onKeyframe() + createSubmap() (so no frame slips into the old submap after a jump; the
 /// integrator never holds it while holding a layer lock). Counters are atomics; the timing
 /// window has its own mutex. Lock order: policy_mutex_ -> layer lock -> collection mutex ->
-/// submap metadata mutex; PendingFrames', PoseBuffer's and scheduler_mutex_ (guards the
+/// submap metadata mutex; InTray', PoseBuffer's and scheduler_mutex_ (guards the
 /// FusionScheduler; held for bookkeeping only, never while calling out) are leaves.
 ///
 /// Thread-safety: every public member function is thread-safe unless noted.
@@ -380,7 +314,7 @@ class Mapper {
   const std::filesystem::path output_dir_;
   SubmapCollection collection_;
   PoseBuffer poses_;
-  PendingFrames<PendingFrame> pending_;
+  InTray<PendingFrame> pending_;
   RateLimitedLog problem_log_;
 
   std::mutex policy_mutex_;  // guards policy_, keyframes_seen_

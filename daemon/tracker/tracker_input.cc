@@ -3,7 +3,7 @@
 #include <cmath>
 #include <iterator>
 
-#include "daemon/lcm/messages.h"
+#include "daemon/common/lcm_messages.h"
 
 namespace cblox {
 namespace {

@@ -22,11 +22,11 @@
 #include "core/tracking/keyframe_covariance_service.h"
 #include "core/tracking/slam_system.h"
 #include "core/vocabulary/binary_vocabulary.h"
-#include "daemon/mapper/pending_frames.h"
-#include "daemon/mapper/rate_limited_log.h"
+#include "daemon/common/in_tray.h"
+#include "daemon/common/rate_limited_log.h"
 #include "daemon/tracker/ground_truth_buffer.h"
 #include "daemon/tracker/image_check.h"
-#include "daemon/tracker/timing_window.h"
+#include "daemon/common/timing_window.h"
 #include "daemon/tracker/tracker_input.h"
 
 namespace cblox {
@@ -216,7 +216,7 @@ class TrackerNode {
   const TrackerNodeConfig config_;
   const BinaryVocabulary* const vocabulary_;
   const Outputs outputs_;
-  PendingFrames<TrackerFrame> queue_;
+  InTray<TrackerFrame> queue_;
   GroundTruthBuffer ground_truth_;
   RateLimitedLog problem_log_;
   TimingWindow tracking_ms_, frame_ms_;

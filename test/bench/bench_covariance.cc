@@ -558,7 +558,7 @@ int runScene(const Options& o, std::vector<Row>* rows) {
     std::fprintf(stderr, "vocabulary: %s\n", error.c_str());
     return 2;
   }
-  SourceOptions options;
+  SourceConfig options;
   options.trajectory = "loop";
   options.laps = o.laps;
   auto source = openFrameSource("sim:" + o.scene, options, &error);

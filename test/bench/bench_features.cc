@@ -39,7 +39,7 @@ struct Frames {
 const Frames& frames() {
   static const Frames f = [] {
     Frames result;
-    SourceOptions options;
+    SourceConfig options;
     options.sim.rate_hz = 1.0;
     options.max_frames = 8;
     std::string error;

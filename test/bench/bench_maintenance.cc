@@ -144,7 +144,7 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "vocabulary: %s\n", error.c_str());
     return 2;
   }
-  SourceOptions options;
+  SourceConfig options;
   options.trajectory = "loop";
   options.laps = laps;
   options.max_frames = max_frames;
@@ -348,7 +348,7 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "ground truth: %s\n", error.c_str());
     return 1;
   }
-  MeshAccuracyOptions accuracy_options;
+  MeshAccuracyConfig accuracy_options;
   accuracy_options.max_surface_samples = 200000;
   // The tracker's frame G starts at the first frame's true pose but its gauge drifts; maps
   // built with its poses are compared after the SE(3) alignment of the final keyframe
@@ -467,7 +467,7 @@ int run(int argc, char** argv) {
     maps += "\n  ]";
     json.raw("maps", maps);
     std::ofstream(out_dir + "/maintenance_" + scene + ".json") << json.close() << "\n";
-    ScatterPlotOptions plot;
+    ScatterPlotConfig plot;
     plot.title = "map maintenance on " + scene + ": size vs accuracy";
     plot.x_label = "map size [TSDF blocks]";
     plot.y_label = "vertex RMSE [mm]";

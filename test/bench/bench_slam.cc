@@ -65,7 +65,7 @@ Ate ate(const StampedTrajectory& truth, const StampedTrajectory& estimate) {
   Ate result;
   if (estimate.size() < 3) return result;
   std::string error;
-  const auto pairs = associateTrajectories(truth, estimate, AssociationOptions{});
+  const auto pairs = associateTrajectories(truth, estimate, AssociationConfig{});
   const auto a = computeAte(pairs, AlignmentType::kSE3, &error);
   if (!a) return result;
   result.rmse = a->translation_m.rmse;
@@ -113,7 +113,7 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "vocabulary: %s\n", error.c_str());
     return 2;
   }
-  SourceOptions options;
+  SourceConfig options;
   options.trajectory = trajectory;
   options.laps = laps;
   options.max_frames = max_frames;
@@ -292,7 +292,7 @@ int run(int argc, char** argv) {
     json.num("ate_frames_m", ate_online.rmse);
     json.num("ate_keyframes_m", ate_keyframes.rmse);
     std::ofstream(out_dir + "/slam_" + scene + ".json") << json.close() << "\n";
-    TrajectoryPlotOptions plot;
+    TrajectoryPlotConfig plot;
     char title[160];
     std::snprintf(title, sizeof(title), "%s: keyframe ATE %.3f m (%.2f %% of %.0f m), %zu loops",
                   scene.c_str(), ate_keyframes.rmse, 100.0 * ate_keyframes.rmse / path, path,

@@ -1,8 +1,8 @@
-#include "daemon/config/capture_config.h"
+#include "daemon/capture/capture_config.h"
 
 #include <gtest/gtest.h>
 
-#include "daemon/config/yaml_config.h"
+#include "daemon/common/yaml_config.h"
 
 namespace cblox {
 namespace {
@@ -12,18 +12,18 @@ TEST(CaptureConfigTest, ShippedYamlMatchesTheCodeDefaults) {
       loadCaptureConfig(loadYamlFile(std::string(CBLOX_CONFIG_DIR) + "/capture.yaml"));
   const CaptureConfig defaults;
   EXPECT_EQ(shipped.source, defaults.source);
-  EXPECT_EQ(shipped.source_options.trajectory, defaults.source_options.trajectory);
-  EXPECT_EQ(shipped.source_options.laps, defaults.source_options.laps);
+  EXPECT_EQ(shipped.source_config.trajectory, defaults.source_config.trajectory);
+  EXPECT_EQ(shipped.source_config.laps, defaults.source_config.laps);
   EXPECT_EQ(shipped.pacing, defaults.pacing);
-  EXPECT_EQ(shipped.source_options.max_frames, defaults.source_options.max_frames);
+  EXPECT_EQ(shipped.source_config.max_frames, defaults.source_config.max_frames);
   EXPECT_EQ(shipped.lcm_url, defaults.lcm_url);
   EXPECT_EQ(shipped.depth_encoding, defaults.depth_encoding);
   EXPECT_EQ(shipped.stereo_channel, defaults.stereo_channel);
   EXPECT_EQ(shipped.depth_channel, defaults.depth_channel);
   EXPECT_EQ(shipped.ground_truth_channel, defaults.ground_truth_channel);
   EXPECT_EQ(shipped.heartbeat_channel, defaults.heartbeat_channel);
-  const SimSourceConfig& a = shipped.source_options.sim;
-  const SimSourceConfig& b = defaults.source_options.sim;
+  const SimSourceConfig& a = shipped.source_config.sim;
+  const SimSourceConfig& b = defaults.source_config.sim;
   EXPECT_EQ(a.rate_hz, b.rate_hz);
   EXPECT_EQ(a.renderer.num_threads, b.renderer.num_threads);
   EXPECT_EQ(a.renderer.rig.stereo.width, b.renderer.rig.stereo.width);
@@ -46,14 +46,14 @@ TEST(CaptureConfigTest, ReadsOverridesAndPresets) {
   EXPECT_EQ(config.source, "euroc:/data");
   EXPECT_EQ(config.pacing, CapturePacing::kFixed);
   EXPECT_EQ(config.fixed_rate_hz, 10.0);
-  EXPECT_EQ(config.source_options.max_frames, 5u);
+  EXPECT_EQ(config.source_config.max_frames, 5u);
   EXPECT_EQ(config.depth_encoding, DepthEncoding::kFloat32Metres);
   EXPECT_EQ(config.stereo_channel, "S");
   EXPECT_FALSE(config.publish_depth);
-  EXPECT_EQ(config.source_options.sim.renderer.rig.stereo.width, 320);
-  EXPECT_EQ(config.source_options.sim.renderer.rig.T_L_D.translation().x(), 0.05);
-  EXPECT_EQ(config.source_options.sim.noise.image_noise_sigma, 3.0);
-  EXPECT_EQ(config.source_options.sim.noise.depth_noise_per_m2, 0.0012);  // from the preset
+  EXPECT_EQ(config.source_config.sim.renderer.rig.stereo.width, 320);
+  EXPECT_EQ(config.source_config.sim.renderer.rig.T_L_D.translation().x(), 0.05);
+  EXPECT_EQ(config.source_config.sim.noise.image_noise_sigma, 3.0);
+  EXPECT_EQ(config.source_config.sim.noise.depth_noise_per_m2, 0.0012);  // from the preset
 }
 
 TEST(CaptureConfigTest, RejectsBadKeysAndValuesNamingThem) {

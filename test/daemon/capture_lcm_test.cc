@@ -21,7 +21,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "core/io/ply_io.h"
-#include "daemon/lcm/messages.h"
+#include "daemon/common/lcm_messages.h"
 #include "drivers/sim/builtin_scenes.h"
 #include "drivers/open_frame_source.h"
 #include "test/test_support/spawn.h"
@@ -94,7 +94,7 @@ TEST(CaptureLcmTest, PublishesSimulatorFramesThatMatchTheSourceExactly) {
   EXPECT_EQ(received.heartbeats.back().state, "finished");
 
   // The same source in this process renders the same frames.
-  SourceOptions options;
+  SourceConfig options;
   options.trajectory = "orbit";
   options.max_frames = kFrames;
   std::string error;

@@ -1,4 +1,4 @@
-#include "daemon/lcm/messages.h"
+#include "daemon/common/lcm_messages.h"
 
 #include <cmath>
 #include <vector>

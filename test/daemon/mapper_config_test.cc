@@ -1,8 +1,8 @@
-#include "daemon/config/mapper_config.h"
+#include "daemon/mapper/mapper_config_loader.h"
 
 #include <gtest/gtest.h>
 
-#include "daemon/config/yaml_config.h"
+#include "daemon/common/yaml_config.h"
 
 namespace cblox {
 namespace {

@@ -171,7 +171,7 @@ TEST(MapperLcmTest, CaptureMapperCtlEndToEndOnTheSimulatedRoom) {
   ASSERT_NE(scene, nullptr) << error;
   const auto raycaster = TriangleMeshRaycaster::create(*scene, &error);
   ASSERT_NE(raycaster, nullptr) << error;
-  MeshAccuracyOptions options;
+  MeshAccuracyConfig options;
   options.completeness_threshold_m = 2.0 * kVoxel;
   const std::optional<MeshAccuracy> accuracy =
       evaluateMeshAccuracy(*raycaster, mesh, options, &error);

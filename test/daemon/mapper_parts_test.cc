@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "daemon/mapper/output_path.h"
-#include "daemon/mapper/pending_frames.h"
+#include "daemon/common/in_tray.h"
 #include "daemon/mapper/pose_buffer.h"
 
 namespace cblox {
@@ -91,8 +91,8 @@ struct Frame {
   int64_t utime;
 };
 
-TEST(PendingFramesTest, NewestReadyFrameWinsAndOlderOnesAreDropped) {
-  PendingFrames<Frame> frames(8);
+TEST(InTrayTest, NewestReadyFrameWinsAndOlderOnesAreDropped) {
+  InTray<Frame> frames(8);
   for (int64_t t = 1; t <= 5; ++t) frames.push(Frame{t});
   // Poses known up to t = 3; t = 4, 5 wait; nothing is rejected.
   auto readiness = [](const Frame& f) {
@@ -102,7 +102,7 @@ TEST(PendingFramesTest, NewestReadyFrameWinsAndOlderOnesAreDropped) {
   ASSERT_TRUE(taken.has_value());
   EXPECT_EQ(taken->utime, 3);
   EXPECT_EQ(frames.size(), 2u);  // 4 and 5 still wait
-  PendingFrameCounters c = frames.counters();
+  InTrayCounters c = frames.counters();
   EXPECT_EQ(c.received, 5u);
   EXPECT_EQ(c.taken, 1u);
   EXPECT_EQ(c.dropped, 2u);  // 1 and 2 superseded
@@ -114,8 +114,8 @@ TEST(PendingFramesTest, NewestReadyFrameWinsAndOlderOnesAreDropped) {
   EXPECT_EQ(frames.counters().dropped, 3u);
 }
 
-TEST(PendingFramesTest, RejectsUnservableFramesAndBoundsTheQueue) {
-  PendingFrames<Frame> frames(3);
+TEST(InTrayTest, RejectsUnservableFramesAndBoundsTheQueue) {
+  InTray<Frame> frames(3);
   for (int64_t t = 1; t <= 5; ++t) frames.push(Frame{t});
   EXPECT_EQ(frames.size(), 3u);
   EXPECT_EQ(frames.counters().dropped, 2u);  // pushed out when full
@@ -129,8 +129,8 @@ TEST(PendingFramesTest, RejectsUnservableFramesAndBoundsTheQueue) {
   EXPECT_EQ(frames.size(), 0u);
 }
 
-TEST(PendingFramesTest, WaitForWorkWakesOnPushAndTimesOut) {
-  PendingFrames<Frame> frames(4);
+TEST(InTrayTest, WaitForWorkWakesOnPushAndTimesOut) {
+  InTray<Frame> frames(4);
   const auto start = std::chrono::steady_clock::now();
   frames.waitForWork(std::chrono::milliseconds(50));  // nothing pushed: times out
   EXPECT_GE(std::chrono::steady_clock::now() - start, std::chrono::milliseconds(45));

@@ -28,7 +28,7 @@
 #include <cblox/keyframe_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 
-#include "daemon/lcm/messages.h"
+#include "daemon/common/lcm_messages.h"
 #include "drivers/open_frame_source.h"
 #include "test/test_support/spawn.h"
 #include "test/test_support/temp_dir.h"
@@ -119,7 +119,7 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
   lcm.subscribe("CBLOX_COV_REQUEST", &CovarianceResponder::onRequest, &responder);
 
   // The simulated room at 160 x 120, played as capture + tracker would.
-  SourceOptions options;
+  SourceConfig options;
   options.trajectory = "orbit";
   options.max_frames = 30;
   options.sim.renderer.rig.stereo = PinholeIntrinsics{160.0, 160.0, 79.5, 59.5, 160, 120};

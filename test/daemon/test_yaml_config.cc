@@ -1,4 +1,4 @@
-#include "daemon/config/yaml_config.h"
+#include "daemon/common/yaml_config.h"
 
 #include <utility>
 

@@ -1,4 +1,4 @@
-#include "daemon/config/tracker_config.h"
+#include "daemon/tracker/tracker_config.h"
 
 #include <cstdio>
 #include <fstream>
@@ -7,8 +7,8 @@
 
 #include <gtest/gtest.h>
 
-#include "daemon/config/calibration_file.h"
-#include "daemon/config/yaml_config.h"
+#include "daemon/tracker/calibration_file.h"
+#include "daemon/common/yaml_config.h"
 #include "test/test_support/temp_dir.h"
 
 namespace cblox {

@@ -32,7 +32,7 @@
 #include <cblox/stereo_pair_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 
-#include "daemon/lcm/messages.h"
+#include "daemon/common/lcm_messages.h"
 #include "drivers/open_frame_source.h"
 #include "test/test_support/spawn.h"
 #include "test/test_support/temp_dir.h"
@@ -317,7 +317,7 @@ TEST(TrackerLcmTest, CountsBadInputAndKeepsTracking) {
   ASSERT_TRUE(pumpUntil(&lcm, std::chrono::seconds(20), [&] { return received.heartbeats > 0; }))
       << "no heartbeat from cblox-tracker";
 
-  SourceOptions options;
+  SourceConfig options;
   options.trajectory = "loop";
   options.max_frames = 18;
   options.sim.renderer.rig.stereo = kRig;

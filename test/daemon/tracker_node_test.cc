@@ -15,7 +15,7 @@
 
 #include <gtest/gtest.h>
 
-#include "daemon/lcm/messages.h"
+#include "daemon/common/lcm_messages.h"
 #include "daemon/tracker/ground_truth_buffer.h"
 #include "daemon/tracker/image_check.h"
 #include "daemon/tracker/tracker_input.h"
@@ -60,7 +60,7 @@ struct Collected {
 };
 
 std::unique_ptr<FrameSource> simRoom(size_t frames, const PinholeIntrinsics& rig) {
-  SourceOptions options;
+  SourceConfig options;
   options.trajectory = "loop";
   options.max_frames = frames;
   options.sim.renderer.rig.stereo = rig;

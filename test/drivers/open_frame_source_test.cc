@@ -22,8 +22,8 @@ class OpenFrameSourceTest : public testing::Test {
   test::TempDir dir_{"cblox_sources"};
 };
 
-SourceOptions smallSim(size_t frames) {
-  SourceOptions options;
+SourceConfig smallSim(size_t frames) {
+  SourceConfig options;
   options.sim.renderer.rig.stereo = PinholeIntrinsics{160.0, 160.0, 79.5, 59.5, 160, 120};
   options.max_frames = frames;
   return options;
@@ -55,7 +55,7 @@ TEST_F(OpenFrameSourceTest, MeshFileWithOrbitOrTumTrajectory) {
   const std::string ply = dir_.file("box.ply");
   std::string error;
   ASSERT_TRUE(writePly(ply, mesh, PlyFormat::kBinaryLittleEndian, &error)) << error;
-  SourceOptions options = smallSim(3);
+  SourceConfig options = smallSim(3);
   options.trajectory = "orbit";
   auto source = openFrameSource("sim:" + ply, options, &error);
   ASSERT_NE(source, nullptr) << error;
@@ -101,7 +101,7 @@ TEST_F(OpenFrameSourceTest, RenderedFolderReadsBackAsTumRgbd) {
     EXPECT_TRUE(fs::exists(fs::path(folder) / file)) << file;
   }
   // Read it back through the TUM RGB-D source.
-  auto tum = openFrameSource("tum:" + folder, SourceOptions{}, &error);
+  auto tum = openFrameSource("tum:" + folder, SourceConfig{}, &error);
   ASSERT_NE(tum, nullptr) << error;
   EXPECT_EQ(tum->info().depth_intrinsics->fx, 160.0);
   EXPECT_EQ(tum->info().depth_intrinsics->width, 160);
@@ -123,7 +123,7 @@ TEST_F(OpenFrameSourceTest, RenderedFolderReadsBackAsTumRgbd) {
 TEST_F(OpenFrameSourceTest, DatasetFoldersFromSharedData) {
   if (!fs::is_directory(kData)) GTEST_SKIP() << "shared data not present at " << kData;
   std::string error;
-  SourceOptions options;
+  SourceConfig options;
   options.max_frames = 3;
   auto euroc = openFrameSource("euroc:" + kData + "/euroc-v101-micro", options, &error);
   ASSERT_NE(euroc, nullptr) << error;
@@ -149,15 +149,15 @@ TEST_F(OpenFrameSourceTest, DatasetFoldersFromSharedData) {
 
 TEST_F(OpenFrameSourceTest, RejectsUnknownSpecsAndMissingFolders) {
   std::string error;
-  EXPECT_EQ(openFrameSource("room", SourceOptions{}, &error), nullptr);
+  EXPECT_EQ(openFrameSource("room", SourceConfig{}, &error), nullptr);
   EXPECT_NE(error.find("has no kind"), std::string::npos) << error;
-  EXPECT_EQ(openFrameSource("kinect:x", SourceOptions{}, &error), nullptr);
+  EXPECT_EQ(openFrameSource("kinect:x", SourceConfig{}, &error), nullptr);
   EXPECT_NE(error.find("unknown source kind 'kinect'"), std::string::npos) << error;
-  EXPECT_EQ(openFrameSource("sim:moon.ply", SourceOptions{}, &error), nullptr);
+  EXPECT_EQ(openFrameSource("sim:moon.ply", SourceConfig{}, &error), nullptr);
   EXPECT_NE(error.find("moon.ply"), std::string::npos) << error;
-  EXPECT_EQ(openFrameSource("euroc:/nonexistent", SourceOptions{}, &error), nullptr);
+  EXPECT_EQ(openFrameSource("euroc:/nonexistent", SourceConfig{}, &error), nullptr);
   EXPECT_NE(error.find("/nonexistent"), std::string::npos) << error;
-  SourceOptions bad;
+  SourceConfig bad;
   bad.trajectory = "spiral";
   EXPECT_EQ(openFrameSource("sim:room", bad, &error), nullptr);
   EXPECT_NE(error.find("unknown trajectory 'spiral'"), std::string::npos) << error;

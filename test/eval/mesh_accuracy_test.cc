@@ -39,7 +39,7 @@ std::unique_ptr<TriangleMeshRaycaster> raycaster(const Mesh& mesh) {
 }
 
 MeshAccuracy evaluate(const Mesh& truth, const Mesh& reconstruction,
-                      const MeshAccuracyOptions& options = {}) {
+                      const MeshAccuracyConfig& options = {}) {
   const auto gt = raycaster(truth);
   std::string error;
   const std::optional<MeshAccuracy> result =
@@ -84,7 +84,7 @@ TEST(MeshAccuracyTest, PlaneOffsetByDHasErrorD) {
   constexpr double d = 0.03;
   const Mesh truth = plane(0.0f);
   const Mesh offset = plane(static_cast<float>(d), 7);  // other vertices than the truth
-  MeshAccuracyOptions options;
+  MeshAccuracyConfig options;
   options.completeness_threshold_m = 0.05;
   MeshAccuracy result = evaluate(truth, offset, options);
   expectAllStatistics(result.accuracy_m, d, kTolerance);
@@ -113,7 +113,7 @@ TEST(MeshAccuracyTest, HalfReconstructionIsHalfComplete) {
   Mesh half;  // x in [-1, 0]
   appendQuad(&half, Eigen::Vector3f(-1, -1, 0), Eigen::Vector3f(1, 0, 0), Eigen::Vector3f(0, 2, 0),
              kGrey, 10, 20);
-  MeshAccuracyOptions options;
+  MeshAccuracyConfig options;
   options.completeness_threshold_m = 0.01;
   const MeshAccuracy result = evaluate(truth, half, options);
   expectAllStatistics(result.accuracy_m, 0.0, kTolerance);
@@ -133,7 +133,7 @@ TEST(MeshAccuracyTest, PointCloudReconstructionUsesNearestVertex) {
       cloud.vertices.emplace_back(-1.0f + 0.02f * i, -1.0f + 0.02f * j, 0.03f);
     }
   }
-  MeshAccuracyOptions options;
+  MeshAccuracyConfig options;
   options.completeness_threshold_m = 0.05;  // sample to vertex <= sqrt(0.03^2 + 2 * 0.01^2)
   MeshAccuracy result = evaluate(truth, cloud, options);
   EXPECT_EQ(result.completeness_reference, "vertices");
@@ -167,7 +167,7 @@ TEST(MeshAccuracyTest, AlignmentIsAppliedToTheReconstructionFirst) {
            scale)
               .cast<float>();
     }
-    MeshAccuracyOptions options;
+    MeshAccuracyConfig options;
     const MeshAccuracy unaligned = evaluate(truth, reconstruction, options);
     EXPECT_GT(unaligned.accuracy_m.rmse, 0.1);
     options.T_G_R = T_G_R;
@@ -191,7 +191,7 @@ TEST(MeshAccuracyTest, VerticesBeyondMaxDistanceAreOutliers) {
   reconstruction.vertices.emplace_back(0.0f, 0.0f, 1.0f);   // 1 m above
   reconstruction.vertices.emplace_back(0.5f, 0.0f, -2.0f);  // 2 m below
   reconstruction.colors.resize(reconstruction.vertices.size(), kGrey);
-  MeshAccuracyOptions options;
+  MeshAccuracyConfig options;
   MeshAccuracy result = evaluate(truth, reconstruction, options);
   EXPECT_EQ(result.outlier_vertices, 0u);
   EXPECT_NEAR(result.accuracy_m.max, 2.0, kTolerance);
@@ -214,7 +214,7 @@ TEST(MeshAccuracyTest, ResultsDoNotDependOnThreadsAndAreDeterministic) {
   std::normal_distribution<float> noise(0.0f, 0.01f);
   for (Eigen::Vector3f& v : reconstruction.vertices)
     v += Eigen::Vector3f(noise(rng), noise(rng), 0);
-  MeshAccuracyOptions options;
+  MeshAccuracyConfig options;
   options.completeness_threshold_m = 0.01;
   options.surface_sample_spacing_m = 0.01;
   options.num_threads = 1;
@@ -232,7 +232,7 @@ TEST(MeshAccuracyTest, ResultsDoNotDependOnThreadsAndAreDeterministic) {
 }
 
 TEST(MeshAccuracyTest, SampleCountIsCapped) {
-  MeshAccuracyOptions options;
+  MeshAccuracyConfig options;
   options.surface_sample_spacing_m = 0.001;  // would be 4 million samples
   options.max_surface_samples = 5000;
   const MeshAccuracy result = evaluate(plane(0.0f), plane(0.0f), options);
@@ -247,13 +247,13 @@ TEST(MeshAccuracyTest, RejectsBadInputWithMessages) {
   EXPECT_FALSE(evaluateMeshAccuracy(*gt, Mesh{}, {}, &error).has_value());
   EXPECT_NE(error.find("no vertex"), std::string::npos) << error;
 
-  const auto expectOptionError = [&](MeshAccuracyOptions options, const std::string& field) {
+  const auto expectOptionError = [&](MeshAccuracyConfig options, const std::string& field) {
     std::string message;
     EXPECT_FALSE(options.validate().empty()) << field;
     EXPECT_FALSE(evaluateMeshAccuracy(*gt, good, options, &message).has_value()) << field;
     EXPECT_NE(message.find(field), std::string::npos) << message;
   };
-  MeshAccuracyOptions options;
+  MeshAccuracyConfig options;
   EXPECT_EQ(options.validate(), "");
   options.completeness_threshold_m = 0.0;
   expectOptionError(options, "completeness_threshold_m");
@@ -292,7 +292,7 @@ TEST(MeshAccuracyTest, RejectsBadInputWithMessages) {
 }
 
 TEST(MeshAccuracyTest, JsonHasAllKeys) {
-  MeshAccuracyOptions options;
+  MeshAccuracyConfig options;
   options.T_G_R = Alignment{Transformationd(), 1.0};
   const MeshAccuracy result = evaluate(plane(0.0f), plane(0.03f, 4), options);
   const std::string json = result.toJson();

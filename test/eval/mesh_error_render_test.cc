@@ -52,7 +52,7 @@ TEST(MeshErrorRenderTest, WritesPngOfRequestedSizeWithColourBar) {
   const test::TempDir dir("cblox_err");
   const std::string path = dir.file("error.png");
   const Mesh mesh = sphere();
-  MeshErrorRenderOptions options;
+  MeshErrorRenderConfig options;
   options.width = 400;
   options.height = 300;
   options.title = "vertex error";
@@ -93,7 +93,7 @@ TEST(MeshErrorRenderTest, ColourFollowsTheInterpolatedError) {
   Mesh quad;
   appendQuad(&quad, Eigen::Vector3f(-1, -1, 0), Eigen::Vector3f(2, 0, 0), Eigen::Vector3f(0, 2, 0),
              kGrey, 4, 4);
-  MeshErrorRenderOptions options;
+  MeshErrorRenderConfig options;
   options.width = 310;  // mesh area 200 x 200
   options.height = 200;
   options.viewpoint = MeshViewpoint{Eigen::Vector3d(0, 0, 3), Eigen::Vector3d(0, 0, 0)};
@@ -124,7 +124,7 @@ TEST(MeshErrorRenderTest, BackFacesAreSeeThroughWhenCulled) {
   appendQuad(&quad, Eigen::Vector3f(-1, -1, 0), Eigen::Vector3f(2, 0, 0), Eigen::Vector3f(0, 2, 0),
              kGrey);
   const std::vector<double> errors(quad.numVertices(), 0.0);
-  MeshErrorRenderOptions options;
+  MeshErrorRenderConfig options;
   options.width = 310;
   options.height = 200;
   options.viewpoint = MeshViewpoint{Eigen::Vector3d(0, 0, -3), Eigen::Vector3d(0, 0, 0)};
@@ -160,7 +160,7 @@ TEST(MeshErrorRenderTest, RejectsBadInputWithMessages) {
   const Mesh mesh = sphere();
   const std::vector<double> errors = heightErrors(mesh);
   std::string error;
-  MeshErrorRenderOptions options;
+  MeshErrorRenderConfig options;
   EXPECT_EQ(options.validate(), "");
   options.width = 50;
   EXPECT_FALSE(renderMeshError(mesh, errors, options, &error).has_value());

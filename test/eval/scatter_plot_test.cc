@@ -19,7 +19,7 @@ namespace {
 TEST(ScatterPlotTest, MarkersSitWhereTheAxesSayInTheirSeriesColour) {
   const std::vector<ScatterPoint> points = {
       {100.0, 10.0, "a", 0}, {200.0, 20.0, "b", 1}, {150.0, 5.0, "c", 1}};
-  ScatterPlotOptions options;
+  ScatterPlotConfig options;
   options.title = "size vs error";
   options.x_label = "blocks";
   options.y_label = "mm";
@@ -48,7 +48,7 @@ TEST(ScatterPlotTest, MarkersSitWhereTheAxesSayInTheirSeriesColour) {
 TEST(ScatterPlotTest, WritesAPngOfTheConfiguredSize) {
   test::TempDir dir("cblox_scatter");
   const std::string path = (dir.path() / "plot.png").string();
-  ScatterPlotOptions options;
+  ScatterPlotConfig options;
   options.width = 640;
   options.height = 480;
   std::string error;
@@ -66,7 +66,7 @@ TEST(ScatterPlotTest, FailsWithAMessage) {
   EXPECT_NE(error.find("'p' is not finite"), std::string::npos);
   EXPECT_FALSE(renderScatterPlot({{1.0, 1.0, "q", -1}}, {}, &error).has_value());
   EXPECT_NE(error.find("negative series"), std::string::npos);
-  ScatterPlotOptions narrow;
+  ScatterPlotConfig narrow;
   narrow.width = 100;
   EXPECT_FALSE(renderScatterPlot({{1.0, 1.0, "", 0}}, narrow, &error).has_value());
   EXPECT_NE(error.find("width"), std::string::npos);

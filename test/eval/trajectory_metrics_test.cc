@@ -41,7 +41,7 @@ Transformationd someTransform() {
 
 std::vector<AssociatedPose> exactPairs(const StampedTrajectory& truth,
                                        const StampedTrajectory& estimate) {
-  return associateTrajectories(truth, estimate, AssociationOptions{});
+  return associateTrajectories(truth, estimate, AssociationConfig{});
 }
 
 // The number after the first "key": in `json` (NaN if absent).
@@ -82,7 +82,7 @@ TEST(AssociationTest, NearestWithinMaxDifferenceUsesEachPoseOnce) {
   }
   estimate.push_back({1010.0, Transformationd()});
 
-  AssociationOptions options;  // nearest, 0.02 s
+  AssociationConfig options;  // nearest, 0.02 s
   std::vector<AssociatedPose> pairs = associateTrajectories(truth, estimate, options);
   ASSERT_EQ(pairs.size(), 100u);
   for (size_t k = 0; k < pairs.size(); ++k) {
@@ -100,7 +100,7 @@ TEST(AssociationTest, NearestWithinMaxDifferenceUsesEachPoseOnce) {
   // takes the next ground-truth pose (still within 0.02 s).
   const StampedTrajectory two_truth = {{1.00, Transformationd()}, {1.01, someTransform()}};
   const StampedTrajectory two_estimates = {{1.000, Transformationd()}, {1.004, Transformationd()}};
-  pairs = associateTrajectories(two_truth, two_estimates, AssociationOptions{});
+  pairs = associateTrajectories(two_truth, two_estimates, AssociationConfig{});
   ASSERT_EQ(pairs.size(), 2u);
   EXPECT_TRUE(pairs[0].T_G_C_truth.isApprox(Transformationd(), 0.0));
   EXPECT_TRUE(pairs[1].T_G_C_truth.isApprox(someTransform(), 0.0));
@@ -117,7 +117,7 @@ TEST(AssociationTest, InterpolateEvaluatesGroundTruthAtEstimateTimes) {
                                       {0.0, Transformationd()},
                                       {0.237, Transformationd()},
                                       {0.95, Transformationd()}};
-  AssociationOptions options;
+  AssociationConfig options;
   options.method = AssociationMethod::kInterpolate;
   options.max_difference_s = 0.15;
   const std::vector<AssociatedPose> pairs = associateTrajectories(truth, estimate, options);
@@ -184,7 +184,7 @@ TEST(AteTest, Sim3HandlesAScaledCopy) {
   EXPECT_GT(computeAte(pairs, AlignmentType::kSE3, &error)->translation_m.rmse, 0.1);
 
   // evaluateTrajectory() passes the Sim3 scale to the RPE, which is then 0 too.
-  TrajectoryEvaluationOptions options;
+  TrajectoryEvaluationConfig options;
   options.alignment = AlignmentType::kSim3;
   const auto evaluation = evaluateTrajectory(truth, estimate, options, &error);
   ASSERT_TRUE(evaluation.has_value()) << error;
@@ -199,7 +199,7 @@ TEST(RpeTest, ZeroAgainstItselfAndAgainstAnotherWorldFrame) {
   for (const StampedTrajectory& estimate : {truth, inOtherFrame(truth, someTransform())}) {
     const auto pairs = exactPairs(truth, estimate);
     for (const RpeDeltaUnit unit : {RpeDeltaUnit::kFrames, RpeDeltaUnit::kSeconds}) {
-      RpeOptions options;
+      RpeConfig options;
       options.unit = unit;
       options.delta = unit == RpeDeltaUnit::kFrames ? 3.0 : 0.5;
       const auto rpe = computeRpe(pairs, options, &error);
@@ -228,7 +228,7 @@ TEST(RpeTest, ConstantPerStepDriftGivesThatDrift) {
   const auto pairs = exactPairs(truth, estimate);
   std::string error;
   for (const RpeDeltaUnit unit : {RpeDeltaUnit::kFrames, RpeDeltaUnit::kSeconds}) {
-    RpeOptions options;
+    RpeConfig options;
     options.unit = unit;
     options.delta = unit == RpeDeltaUnit::kFrames ? 1.0 : 0.1;  // 10 Hz: the same pairs
     const auto rpe = computeRpe(pairs, options, &error);
@@ -246,7 +246,7 @@ TEST(RpeTest, RejectsBadOptionsAndTooLongDeltas) {
   const StampedTrajectory truth = groundTruth(10);
   const auto pairs = exactPairs(truth, truth);
   std::string error;
-  RpeOptions options;
+  RpeConfig options;
   options.delta = 10.0;
   EXPECT_FALSE(computeRpe(pairs, options, &error).has_value());
   EXPECT_NE(error.find("no pose pair is 10 frames apart (10 associated poses)"), std::string::npos)
@@ -270,7 +270,7 @@ TEST(EvaluateTrajectoryTest, JsonHasAllKeysAndNumbers) {
   const Transformationd shift(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.3, -0.4, 0.0));
   StampedTrajectory estimate = inOtherFrame(truth, shift);
   estimate.resize(80);
-  TrajectoryEvaluationOptions options;
+  TrajectoryEvaluationConfig options;
   options.alignment = AlignmentType::kNone;
   std::string error;
   const auto evaluation = evaluateTrajectory(truth, estimate, options, &error);
@@ -308,7 +308,7 @@ TEST(EvaluateTrajectoryTest, JsonHasAllKeysAndNumbers) {
 
 TEST(EvaluateTrajectoryTest, RejectsEmptyUnmatchedAndInvalidInput) {
   const StampedTrajectory truth = groundTruth();
-  TrajectoryEvaluationOptions options;
+  TrajectoryEvaluationConfig options;
   std::string error;
   EXPECT_FALSE(evaluateTrajectory(truth, {}, options, &error).has_value());
   EXPECT_NE(error.find("the estimate is empty"), std::string::npos) << error;
@@ -332,7 +332,7 @@ TEST(EvaluateTrajectoryTest, RejectsEmptyUnmatchedAndInvalidInput) {
       << error;
 
   const StampedTrajectory two(truth.begin(), truth.begin() + 2);
-  EXPECT_FALSE(evaluateTrajectory(two, two, TrajectoryEvaluationOptions{}, &error).has_value());
+  EXPECT_FALSE(evaluateTrajectory(two, two, TrajectoryEvaluationConfig{}, &error).has_value());
   EXPECT_NE(error.find("ATE: umeyamaAlign: se3 alignment needs at least 3 point pairs"),
             std::string::npos)
       << error;

@@ -49,7 +49,7 @@ class TrajectoryPlotTest : public testing::Test {
 };
 
 TEST_F(TrajectoryPlotTest, WritesPngWithBothTrajectories) {
-  TrajectoryPlotOptions options;
+  TrajectoryPlotConfig options;
   options.title = "ATE RMSE 0.034 m";
   const std::string path = dir_.file("plot.png");
   std::string error;
@@ -75,7 +75,7 @@ TEST_F(TrajectoryPlotTest, EqualAxisScaling) {
     box.push_back({1.0 * i, Transformationd(Eigen::Quaterniond::Identity(),
                                             Eigen::Vector3d(corners[i][0], corners[i][1], 0.0))});
   }
-  TrajectoryPlotOptions options;
+  TrajectoryPlotConfig options;
   options.width = 600;
   options.height = 600;
   std::string error;
@@ -105,7 +105,7 @@ TEST_F(TrajectoryPlotTest, EqualAxisScaling) {
 }
 
 TEST_F(TrajectoryPlotTest, EstimateMayBeEmptyAndSizeIsConfigurable) {
-  TrajectoryPlotOptions options;
+  TrajectoryPlotConfig options;
   options.width = 640;
   options.height = 480;
   const std::string path = dir_.file("gt_only.png");
@@ -123,7 +123,7 @@ TEST_F(TrajectoryPlotTest, EstimateMayBeEmptyAndSizeIsConfigurable) {
 }
 
 TEST_F(TrajectoryPlotTest, FailsWithAMessage) {
-  TrajectoryPlotOptions options;
+  TrajectoryPlotConfig options;
   std::string error;
   const std::string unwritable = dir_.file("no_such_dir/plot.png");
   EXPECT_FALSE(writeTrajectoryPlotPng(unwritable, truth_, estimate_, options, &error));
@@ -142,7 +142,7 @@ TEST_F(TrajectoryPlotTest, FailsWithAMessage) {
   options.width = 50;
   EXPECT_FALSE(renderTrajectoryPlot(truth_, estimate_, options, &error).has_value());
   EXPECT_NE(error.find("width must be in [200, 10000] pixels, got 50"), std::string::npos) << error;
-  options = TrajectoryPlotOptions{};
+  options = TrajectoryPlotConfig{};
   options.line_thickness = 0;
   EXPECT_NE(options.validate().find("line_thickness"), std::string::npos);
 

@@ -19,7 +19,7 @@ using Key = std::pair<int, int>;
 
 // Reference: one cv::FAST pass at the minimum threshold over the whole detection area; each
 // ORB-SLAM2 cell keeps its corners of score >= initial threshold if it has any, else all.
-std::map<Key, float> wholeAreaReference(const cv::Mat& level, const FastGridParams& p) {
+std::map<Key, float> wholeAreaReference(const cv::Mat& level, const FastGridConfig& p) {
   const int e = p.edge_threshold;
   const cv::Rect area(e - 3, e - 3, level.cols - 2 * e + 6, level.rows - 2 * e + 6);
   std::vector<cv::KeyPoint> all;
@@ -46,7 +46,7 @@ std::map<Key, float> wholeAreaReference(const cv::Mat& level, const FastGridPara
 
 // ORB-SLAM2's own loop: cv::FAST per cell (cells overlap by 6 pixels), the minimum threshold
 // when the initial one finds nothing.
-std::map<Key, float> orbSlam2Reference(const cv::Mat& level, const FastGridParams& p) {
+std::map<Key, float> orbSlam2Reference(const cv::Mat& level, const FastGridConfig& p) {
   const int e = p.edge_threshold;
   const int min_b = e - 3, max_bx = level.cols - e + 3, max_by = level.rows - e + 3;
   const float width = static_cast<float>(max_bx - min_b),
@@ -94,7 +94,7 @@ TEST(FastGridDetectorTest, EqualsOneWholeAreaPassFilteredPerCell) {
     for (const double scale : {1.0, 0.6, 0.3}) {
       cv::Mat image;
       cv::resize(level, image, cv::Size(), scale, scale, cv::INTER_LINEAR);
-      const FastGridParams p;
+      const FastGridConfig p;
       const std::vector<LevelCorner> corners = detector.detect(image, p);
       const std::map<Key, float> ours = asMap(corners);
       const std::map<Key, float> reference = wholeAreaReference(image, p);
@@ -121,7 +121,7 @@ TEST(FastGridDetectorTest, AgreesWithOrbSlam2sPerCellDetectionAwayFromCellOverla
   const auto& frames = test::simFrames("town", 1);
   ASSERT_FALSE(frames.empty());
   const cv::Mat image = test::matView(frames[0].left);
-  const FastGridParams p;
+  const FastGridConfig p;
   FastGridDetector detector;
   const std::map<Key, float> ours = asMap(detector.detect(image, p));
   const std::map<Key, float> theirs = orbSlam2Reference(image, p);
@@ -142,7 +142,7 @@ TEST(FastGridDetectorTest, AgreesWithOrbSlam2sPerCellDetectionAwayFromCellOverla
 
 TEST(FastGridDetectorTest, TooSmallOrFlatLevelsGiveNoCorners) {
   FastGridDetector detector;
-  const FastGridParams p;
+  const FastGridConfig p;
   EXPECT_TRUE(detector.detect(cv::Mat(38, 500, CV_8UC1, cv::Scalar(0)), p).empty());
   EXPECT_TRUE(detector.detect(cv::Mat(200, 200, CV_8UC1, cv::Scalar(128)), p).empty());
   // A single bright dot in a flat image is one corner, even at the minimum threshold.

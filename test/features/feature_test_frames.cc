@@ -10,7 +10,7 @@
 namespace cblox::test {
 namespace {
 
-std::vector<StereoFrame> readFrames(const std::string& spec, const SourceOptions& options,
+std::vector<StereoFrame> readFrames(const std::string& spec, const SourceConfig& options,
                                     size_t count) {
   std::vector<StereoFrame> frames;
   std::string error;
@@ -51,7 +51,7 @@ const std::vector<StereoFrame>& simFrames(const std::string& scene, size_t count
   const auto key = std::make_pair(scene, count);
   auto it = cache.find(key);
   if (it == cache.end()) {
-    SourceOptions options;
+    SourceConfig options;
     options.sim.rate_hz = 0.5;  // frames 2 s apart: different views
     options.max_frames = count;
     it = cache.emplace(key, readFrames("sim:" + scene, options, count)).first;
@@ -64,7 +64,7 @@ std::string eurocDir() { return std::string(CBLOX_SHARED_DATA_DIR) + "/euroc-v10
 const std::vector<StereoFrame>& eurocFrames() {
   static const std::vector<StereoFrame> frames = [] {
     if (!std::filesystem::exists(eurocDir() + "/mav0/cam0")) return std::vector<StereoFrame>{};
-    std::vector<StereoFrame> all = readFrames("euroc:" + eurocDir(), SourceOptions{}, 40);
+    std::vector<StereoFrame> all = readFrames("euroc:" + eurocDir(), SourceConfig{}, 40);
     // The rig stands still in this window: every 10th pair is enough.
     std::vector<StereoFrame> some;
     for (size_t i = 0; i < all.size(); i += 10) some.push_back(std::move(all[i]));

@@ -37,7 +37,7 @@ class KeyframeCovarianceServiceTest : public ::testing::Test {
   static void SetUpTestSuite() {
     std::string error;
     vocabulary_ = new BinaryVocabulary(*BinaryVocabulary::load(CBLOX_DEFAULT_VOCABULARY, &error));
-    SourceOptions options;
+    SourceConfig options;
     options.trajectory = "loop";
     options.max_frames = 250;
     std::unique_ptr<FrameSource> source = openFrameSource("sim:room", options, &error);

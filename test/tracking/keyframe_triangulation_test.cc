@@ -476,7 +476,7 @@ struct HallPair {
 };
 
 // Frames `first` and `second` of sim:hall played with `options`.
-HallPair renderHallPair(const SourceOptions& options, size_t first, size_t second,
+HallPair renderHallPair(const SourceConfig& options, size_t first, size_t second,
                         const BinaryVocabulary& vocabulary) {
   HallPair h;
   std::string error;
@@ -667,7 +667,7 @@ class KeyframeTriangulationHallTest : public testing::Test {
 TEST_F(KeyframeTriangulationHallTest, LoopKeyframesGainManyFarLandmarks) {
   // At 2 Hz the camera cruises along the hall at 1.5 m/s from frame 3 on, looking ahead:
   // frames 3 and 4 are 0.75 m apart along the viewing direction.
-  SourceOptions options;
+  SourceConfig options;
   options.trajectory = "loop";
   options.sim.rate_hz = 2.0;
   const HallPair h = renderHallPair(options, 3, 4, *vocabulary_);
@@ -696,7 +696,7 @@ TEST_F(KeyframeTriangulationHallTest, SidewaysKeyframesTriangulateOnTheTrueSurfa
   std::string error;
   // The loop's pose at 1.5 s and the same pose 0.75 m to the camera's right (a wide stereo
   // pair), played at 20 Hz from a TUM file.
-  SourceOptions loop;
+  SourceConfig loop;
   loop.trajectory = "loop";
   loop.max_frames = 1;
   std::unique_ptr<FrameSource> source = openFrameSource("sim:hall", loop, &error);
@@ -709,7 +709,7 @@ TEST_F(KeyframeTriangulationHallTest, SidewaysKeyframesTriangulateOnTheTrueSurfa
   const Transformationd right = pose({0, 0, 0}, {0.75, 0.0, 0.0});
   const std::string path = testing::TempDir() + "/keyframe_triangulation_sideways.txt";
   ASSERT_TRUE(writeTumTrajectory(path, {{0.0, *start}, {0.05, *start * right}}, &error)) << error;
-  SourceOptions options;
+  SourceConfig options;
   options.trajectory = path;
   const HallPair h = renderHallPair(options, 0, 1, *vocabulary_);
   ASSERT_TRUE(h.f0 && h.f1);

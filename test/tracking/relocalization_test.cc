@@ -18,7 +18,7 @@ TEST(RelocalizationTest, LostOnBlackFramesThenRelocalizedAtAnEarlierPlace) {
   std::string error;
   const auto vocabulary = BinaryVocabulary::load(CBLOX_DEFAULT_VOCABULARY, &error);
   ASSERT_TRUE(vocabulary.has_value()) << error;
-  SourceOptions options;
+  SourceConfig options;
   options.trajectory = "loop";
   options.max_frames = 160;
   std::unique_ptr<FrameSource> source = openFrameSource("sim:room", options, &error);

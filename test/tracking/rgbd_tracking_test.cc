@@ -54,7 +54,7 @@ TEST(RgbdTrackingTest, SevenScenesFramesTrackWithinThreeCentimetres) {
   slam.stop();
   EXPECT_EQ(lost, 0);
   ASSERT_GE(estimate.size(), 45u);
-  AssociationOptions association;
+  AssociationConfig association;
   const auto pairs = associateTrajectories(truth, estimate, association);
   ASSERT_EQ(pairs.size(), estimate.size());
   const auto ate = computeAte(pairs, AlignmentType::kSE3, &error);

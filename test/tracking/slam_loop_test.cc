@@ -24,7 +24,7 @@ TEST(SlamLoopTest, ClosesTheRoomLoopAndCorrectsTheKeyframes) {
   std::string error;
   const auto vocabulary = BinaryVocabulary::load(CBLOX_DEFAULT_VOCABULARY, &error);
   ASSERT_TRUE(vocabulary.has_value()) << error;
-  SourceOptions options;
+  SourceConfig options;
   options.trajectory = "loop";
   options.laps = 2;
   options.max_frames = 640;  // one lap is 485 frames; the loop closes before frame 600

@@ -22,7 +22,7 @@ TEST(TownAliasingTest, RepeatedCrossingIsNotALoop) {
   std::string error;
   const auto vocabulary = BinaryVocabulary::load(CBLOX_DEFAULT_VOCABULARY, &error);
   ASSERT_TRUE(vocabulary.has_value()) << error;
-  SourceOptions options;
+  SourceConfig options;
   options.trajectory = "loop";
   options.max_frames = 320;  // 0..123 m down the first street, before its end
   std::unique_ptr<FrameSource> source = openFrameSource("sim:town", options, &error);

@@ -26,7 +26,7 @@ struct RunStats {
 
 RunStats runTracker(const std::string& spec, const std::string& trajectory, size_t frames,
                     bool local_mapping) {
-  SourceOptions options;
+  SourceConfig options;
   options.trajectory = trajectory;
   options.max_frames = frames;
   std::string error;

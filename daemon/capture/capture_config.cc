@@ -1,0 +1,162 @@
+#include "daemon/capture/capture_config.h"
+
+#include <cmath>
+
+#include "daemon/common/yaml_config.h"
+
+namespace cblox {
+namespace {
+
+void loadRig(const YAML::Node& node, SimRigConfig* rig) {
+  const std::string path = "sim.rig";
+  requireKnownKeys(node, path,
+                   {"width", "height", "fx", "fy", "cx", "cy", "baseline_m", "depth_min_m",
+                    "depth_max_m", "depth_width", "depth_height", "depth_fx", "depth_fy",
+                    "depth_cx", "depth_cy", "T_L_D_position", "T_L_D_quaternion_wxyz"});
+  if (isAbsent(node)) return;
+  readOptional(node, path, "width", &rig->stereo.width);
+  readOptional(node, path, "height", &rig->stereo.height);
+  readOptional(node, path, "fx", &rig->stereo.fx);
+  readOptional(node, path, "fy", &rig->stereo.fy);
+  readOptional(node, path, "cx", &rig->stereo.cx);
+  readOptional(node, path, "cy", &rig->stereo.cy);
+  readOptional(node, path, "baseline_m", &rig->baseline_m);
+  readOptional(node, path, "depth_min_m", &rig->depth_min_m);
+  readOptional(node, path, "depth_max_m", &rig->depth_max_m);
+  readOptional(node, path, "depth_width", &rig->depth.width);
+  readOptional(node, path, "depth_height", &rig->depth.height);
+  readOptional(node, path, "depth_fx", &rig->depth.fx);
+  readOptional(node, path, "depth_fy", &rig->depth.fy);
+  readOptional(node, path, "depth_cx", &rig->depth.cx);
+  readOptional(node, path, "depth_cy", &rig->depth.cy);
+  std::vector<double> position, quaternion;
+  readOptional(node, path, "T_L_D_position", &position);
+  readOptional(node, path, "T_L_D_quaternion_wxyz", &quaternion);
+  if (!position.empty() || !quaternion.empty()) {
+    if (position.empty()) position = {0.0, 0.0, 0.0};
+    if (quaternion.empty()) quaternion = {1.0, 0.0, 0.0, 0.0};
+    if (position.size() != 3 || quaternion.size() != 4) {
+      throw ConfigError(path + ": T_L_D_position needs 3 numbers, T_L_D_quaternion_wxyz 4");
+    }
+    const Eigen::Quaterniond q(quaternion[0], quaternion[1], quaternion[2], quaternion[3]);
+    if (std::abs(q.norm() - 1.0) > 1e-3) {
+      throw ConfigError(path + ".T_L_D_quaternion_wxyz: norm must be 1");
+    }
+    rig->T_L_D = Transformationd(q, Eigen::Vector3d(position[0], position[1], position[2]));
+  }
+}
+
+void loadNoise(const YAML::Node& node, SensorNoiseConfig* noise) {
+  const std::string path = "sim.noise";
+  requireKnownKeys(node, path,
+                   {"preset", "image_noise_sigma", "exposure_amplitude", "exposure_period_s",
+                    "exposure_time_s", "blur_samples", "depth_noise_per_m2",
+                    "depth_hole_probability", "depth_edge_hole_probability",
+                    "frame_drop_probability", "seed"});
+  if (isAbsent(node)) return;
+  std::string preset;
+  readOptional(node, path, "preset", &preset);
+  if (!preset.empty()) *noise = sensorNoisePreset(preset);
+  readOptional(node, path, "image_noise_sigma", &noise->image_noise_sigma);
+  readOptional(node, path, "exposure_amplitude", &noise->exposure_amplitude);
+  readOptional(node, path, "exposure_period_s", &noise->exposure_period_s);
+  readOptional(node, path, "exposure_time_s", &noise->exposure_time_s);
+  readOptional(node, path, "blur_samples", &noise->blur_samples);
+  readOptional(node, path, "depth_noise_per_m2", &noise->depth_noise_per_m2);
+  readOptional(node, path, "depth_hole_probability", &noise->depth_hole_probability);
+  readOptional(node, path, "depth_edge_hole_probability", &noise->depth_edge_hole_probability);
+  readOptional(node, path, "frame_drop_probability", &noise->frame_drop_probability);
+  readOptional(node, path, "seed", &noise->seed);
+}
+
+}  // namespace
+
+SensorNoiseConfig sensorNoisePreset(const std::string& name) {
+  SensorNoiseConfig noise;
+  if (name == "none") return noise;
+  if (name == "realistic") {
+    noise.image_noise_sigma = 2.0;
+    noise.exposure_amplitude = 0.15;
+    noise.exposure_period_s = 7.0;
+    noise.depth_noise_per_m2 = 0.0012;
+    noise.depth_hole_probability = 0.01;
+    noise.depth_edge_hole_probability = 0.5;
+    return noise;
+  }
+  throw ConfigError("noise preset must be none or realistic, got '" + name + "'");
+}
+
+void parsePacing(const std::string& text, CaptureConfig* config) {
+  if (text == "source") {
+    config->pacing = CapturePacing::kSource;
+    return;
+  }
+  if (text == "max") {
+    config->pacing = CapturePacing::kMax;
+    return;
+  }
+  char* end = nullptr;
+  const double hz = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || *end != '\0' || !(hz > 0.0) || !std::isfinite(hz)) {
+    throw ConfigError("rate must be 'source', 'max' or a rate in Hz > 0, got '" + text + "'");
+  }
+  config->pacing = CapturePacing::kFixed;
+  config->fixed_rate_hz = hz;
+}
+
+CaptureConfig loadCaptureConfig(const YAML::Node& root) {
+  CaptureConfig config;
+  requireKnownKeys(root, "capture",
+                   {"source", "trajectory", "laps", "rate", "frames", "lcm_url", "channels",
+                    "publish", "depth_encoding", "sim"});
+  if (isAbsent(root)) return config;
+  readOptional(root, "capture", "source", &config.source);
+  readOptional(root, "capture", "trajectory", &config.source_config.trajectory);
+  readOptional(root, "capture", "laps", &config.source_config.laps);
+  if (root["rate"]) {
+    std::string rate;
+    readOptional(root, "capture", "rate", &rate);
+    parsePacing(rate, &config);
+  }
+  int frames = 0;
+  readOptional(root, "capture", "frames", &frames);
+  if (frames < 0) throw ConfigError("capture.frames must be >= 0, got " + std::to_string(frames));
+  config.source_config.max_frames = static_cast<size_t>(frames);
+  readOptional(root, "capture", "lcm_url", &config.lcm_url);
+  const YAML::Node channels = root["channels"];
+  requireKnownKeys(channels, "channels", {"stereo", "depth", "ground_truth", "heartbeat"});
+  if (!isAbsent(channels)) {
+    readOptional(channels, "channels", "stereo", &config.stereo_channel);
+    readOptional(channels, "channels", "depth", &config.depth_channel);
+    readOptional(channels, "channels", "ground_truth", &config.ground_truth_channel);
+    readOptional(channels, "channels", "heartbeat", &config.heartbeat_channel);
+  }
+  const YAML::Node publish = root["publish"];
+  requireKnownKeys(publish, "publish", {"stereo", "depth", "ground_truth"});
+  if (!isAbsent(publish)) {
+    readOptional(publish, "publish", "stereo", &config.publish_stereo);
+    readOptional(publish, "publish", "depth", &config.publish_depth);
+    readOptional(publish, "publish", "ground_truth", &config.publish_ground_truth);
+  }
+  readOptionalEnum(root, "capture", "depth_encoding",
+                   {{"u16_mm", DepthEncoding::kUint16Millimetres},
+                    {"f32", DepthEncoding::kFloat32Metres}},
+                   &config.depth_encoding);
+  const YAML::Node sim = root["sim"];
+  requireKnownKeys(sim, "sim", {"rate_hz", "threads", "rig", "noise", "keep_rig_range"});
+  if (!isAbsent(sim)) {
+    SimSourceConfig& s = config.source_config.sim;
+    readOptional(sim, "sim", "rate_hz", &s.rate_hz);
+    readOptional(sim, "sim", "threads", &s.renderer.num_threads);
+    readOptional(sim, "sim", "keep_rig_range", &config.source_config.keep_rig_range);
+    loadRig(sim["rig"], &s.renderer.rig);
+    loadNoise(sim["noise"], &s.noise);
+    if (const std::string problem = s.validate(); !problem.empty()) {
+      throw ConfigError("sim: " + problem);
+    }
+  }
+  if (config.source_config.laps < 1) throw ConfigError("capture.laps must be >= 1");
+  return config;
+}
+
+}  // namespace cblox

@@ -1,0 +1,49 @@
+#pragma once
+
+#include <string>
+
+#include <yaml-cpp/yaml.h>
+
+#include "daemon/common/lcm_messages.h"
+#include "drivers/open_frame_source.h"
+
+namespace cblox {
+
+/// How fast cblox-capture plays a source.
+enum class CapturePacing {
+  kSource,  ///< at the source's own time stamps (real time)
+  kMax,     ///< as fast as possible
+  kFixed,   ///< at a fixed rate (fixed_rate_hz), whatever the source's stamps
+};
+
+/// Settings of cblox-capture (config/capture.yaml). Plain value type.
+struct CaptureConfig {
+  std::string source = "sim:room";
+  SourceConfig source_config;
+  CapturePacing pacing = CapturePacing::kSource;
+  double fixed_rate_hz = 0.0;
+  /// LCM provider URL; empty means LCM's default (udpm://239.255.76.67:7667?ttl=0).
+  std::string lcm_url;
+  std::string stereo_channel = "CBLOX_STEREO";
+  std::string depth_channel = "CBLOX_DEPTH";
+  std::string ground_truth_channel = "CBLOX_GT_POSE";
+  std::string heartbeat_channel = "CBLOX_HEARTBEAT";
+  bool publish_stereo = true;
+  bool publish_depth = true;
+  bool publish_ground_truth = true;
+  DepthEncoding depth_encoding = DepthEncoding::kUint16Millimetres;
+};
+
+/// The sensor-noise presets: "none" (exact images) and "realistic" (image noise 2 grey
+/// levels, exposure drift 15 % over 7 s, depth noise 0.0012 z^2, 1 % holes, half of the
+/// depth-edge pixels missing, no frame drops).
+SensorNoiseConfig sensorNoisePreset(const std::string& name);  // throws ConfigError
+
+/// Parses "source" / "max" / a rate in Hz into *config. Throws ConfigError.
+void parsePacing(const std::string& text, CaptureConfig* config);
+
+/// Reads the YAML tree of config/capture.yaml over the defaults; throws ConfigError naming
+/// the key for unknown keys or bad values.
+CaptureConfig loadCaptureConfig(const YAML::Node& root);
+
+}  // namespace cblox

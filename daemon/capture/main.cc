@@ -1,0 +1,313 @@
+// cblox-capture: plays a capture source (simulator, EuRoC, TUM RGB-D or 7-Scenes folder) on
+// the LCM channels of the design, or renders it to a folder for inspection.
+//
+//   cblox-capture --source sim:room --trajectory loop            # publish at 20 Hz
+//   cblox-capture --source euroc:../shared/data/euroc-v101-micro --rate max
+//   cblox-capture --source sim:town --frames 100 --render-to out/town_frames
+//   cblox-capture --source sim:hall --write-scene out/hall.ply
+//
+// Channels (configurable): CBLOX_STEREO (stereo_pair_t), CBLOX_DEPTH (depth_frame_t),
+// CBLOX_GT_POSE (pose_stamped_t, sources with ground truth), CBLOX_HEARTBEAT (1 Hz).
+// Exit status: 0 done, 1 runtime error, 2 usage or configuration error.
+
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <iostream>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include <cblox/heartbeat_t.hpp>
+#include <lcm/lcm-cpp.hpp>
+
+#include "core/io/ply_io.h"
+#include "daemon/capture/capture_config.h"
+#include "daemon/common/command_line.h"
+#include "daemon/common/heartbeat.h"
+#include "daemon/common/run_loop.h"
+#include "daemon/common/yaml_config.h"
+#include "daemon/common/lcm_messages.h"
+#include "drivers/frame_folder_writer.h"
+#include "drivers/open_frame_source.h"
+
+namespace cblox {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+void printUsage() {
+  std::cout
+      << "usage: cblox-capture [--config FILE] [--source SPEC] [--trajectory KIND|FILE] [--laps "
+         "N]\n"
+         "                     [--rate source|max|HZ] [--frames N] [--noise none|realistic]\n"
+         "                     [--lcm-url URL] [--depth-encoding u16_mm|f32]\n"
+         "                     [--render-to DIR] [--write-scene FILE.ply] [--quiet]\n"
+         "  SPEC: sim:room | sim:hall | sim:town | sim:MESH.ply|.obj | euroc:DIR | tum:DIR |\n"
+         "        7scenes:DIR\n"
+         "  KIND (sim): loop | orbit | lawnmower | figure-eight, or a TUM trajectory file\n"
+         "  --render-to DIR  writes images + lists + groundtruth.txt instead of publishing\n"
+         "  --write-scene    writes the simulator's ground-truth mesh (sim sources) and exits\n";
+}
+
+struct Args {
+  std::optional<std::string> config_file, source, trajectory, rate, noise, lcm_url, depth_encoding,
+      render_to, write_scene;
+  std::optional<int> laps, frames;
+  bool quiet = false;
+};
+
+int64_t toInt(const std::string& flag, const std::string& value) {
+  char* end = nullptr;
+  const long long n = std::strtoll(value.c_str(), &end, 10);
+  if (end == value.c_str() || *end != '\0') {
+    throw ConfigError(flag + ": expected an integer, got '" + value + "'");
+  }
+  return n;
+}
+
+Args parseArgs(int argc, char** argv) {
+  Args args;
+  parseFlags(
+      argc, argv, printUsage, {"--quiet"}, [&](const std::string&) { args.quiet = true; },
+      [&](const std::string& flag, const std::string& value) {
+        if (flag == "--config")
+          args.config_file = value;
+        else if (flag == "--source")
+          args.source = value;
+        else if (flag == "--trajectory")
+          args.trajectory = value;
+        else if (flag == "--laps")
+          args.laps = static_cast<int>(toInt(flag, value));
+        else if (flag == "--rate")
+          args.rate = value;
+        else if (flag == "--frames")
+          args.frames = static_cast<int>(toInt(flag, value));
+        else if (flag == "--noise")
+          args.noise = value;
+        else if (flag == "--lcm-url")
+          args.lcm_url = value;
+        else if (flag == "--depth-encoding")
+          args.depth_encoding = value;
+        else if (flag == "--render-to")
+          args.render_to = value;
+        else if (flag == "--write-scene")
+          args.write_scene = value;
+        else
+          return false;
+        return true;
+      });
+  return args;
+}
+
+CaptureConfig buildConfig(const Args& args) {
+  CaptureConfig config =
+      args.config_file ? loadCaptureConfig(loadYamlFile(*args.config_file)) : CaptureConfig{};
+  if (args.source) config.source = *args.source;
+  if (args.trajectory) config.source_config.trajectory = *args.trajectory;
+  if (args.laps) {
+    if (*args.laps < 1) throw ConfigError("--laps must be >= 1");
+    config.source_config.laps = *args.laps;
+  }
+  if (args.rate) parsePacing(*args.rate, &config);
+  if (args.frames) {
+    if (*args.frames < 0) throw ConfigError("--frames must be >= 0");
+    config.source_config.max_frames = static_cast<size_t>(*args.frames);
+  }
+  if (args.noise) config.source_config.sim.noise = sensorNoisePreset(*args.noise);
+  if (args.lcm_url) config.lcm_url = *args.lcm_url;
+  if (args.depth_encoding) {
+    if (*args.depth_encoding == "u16_mm") {
+      config.depth_encoding = DepthEncoding::kUint16Millimetres;
+    } else if (*args.depth_encoding == "f32") {
+      config.depth_encoding = DepthEncoding::kFloat32Metres;
+    } else {
+      throw ConfigError("--depth-encoding must be u16_mm or f32, got '" + *args.depth_encoding +
+                        "'");
+    }
+  }
+  return config;
+}
+
+void printInfo(const SourceInfo& info) {
+  std::printf("capture: source %s, %.1f Hz, %s frames\n", info.name.c_str(), info.rate_hz,
+              info.frame_count ? std::to_string(*info.frame_count).c_str() : "unknown");
+  if (info.stereo) {
+    const auto& s = *info.stereo;
+    std::printf("capture: stereo %dx%d fx %.2f fy %.2f cx %.2f cy %.2f baseline %.4f m\n",
+                s.intrinsics.width, s.intrinsics.height, s.intrinsics.fx, s.intrinsics.fy,
+                s.intrinsics.cx, s.intrinsics.cy, s.baseline_m);
+  }
+  if (info.depth_intrinsics) {
+    const auto& K = *info.depth_intrinsics;
+    std::printf("capture: depth %dx%d fx %.2f fy %.2f cx %.2f cy %.2f range [%.2f, %.2f] m\n",
+                K.width, K.height, K.fx, K.fy, K.cx, K.cy, info.depth_min_m, info.depth_max_m);
+  }
+  std::printf("capture: ground truth %s\n", info.has_ground_truth ? "yes" : "no");
+  for (const std::string& note : info.notes) std::printf("capture: note: %s\n", note.c_str());
+  std::fflush(stdout);
+}
+
+/// Prints "frames done, rate, ETA" at most every two seconds.
+class Progress {
+ public:
+  Progress(std::optional<size_t> total, bool quiet) : total_(total), quiet_(quiet) {}
+  void update(size_t done, bool force = false) {
+    const auto now = Clock::now();
+    if (quiet_ || (!force && now - last_ < std::chrono::seconds(2))) return;
+    last_ = now;
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    const double rate = elapsed > 0 ? done / elapsed : 0.0;
+    if (total_ && rate > 0) {
+      std::printf("capture: %zu/%zu frames, %.1f frames/s, ETA %.0f s\n", done, *total_, rate,
+                  (*total_ - std::min(done, *total_)) / rate);
+    } else {
+      std::printf("capture: %zu frames, %.1f frames/s\n", done, rate);
+    }
+    std::fflush(stdout);
+  }
+
+ private:
+  std::optional<size_t> total_;
+  bool quiet_;
+  Clock::time_point start_ = Clock::now();
+  Clock::time_point last_ = Clock::now();
+};
+
+int run(const Args& args) {
+  const CaptureConfig config = buildConfig(args);
+  std::string error;
+  if (args.write_scene) {
+    std::shared_ptr<const Mesh> mesh = loadSimSceneMesh(config.source, &error);
+    if (mesh == nullptr ||
+        !writePly(*args.write_scene, *mesh, PlyFormat::kBinaryLittleEndian, &error)) {
+      std::fprintf(stderr, "cblox-capture: --write-scene: %s\n", error.c_str());
+      return 2;
+    }
+    std::printf("capture: wrote scene mesh %s (%zu triangles)\n", args.write_scene->c_str(),
+                mesh->numTriangles());
+    return 0;
+  }
+  std::unique_ptr<FrameSource> source =
+      openFrameSource(config.source, config.source_config, &error);
+  if (source == nullptr) {
+    std::fprintf(stderr, "cblox-capture: %s\n", error.c_str());
+    return 2;
+  }
+  const SourceInfo& info = source->info();
+  if (!args.quiet) printInfo(info);
+
+  installStopHandlers();
+
+  std::optional<FrameFolderWriter> writer;
+  std::optional<lcm::LCM> lcm;
+  if (args.render_to) {
+    writer.emplace();
+    if (!writer->open(*args.render_to, info, &error)) {
+      std::fprintf(stderr, "cblox-capture: %s\n", error.c_str());
+      return 1;
+    }
+  } else {
+    lcm.emplace(config.lcm_url);
+    if (!lcm->good()) {
+      std::fprintf(stderr, "cblox-capture: cannot open LCM (url '%s')\n", config.lcm_url.c_str());
+      return 1;
+    }
+  }
+
+  Progress progress(info.frame_count, args.quiet);
+  SystemdNotifier notifier;
+  notifier.ready("cblox-capture: " + info.name);
+  CaptureFrame frame;
+  size_t delivered = 0, errors = 0, publish_failures = 0, gaps = 0;
+  int64_t last_id = -1;
+  std::optional<int64_t> first_stamp_ns;
+  const auto start = Clock::now();
+  auto last_heartbeat = Clock::now() - std::chrono::seconds(2);
+  auto send_heartbeat = [&](const char* state) {
+    if (!lcm) return;
+    const heartbeat_t hb = HeartbeatBuilder("cblox-capture", state)
+                               .add("frames_published", static_cast<uint64_t>(delivered))
+                               .add("source_gaps", static_cast<uint64_t>(gaps))
+                               .add("source_errors", static_cast<uint64_t>(errors))
+                               .add("publish_failures", static_cast<uint64_t>(publish_failures))
+                               .build();
+    lcm->publish(config.heartbeat_channel, &hb);
+  };
+
+  while (!g_stop_requested) {
+    const FrameSource::Status status = source->next(&frame, &error);
+    if (status == FrameSource::Status::kEnd) break;
+    if (status == FrameSource::Status::kError) {
+      ++errors;
+      std::fprintf(stderr, "cblox-capture: frame skipped: %s\n", error.c_str());
+      continue;
+    }
+    if (last_id >= 0 && frame.frame_id > last_id + 1) gaps += frame.frame_id - last_id - 1;
+    last_id = frame.frame_id;
+    if (!first_stamp_ns) first_stamp_ns = frame.timestamp_ns;
+
+    // Pacing: wait until this frame's time relative to the first one.
+    if (!writer && config.pacing != CapturePacing::kMax) {
+      const double offset_s = config.pacing == CapturePacing::kSource
+                                  ? static_cast<double>(frame.timestamp_ns - *first_stamp_ns) * 1e-9
+                                  : static_cast<double>(delivered) / config.fixed_rate_hz;
+      std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(
+                                                std::chrono::duration<double>(offset_s)));
+    }
+
+    if (writer) {
+      if (!writer->write(frame, &error)) {
+        std::fprintf(stderr, "cblox-capture: %s\n", error.c_str());
+        return 1;
+      }
+    } else {
+      const int64_t utime = frame.timestamp_ns / 1000;
+      if (config.publish_stereo && info.stereo && !frame.left.empty()) {
+        const stereo_pair_t msg = toStereoPairMsg(frame, info, utime);
+        publish_failures += lcm->publish(config.stereo_channel, &msg) != 0;
+      }
+      if (config.publish_depth && info.depth_intrinsics && !frame.depth.empty()) {
+        const depth_frame_t msg = toDepthFrameMsg(frame, info, utime, config.depth_encoding);
+        publish_failures += lcm->publish(config.depth_channel, &msg) != 0;
+      }
+      if (config.publish_ground_truth && frame.T_G_C) {
+        const pose_stamped_t msg = toGroundTruthMsg(frame, utime);
+        publish_failures += lcm->publish(config.ground_truth_channel, &msg) != 0;
+      }
+      if (Clock::now() - last_heartbeat >= std::chrono::seconds(1)) {
+        send_heartbeat("running");
+        notifier.status(std::to_string(delivered) + " frames published");
+        last_heartbeat = Clock::now();
+      }
+    }
+    ++delivered;
+    progress.update(delivered);
+    notifier.pingWatchdogIfDue();
+  }
+  notifier.stopping();
+  send_heartbeat(g_stop_requested ? "stopped" : "finished");
+  if (writer && !writer->close(&error)) {
+    std::fprintf(stderr, "cblox-capture: %s\n", error.c_str());
+    return 1;
+  }
+  const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+  std::printf(
+      "capture: %s %zu frames in %.1f s (%.1f frames/s); source gaps %zu, skipped %zu, "
+      "publish failures %zu%s\n",
+      writer ? "wrote" : "published", delivered, elapsed, elapsed > 0 ? delivered / elapsed : 0.0,
+      gaps, errors, publish_failures, g_stop_requested ? " (stopped by signal)" : "");
+  if (writer) std::printf("capture: folder %s\n", args.render_to->c_str());
+  return 0;
+}
+
+}  // namespace
+}  // namespace cblox
+
+int main(int argc, char** argv) {
+  return cblox::runProcess("cblox-capture",
+                           [&] { return cblox::run(cblox::parseArgs(argc, argv)); });
+}

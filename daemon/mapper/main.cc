@@ -1,0 +1,168 @@
+// cblox-mapper: the dense mapper process. Integrates depth frames into a collection of TSDF
+// subvolumes, moves subvolumes when keyframe poses are corrected, and exports meshes on
+// command.
+//
+//   cblox-mapper --config config/mapper.yaml                       # ground-truth poses
+//   cblox-mapper --pose-source tracker --output-dir /data/maps
+//
+// Subscribes: CBLOX_DEPTH (depth_frame_t); ground_truth mode: CBLOX_GT_POSE
+// (pose_stamped_t); tracker mode: CBLOX_FRAME_POSE (frame_pose_t), CBLOX_KEYFRAME
+// (keyframe_t), CBLOX_COV_REPLY (covariance_reply_t); both: CBLOX_KEYFRAME_POSES
+// (keyframe_pose_batch_t), CBLOX_CMD (command_t).
+// Publishes: CBLOX_MAP_STATUS (map_status_t) and CBLOX_HEARTBEAT (heartbeat_t) every second,
+// CBLOX_CMD_REPLY (command_reply_t); tracker mode: CBLOX_COV_REQUEST (covariance_request_t)
+// for the map maintenance's fusion candidates.
+// Poses on CBLOX_GT_POSE / CBLOX_FRAME_POSE are of the body (primary camera) frame B; a depth
+// frame's camera is placed at T_G_B * calibration.T_B_C.
+// Exit status: 0 stopped by SIGINT/SIGTERM, 1 runtime error, 2 usage or configuration error.
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "daemon/common/command_line.h"
+#include "daemon/common/run_loop.h"
+#include "daemon/common/yaml_config.h"
+#include "daemon/mapper/mapper.h"
+#include "daemon/mapper/mapper_config_loader.h"
+#include "daemon/mapper/mapper_lcm_node.h"
+
+namespace cblox {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+void printUsage() {
+  std::cout << "usage: cblox-mapper [--config FILE] [--pose-source ground_truth|tracker]\n"
+               "                    [--output-dir DIR] [--lcm-url URL] [--quiet]\n"
+               "  Runs until SIGINT/SIGTERM. Commands arrive on CBLOX_CMD (see cblox-ctl).\n"
+               "  exit status: 0 stopped by signal, 1 runtime error, 2 usage/configuration\n";
+}
+
+struct Args {
+  std::optional<std::string> config_file, pose_source, output_dir, lcm_url;
+  bool quiet = false;
+};
+
+Args parseArgs(int argc, char** argv) {
+  Args args;
+  parseFlags(
+      argc, argv, printUsage, {"--quiet"}, [&](const std::string&) { args.quiet = true; },
+      [&](const std::string& flag, const std::string& value) {
+        if (flag == "--config") {
+          args.config_file = value;
+        } else if (flag == "--pose-source") {
+          args.pose_source = value;
+        } else if (flag == "--output-dir") {
+          args.output_dir = value;
+        } else if (flag == "--lcm-url") {
+          args.lcm_url = value;
+        } else {
+          return false;
+        }
+        return true;
+      });
+  return args;
+}
+
+MapperProcessConfig buildConfig(const Args& args) {
+  MapperProcessConfig config =
+      args.config_file ? loadMapperConfig(loadYamlFile(*args.config_file)) : MapperProcessConfig{};
+  if (args.pose_source) config.mapper.pose_source = parsePoseSource(*args.pose_source);
+  if (args.output_dir) config.mapper.output_dir = *args.output_dir;
+  if (args.lcm_url) config.lcm_url = *args.lcm_url;
+  if (const std::string e = config.validate(); !e.empty()) throw ConfigError(e);
+  return config;
+}
+
+int run(const Args& args) {
+  const MapperProcessConfig config = buildConfig(args);
+  const MapperConfig& m = config.mapper;
+
+  lcm::LCM lcm(config.lcm_url);
+  if (!lcm.good()) {
+    std::fprintf(stderr, "cblox-mapper: cannot open LCM (url '%s')\n", config.lcm_url.c_str());
+    return 1;
+  }
+  Mapper mapper(m);
+  std::string error;
+  if (!mapper.start(&error)) {
+    std::fprintf(stderr, "cblox-mapper: %s\n", error.c_str());
+    return 1;
+  }
+  installStopHandlers();
+  if (!args.quiet) {
+    std::printf(
+        "mapper: %s poses, %s integrator, voxel %.3f m, truncation %.3f m, %d thread(s); "
+        "new subvolume every %d keyframes%s; output %s\n",
+        poseSourceName(m.pose_source), integratorTypeName(m.integrator_type), m.layer.voxel_size,
+        m.integrator.truncation_distance_m, m.integrator.num_threads,
+        m.creation.max_keyframes_per_subvolume,
+        m.pose_source == PoseSource::kGroundTruth
+            ? (" (a keyframe every " + std::to_string(m.keyframe_every_n_frames) + " frames)")
+                  .c_str()
+            : "",
+        mapper.outputDir().c_str());
+    std::fflush(stdout);
+  }
+
+  MapperNode node(config, &lcm, &mapper);
+  node.subscribe();
+
+  const Clock::time_point start = Clock::now();
+  uint64_t last_integrated = 0;
+  Clock::time_point last_progress = start;
+  auto progress = [&](const MapperStatus& s, const char* prefix) {
+    const double dt = std::chrono::duration<double>(Clock::now() - last_progress).count();
+    const double rate =
+        dt > 0 ? static_cast<double>(s.frames_integrated - last_integrated) / dt : 0;
+    last_integrated = s.frames_integrated;
+    last_progress = Clock::now();
+    std::printf(
+        "mapper: %s%llu frames integrated (%.1f/s), %llu dropped, %llu rejected, "
+        "%zu subvolumes (%llu fused), %zu blocks, %.1f MiB, integration median %.1f ms p99 "
+        "%.1f ms\n",
+        prefix, static_cast<unsigned long long>(s.frames_integrated), rate,
+        static_cast<unsigned long long>(s.frames_dropped),
+        static_cast<unsigned long long>(s.frames_rejected), s.num_submaps,
+        static_cast<unsigned long long>(s.fusion.fused), s.num_blocks,
+        static_cast<double>(s.memory_bytes) / 1048576.0, s.integration_ms_median,
+        s.integration_ms_p99);
+    std::fflush(stdout);
+  };
+
+  SystemdNotifier notifier;
+  std::vector<PeriodicTask> tasks{{config.status_period_s, 0.0, [&] {
+                                     const MapperStatus s = mapper.status();
+                                     node.publishStatus(s);
+                                     node.publishHeartbeat(s, "running");
+                                     notifier.status(
+                                         std::to_string(s.frames_integrated) +
+                                         " frames integrated, " + std::to_string(s.num_submaps) +
+                                         " subvolumes, " + std::to_string(s.num_blocks) + " blocks");
+                                   }}};
+  if (!args.quiet) {
+    tasks.push_back({config.progress_period_s, config.progress_period_s,
+                     [&] { progress(mapper.status(), ""); }});
+  }
+  const int exit_code = serveUntilStopped(lcm, "cblox-mapper", tasks, &notifier);
+  mapper.stop();  // finishes the frame in hand and the export in hand
+  const MapperStatus s = mapper.status();
+  node.publishStatus(s);
+  node.publishHeartbeat(s, "stopped");
+  if (!args.quiet) progress(s, "stopped: ");
+  return exit_code;
+}
+
+}  // namespace
+}  // namespace cblox
+
+int main(int argc, char** argv) {
+  return cblox::runProcess("cblox-mapper",
+                           [&] { return cblox::run(cblox::parseArgs(argc, argv)); });
+}

@@ -1,0 +1,114 @@
+#pragma once
+
+// Settings of the dense mapper (MapperConfig) and of the cblox-mapper process
+// (MapperProcessConfig): plain value types with validate(); YAML loading is in
+// mapper_config_loader.h.
+
+#include <cstddef>
+#include <string>
+
+#include "core/integrator/integrator_config.h"
+#include "core/integrator/make_integrator.h"
+#include "core/maintenance/fusion_scheduler.h"
+#include "core/mesh/mesh_integrator.h"
+#include "core/submap/submap_creation_policy.h"
+#include "core/submap/submap_fusion.h"
+#include "core/tsdf/layer_config.h"
+#include "daemon/mapper/pose_buffer.h"
+
+namespace cblox {
+
+/// Where the mapper's frame poses come from.
+enum class PoseSource {
+  /// Simulator / dataset ground truth (CBLOX_GT_POSE): every pose is tracked, no jumps; the
+  /// mapper synthesises a keyframe every keyframe_every_n_frames integrated frames (id = the
+  /// frame id, or the next unused id when a restarted source repeats frame ids; T_G_K = the
+  /// frame's pose), and the first frame anchors the first subvolume.
+  kGroundTruth,
+  /// The tracker (CBLOX_FRAME_POSE, CBLOX_KEYFRAME, CBLOX_KEYFRAME_POSES).
+  kTracker,
+};
+const char* poseSourceName(PoseSource source);
+
+/// Settings of a Mapper (the `mapper` part of config/mapper.yaml). Plain value type.
+/// Defaults are sized for 752x480 depth at 10-20 Hz on a 2-core computer that also tracks.
+struct MapperConfig {
+  PoseSource pose_source = PoseSource::kGroundTruth;
+
+  /// Subvolume geometry: 4 cm voxels, 8^3-voxel blocks (32 cm).
+  LayerConfig layer{0.04f, 8};
+  /// Integrator (projective by default: ~10x faster than ray casting, BENCHMARKS.md).
+  IntegratorType integrator_type = IntegratorType::kProjective;
+  /// Truncation 3 voxels, depth used up to 5 m, one thread (the other core is the tracker's).
+  IntegratorConfig integrator = defaultIntegratorConfig();
+  /// Mesh extraction for exports.
+  MeshConfig mesh;
+  /// Fusion of subvolumes (map maintenance, and export: projection of the collection into
+  /// one volume).
+  SubmapFusionConfig fusion;
+  /// Map maintenance (tracker mode): covisibility candidates, covariance requests, q_min.
+  FusionSchedulerConfig maintenance;
+  /// The paper's subvolume creation rule.
+  SubmapCreationPolicyConfig creation{10};
+  /// Frame-pose buffer: interpolation gap bound and capacity.
+  PoseBuffer::Config pose_buffer{0.25, 1024};
+
+  /// Ground-truth mode: a keyframe every this many integrated frames (>= 1).
+  int keyframe_every_n_frames = 10;
+  /// Depth frames waiting for their pose (newest wins; older ones are dropped), >= 1.
+  size_t pending_capacity = 4;
+  /// A frame newer than every pose waits at most this long for its pose, then is rejected.
+  double max_pose_wait_s = 0.5;
+  /// A depth frame or pose whose time stamp is this much older than the newest one means the
+  /// source restarted (e.g. cblox-capture run again; simulator time starts at 0): the depth
+  /// order, or the pose buffer, starts afresh (logged) instead of rejecting everything as
+  /// out of order. Smaller steps back are rejected as out of order. 0 = never restart.
+  double restart_after_backwards_s = 2.0;
+  /// Keyframes and pose batches waiting for the maintenance thread (oldest dropped), >= 1.
+  size_t maintenance_queue_capacity = 256;
+  /// Export commands waiting for the worker (more are refused as busy), >= 1.
+  size_t command_queue_capacity = 4;
+  /// Integration times kept for the median / p99 in status, >= 1.
+  size_t timing_window = 200;
+  /// Exports are confined to this directory (created at start).
+  std::string output_dir = "out";
+  /// Niceness of the fusion/export worker thread (setpriority on its thread id), [0, 19].
+  int worker_niceness = 10;
+  /// Also put the worker thread in SCHED_IDLE (runs only when a core is otherwise idle).
+  bool worker_sched_idle = true;
+  /// Minimum interval between two log lines of the same bad-input kind, seconds (> 0).
+  double log_interval_s = 10.0;
+
+  /// The default IntegratorConfig of the mapper (see `integrator`).
+  static IntegratorConfig defaultIntegratorConfig();
+  /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
+  std::string validate() const;
+};
+
+/// Settings of the cblox-mapper process (config/mapper.yaml): the Mapper's own settings
+/// plus LCM, channels and reporting. Plain value type.
+struct MapperProcessConfig {
+  MapperConfig mapper;
+  /// LCM provider URL; empty means LCM's default (udpm://239.255.76.67:7667?ttl=0).
+  std::string lcm_url;
+  std::string depth_channel = "CBLOX_DEPTH";
+  std::string ground_truth_channel = "CBLOX_GT_POSE";
+  std::string frame_pose_channel = "CBLOX_FRAME_POSE";
+  std::string keyframe_channel = "CBLOX_KEYFRAME";
+  std::string keyframe_poses_channel = "CBLOX_KEYFRAME_POSES";
+  std::string command_channel = "CBLOX_CMD";
+  std::string command_reply_channel = "CBLOX_CMD_REPLY";
+  std::string map_status_channel = "CBLOX_MAP_STATUS";
+  std::string heartbeat_channel = "CBLOX_HEARTBEAT";
+  std::string covariance_request_channel = "CBLOX_COV_REQUEST";  ///< tracker mode
+  std::string covariance_reply_channel = "CBLOX_COV_REPLY";      ///< tracker mode
+  /// CBLOX_MAP_STATUS and CBLOX_HEARTBEAT period, seconds (> 0).
+  double status_period_s = 1.0;
+  /// Progress lines on stdout every this many seconds (> 0).
+  double progress_period_s = 5.0;
+
+  /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
+  std::string validate() const;
+};
+
+}  // namespace cblox

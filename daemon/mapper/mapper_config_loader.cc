@@ -1,0 +1,178 @@
+#include "daemon/mapper/mapper_config_loader.h"
+
+#include <cmath>
+
+#include "daemon/common/yaml_config.h"
+
+namespace cblox {
+namespace {
+
+bool present(const YAML::Node& node, const char* key) { return !isAbsent(node) && node[key]; }
+
+// The shared loaders start from the components' defaults; the mapper's defaults differ for a
+// few keys (4 cm voxels, 12 cm truncation, 5 m rays, one integration thread, 80 ms budget): keys
+// absent from the file keep the mapper's values.
+LayerConfig loadMapperLayer(const YAML::Node& node, const LayerConfig& defaults) {
+  LayerConfig layer = loadLayerConfig(node, "layer");
+  if (!present(node, "voxel_size")) layer.voxel_size = defaults.voxel_size;
+  if (!present(node, "voxels_per_side")) layer.voxels_per_side = defaults.voxels_per_side;
+  if (const std::string e = layer.validate(); !e.empty()) throw ConfigError("layer." + e);
+  return layer;
+}
+
+IntegratorConfig loadMapperIntegrator(const YAML::Node& node, float voxel_size,
+                                      const IntegratorConfig& defaults, IntegratorType* type) {
+  // Validate against the mapper's defaults for the absent keys, not the generic ones.
+  YAML::Node merged = isAbsent(node) ? YAML::Node(YAML::NodeType::Map) : YAML::Clone(node);
+  if (!merged["truncation_distance_m"])
+    merged["truncation_distance_m"] = defaults.truncation_distance_m;
+  if (!merged["max_ray_length_m"]) merged["max_ray_length_m"] = defaults.max_ray_length_m;
+  if (!merged["num_threads"]) merged["num_threads"] = defaults.num_threads;
+  if (!merged["max_integration_time_s"]) {
+    merged["max_integration_time_s"] = defaults.max_integration_time_s;
+  }
+  return loadIntegratorConfig(merged, voxel_size, type, "integrator");
+}
+
+SubmapFusionConfig loadFusion(const YAML::Node& node) {
+  const std::string path = "fusion";
+  requireKnownKeys(node, path,
+                   {"max_weight", "min_weight", "min_sample_coverage", "use_color", "num_threads"});
+  SubmapFusionConfig fusion;
+  if (!isAbsent(node)) {
+    readOptional(node, path, "max_weight", &fusion.max_weight);
+    readOptional(node, path, "min_weight", &fusion.min_weight);
+    readOptional(node, path, "min_sample_coverage", &fusion.min_sample_coverage);
+    readOptional(node, path, "use_color", &fusion.use_color);
+    readOptional(node, path, "num_threads", &fusion.num_threads);
+  }
+  if (const std::string e = fusion.validate(); !e.empty()) throw ConfigError(path + "." + e);
+  return fusion;
+}
+
+FusionSchedulerConfig loadMaintenance(const YAML::Node& node) {
+  const std::string path = "maintenance";
+  requireKnownKeys(
+      node, path,
+      {"enabled", "min_shared_landmarks", "min_shared_ratio", "q_min", "max_pairs_per_request",
+       "reply_timeout_s", "retry_after_s", "max_retry_after_s"});
+  FusionSchedulerConfig m;
+  if (!isAbsent(node)) {
+    readOptional(node, path, "enabled", &m.enabled);
+    readOptional(node, path, "min_shared_landmarks", &m.candidates.min_shared_landmarks);
+    readOptional(node, path, "min_shared_ratio", &m.candidates.min_shared_ratio);
+    readOptional(node, path, "q_min", &m.q_min);
+    readOptional(node, path, "max_pairs_per_request", &m.max_pairs_per_request);
+    readOptional(node, path, "reply_timeout_s", &m.reply_timeout_s);
+    readOptional(node, path, "retry_after_s", &m.retry_after_s);
+    readOptional(node, path, "max_retry_after_s", &m.max_retry_after_s);
+  }
+  if (const std::string e = m.validate(); !e.empty()) throw ConfigError(path + "." + e);
+  return m;
+}
+
+}  // namespace
+
+PoseSource parsePoseSource(const std::string& name) {
+  if (name == "ground_truth") return PoseSource::kGroundTruth;
+  if (name == "tracker") return PoseSource::kTracker;
+  throw ConfigError("pose_source must be ground_truth or tracker, got '" + name + "'");
+}
+
+MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
+  MapperProcessConfig config;
+  MapperConfig& m = config.mapper;
+  const std::string top = "mapper";
+  requireKnownKeys(
+      root, top,
+      {"pose_source", "lcm_url", "output_dir", "channels", "layer", "integrator", "mesh", "fusion",
+       "maintenance", "subvolumes", "poses", "queues", "worker", "status"});
+  if (isAbsent(root)) return config;
+
+  if (root["pose_source"]) {
+    std::string name;
+    readOptional(root, top, "pose_source", &name);
+    try {
+      m.pose_source = parsePoseSource(name);
+    } catch (const ConfigError& e) {
+      throw ConfigError(top + "." + e.what());
+    }
+  }
+  readOptional(root, top, "lcm_url", &config.lcm_url);
+  readOptional(root, top, "output_dir", &m.output_dir);
+
+  const YAML::Node channels = root["channels"];
+  requireKnownKeys(
+      channels, "channels",
+      {"depth", "ground_truth_pose", "frame_pose", "keyframe", "keyframe_poses", "command",
+       "command_reply", "map_status", "heartbeat", "covariance_request", "covariance_reply"});
+  if (!isAbsent(channels)) {
+    readOptional(channels, "channels", "depth", &config.depth_channel);
+    readOptional(channels, "channels", "ground_truth_pose", &config.ground_truth_channel);
+    readOptional(channels, "channels", "frame_pose", &config.frame_pose_channel);
+    readOptional(channels, "channels", "keyframe", &config.keyframe_channel);
+    readOptional(channels, "channels", "keyframe_poses", &config.keyframe_poses_channel);
+    readOptional(channels, "channels", "command", &config.command_channel);
+    readOptional(channels, "channels", "command_reply", &config.command_reply_channel);
+    readOptional(channels, "channels", "map_status", &config.map_status_channel);
+    readOptional(channels, "channels", "heartbeat", &config.heartbeat_channel);
+    readOptional(channels, "channels", "covariance_request", &config.covariance_request_channel);
+    readOptional(channels, "channels", "covariance_reply", &config.covariance_reply_channel);
+  }
+
+  m.layer = loadMapperLayer(root["layer"], m.layer);
+  m.integrator = loadMapperIntegrator(root["integrator"], m.layer.voxel_size, m.integrator,
+                                      &m.integrator_type);
+  m.mesh = loadMeshConfig(root["mesh"], "mesh");
+  m.fusion = loadFusion(root["fusion"]);
+  m.maintenance = loadMaintenance(root["maintenance"]);
+
+  const YAML::Node subvolumes = root["subvolumes"];
+  requireKnownKeys(subvolumes, "subvolumes",
+                   {"max_keyframes_per_subvolume", "keyframe_every_n_frames"});
+  if (!isAbsent(subvolumes)) {
+    readOptional(subvolumes, "subvolumes", "max_keyframes_per_subvolume",
+                 &m.creation.max_keyframes_per_subvolume);
+    readOptional(subvolumes, "subvolumes", "keyframe_every_n_frames", &m.keyframe_every_n_frames);
+  }
+
+  const YAML::Node poses = root["poses"];
+  requireKnownKeys(poses, "poses",
+                   {"max_gap_s", "buffer_capacity", "max_wait_s", "restart_after_backwards_s"});
+  if (!isAbsent(poses)) {
+    readOptional(poses, "poses", "max_gap_s", &m.pose_buffer.max_gap_s);
+    readOptional(poses, "poses", "buffer_capacity", &m.pose_buffer.capacity);
+    readOptional(poses, "poses", "max_wait_s", &m.max_pose_wait_s);
+    readOptional(poses, "poses", "restart_after_backwards_s", &m.restart_after_backwards_s);
+  }
+
+  const YAML::Node queues = root["queues"];
+  requireKnownKeys(queues, "queues", {"pending_frames", "maintenance", "commands"});
+  if (!isAbsent(queues)) {
+    readOptional(queues, "queues", "pending_frames", &m.pending_capacity);
+    readOptional(queues, "queues", "maintenance", &m.maintenance_queue_capacity);
+    readOptional(queues, "queues", "commands", &m.command_queue_capacity);
+  }
+
+  const YAML::Node worker = root["worker"];
+  requireKnownKeys(worker, "worker", {"niceness", "sched_idle"});
+  if (!isAbsent(worker)) {
+    readOptional(worker, "worker", "niceness", &m.worker_niceness);
+    readOptional(worker, "worker", "sched_idle", &m.worker_sched_idle);
+  }
+
+  const YAML::Node status = root["status"];
+  requireKnownKeys(status, "status",
+                   {"period_s", "progress_period_s", "timing_window", "log_interval_s"});
+  if (!isAbsent(status)) {
+    readOptional(status, "status", "period_s", &config.status_period_s);
+    readOptional(status, "status", "progress_period_s", &config.progress_period_s);
+    readOptional(status, "status", "timing_window", &m.timing_window);
+    readOptional(status, "status", "log_interval_s", &m.log_interval_s);
+  }
+
+  if (const std::string e = config.validate(); !e.empty()) throw ConfigError(top + ": " + e);
+  return config;
+}
+
+}  // namespace cblox

@@ -1,0 +1,64 @@
+#pragma once
+
+// cblox-mapper's LCM side: subscribes the mapper's input channels behind the message guard,
+// turns messages into Mapper calls, and publishes status, heartbeat, covariance requests and
+// command replies.
+
+#include <cstddef>
+#include <mutex>
+#include <string>
+
+#include <cblox/command_t.hpp>
+#include <cblox/covariance_reply_t.hpp>
+#include <cblox/depth_frame_t.hpp>
+#include <cblox/frame_pose_t.hpp>
+#include <cblox/keyframe_pose_batch_t.hpp>
+#include <cblox/keyframe_t.hpp>
+#include <cblox/pose_stamped_t.hpp>
+#include <lcm/lcm-cpp.hpp>
+
+#include "daemon/common/message_guard.h"
+#include "daemon/mapper/mapper.h"
+#include "daemon/mapper/mapper_config.h"
+
+namespace cblox {
+
+/// LCM <-> Mapper adapter. The handlers run on the LCM (main) thread; replies may be
+/// published from the worker thread, so every publish goes through one mutex. Every message
+/// passes the MessageGuard first: a message that does not decode is reported to the Mapper
+/// as the input problem of its channel (counted and logged), and a handler that throws is
+/// caught there. Thread-safety: publish*() are thread-safe; subscribe() once, before the LCM
+/// thread handles messages.
+class MapperNode {
+ public:
+  /// `config`, `lcm` and `mapper` must outlive the node.
+  MapperNode(const MapperProcessConfig& config, lcm::LCM* lcm, Mapper* mapper)
+      : config_(config), lcm_(lcm), mapper_(mapper), guard_(lcm) {}
+
+  /// Subscribes the channels of the configured pose source and sets the Mapper's covariance
+  /// requester (tracker mode).
+  void subscribe();
+  void publishStatus(const MapperStatus& s);
+  void publishHeartbeat(const MapperStatus& s, const char* state);
+  /// The message guard's counts (refused messages by kind, handler errors).
+  MessageGuardCounts messageCounts() const { return guard_.counts(); }
+
+ private:
+  void onDepth(const depth_frame_t& msg, const std::string& channel);
+  void onGroundTruth(const pose_stamped_t& msg, const std::string& channel);
+  void onFramePose(const frame_pose_t& msg, const std::string& channel);
+  void onKeyframe(const keyframe_t& msg, const std::string& channel);
+  void onCovarianceReply(const covariance_reply_t& msg, const std::string& channel);
+  void onKeyframePoses(const keyframe_pose_batch_t& msg, const std::string& channel);
+  void onCommand(const command_t& msg, const std::string& channel);
+  void publishCovarianceRequest(const FusionCovarianceRequest& request);
+  void publishReply(const MapperReply& reply);
+
+  const MapperProcessConfig& config_;
+  lcm::LCM* lcm_;
+  Mapper* mapper_;
+  MessageGuard guard_;
+  std::mutex publish_mutex_;
+};
+
+}  // namespace cblox

@@ -1,0 +1,200 @@
+// cblox-tracker: the sparse stereo / RGB-D SLAM process. Tracks every frame, builds the
+// sparse map (keyframes, landmarks, local BA, loop closure, global BA) and publishes the
+// poses the dense mapper hangs its subvolumes on.
+//
+//   cblox-tracker --config config/tracker.yaml          # stereo, calibration from the messages
+//   cblox-tracker --initial-pose-from-gt                 # simulator: G = the simulator's frame
+//   cblox-tracker --calibration config/calibration/sim_rig.yaml     # camera from a file
+//   cblox-tracker --mode rgbd                            # depth + registered colour
+//
+// Subscribes: stereo mode CBLOX_STEREO (stereo_pair_t), RGB-D mode CBLOX_DEPTH
+// (depth_frame_t with registered colour); initial_pose ground_truth: CBLOX_GT_POSE
+// (pose_stamped_t); CBLOX_COV_REQUEST (covariance_request_t) from the mapper.
+// Publishes: CBLOX_FRAME_POSE (frame_pose_t) for every frame processed, CBLOX_KEYFRAME
+// (keyframe_t) for every new keyframe, CBLOX_KEYFRAME_POSES (keyframe_pose_batch_t) after
+// every local BA, loop correction and global BA, CBLOX_HEARTBEAT (heartbeat_t) every second,
+// CBLOX_COV_REPLY (covariance_reply_t) for every request (computed on the covariance
+// service's own low-priority thread).
+// Frame poses are of the tracked camera (the rectified left camera, or the RGB-D camera).
+// Exit status: 0 stopped by SIGINT/SIGTERM, 1 runtime error, 2 usage or configuration error.
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "core/vocabulary/binary_vocabulary.h"
+#include "daemon/common/command_line.h"
+#include "daemon/common/run_loop.h"
+#include "daemon/common/yaml_config.h"
+#include "daemon/tracker/tracker_config.h"
+#include "daemon/tracker/tracker_lcm_node.h"
+#include "daemon/tracker/tracker_node.h"
+
+namespace cblox {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+void printUsage() {
+  std::cout
+      << "usage: cblox-tracker [--config FILE] [--mode stereo|rgbd] [--initial-pose-from-gt]\n"
+         "                     [--calibration FILE] [--vocabulary FILE|none]\n"
+         "                     [--lcm-url URL] [--quiet]\n"
+         "  Runs until SIGINT/SIGTERM.\n"
+         "  --initial-pose-from-gt  the first keyframe takes its pose from CBLOX_GT_POSE\n"
+         "                          (initial_pose: ground_truth): G = the simulator's frame\n"
+         "  --calibration FILE      Kalibr/EuRoC-style camera file instead of the messages'\n"
+         "  exit status: 0 stopped by signal, 1 runtime error, 2 usage/configuration\n";
+}
+
+struct Args {
+  std::optional<std::string> config_file, mode, calibration, vocabulary, lcm_url;
+  bool initial_pose_from_gt = false;
+  bool quiet = false;
+};
+
+Args parseArgs(int argc, char** argv) {
+  Args args;
+  parseFlags(
+      argc, argv, printUsage, {"--quiet", "--initial-pose-from-gt"},
+      [&](const std::string& flag) {
+        if (flag == "--quiet") args.quiet = true;
+        if (flag == "--initial-pose-from-gt") args.initial_pose_from_gt = true;
+      },
+      [&](const std::string& flag, const std::string& value) {
+        if (flag == "--config") {
+          args.config_file = value;
+        } else if (flag == "--mode") {
+          args.mode = value;
+        } else if (flag == "--calibration") {
+          args.calibration = value;
+        } else if (flag == "--vocabulary") {
+          args.vocabulary = value;
+        } else if (flag == "--lcm-url") {
+          args.lcm_url = value;
+        } else {
+          return false;
+        }
+        return true;
+      });
+  return args;
+}
+
+TrackerProcessConfig buildConfig(const Args& args) {
+  TrackerProcessConfig config = args.config_file
+                                    ? loadTrackerConfig(loadYamlFile(*args.config_file))
+                                    : TrackerProcessConfig{};
+  if (args.mode) config.tracker.mode = parseTrackerMode(*args.mode);
+  if (args.initial_pose_from_gt) config.tracker.initial_pose = InitialPose::kGroundTruth;
+  if (args.calibration) {
+    config.calibration_source = CalibrationSource::kFile;
+    config.calibration_file = *args.calibration;
+  }
+  if (args.vocabulary) config.vocabulary = *args.vocabulary;
+  if (args.lcm_url) config.lcm_url = *args.lcm_url;
+  finishTrackerConfig(&config);
+  return config;
+}
+
+// The vocabulary the config names (empty: the build's; "none": none). Throws ConfigError.
+std::unique_ptr<BinaryVocabulary> loadVocabulary(const std::string& configured) {
+  if (configured == "none") return nullptr;
+  const std::string path = configured.empty() ? CBLOX_DEFAULT_VOCABULARY : configured;
+  std::string error;
+  std::optional<BinaryVocabulary> vocabulary = BinaryVocabulary::load(path, &error);
+  if (!vocabulary) {
+    throw ConfigError("vocabulary: " + error +
+                      (configured.empty() ? " (the build's default vocabulary; build the "
+                                            "cblox_vocabulary_file target or set vocabulary)"
+                                          : ""));
+  }
+  return std::make_unique<BinaryVocabulary>(std::move(*vocabulary));
+}
+
+int run(const Args& args) {
+  installStopHandlers();  // before the vocabulary loads: a stop then still exits 0
+  const TrackerProcessConfig config = buildConfig(args);
+  const TrackerNodeConfig& t = config.tracker;
+  const std::unique_ptr<BinaryVocabulary> vocabulary = loadVocabulary(config.vocabulary);
+
+  lcm::LCM lcm(config.lcm_url);
+  if (!lcm.good()) {
+    std::fprintf(stderr, "cblox-tracker: cannot open LCM (url '%s')\n", config.lcm_url.c_str());
+    return 1;
+  }
+  TrackerLcmNode lcm_node(config, &lcm);
+  TrackerNode node(t, vocabulary.get(), lcm_node.outputs());
+  if (!args.quiet) {
+    std::printf(
+        "tracker: %s mode on %s, calibration from %s, initial pose %s, %d ORB features, "
+        "vocabulary %s, loop closing %s\n",
+        trackerModeName(t.mode),
+        (t.mode == TrackerMode::kStereo ? config.stereo_channel : config.depth_channel).c_str(),
+        config.calibration_source == CalibrationSource::kFile ? config.calibration_file.c_str()
+                                                              : "the messages",
+        initialPoseName(t.initial_pose), t.slam.frames.orb.num_features,
+        vocabulary
+            ? (config.vocabulary.empty() ? CBLOX_DEFAULT_VOCABULARY : config.vocabulary.c_str())
+            : "none",
+        vocabulary && t.slam.loop_closing_enabled ? "on" : "off");
+    std::fflush(stdout);
+  }
+  lcm_node.subscribe(&node);
+  node.start();
+
+  const Clock::time_point start = Clock::now();
+  uint64_t last_processed = 0;
+  Clock::time_point last_progress = start;
+  auto progress = [&](const TrackerStatus& s, const char* prefix) {
+    const double dt = std::chrono::duration<double>(Clock::now() - last_progress).count();
+    const double rate = dt > 0 ? static_cast<double>(s.frames_processed - last_processed) / dt : 0;
+    last_processed = s.frames_processed;
+    last_progress = Clock::now();
+    std::printf(
+        "tracker: %s%llu frames (%.1f/s): %llu tracked, %llu lost, %llu dropped, %llu "
+        "rejected; %llu keyframes, %llu landmarks, %llu loops; tracking median %.1f ms, frame "
+        "median %.1f ms p95 %.1f ms; %s\n",
+        prefix, static_cast<unsigned long long>(s.frames_processed), rate,
+        static_cast<unsigned long long>(s.frames_tracked),
+        static_cast<unsigned long long>(s.frames_lost),
+        static_cast<unsigned long long>(s.frames_dropped),
+        static_cast<unsigned long long>(s.frames_rejected),
+        static_cast<unsigned long long>(s.keyframes), static_cast<unsigned long long>(s.landmarks),
+        static_cast<unsigned long long>(s.loops_closed), s.tracking_ms_median, s.frame_ms_median,
+        s.frame_ms_p95, s.state.c_str());
+    std::fflush(stdout);
+  };
+
+  SystemdNotifier notifier;
+  std::vector<PeriodicTask> tasks{{config.status_period_s, 0.0, [&] {
+                                     const TrackerStatus s = node.status();
+                                     lcm_node.publishHeartbeat(s, s.state);
+                                     notifier.status(std::to_string(s.frames_processed) +
+                                                     " frames, " + std::to_string(s.keyframes) +
+                                                     " keyframes; " + s.state);
+                                   }}};
+  if (!args.quiet) {
+    tasks.push_back(
+        {config.progress_period_s, config.progress_period_s, [&] { progress(node.status(), ""); }});
+  }
+  const int exit_code = serveUntilStopped(lcm, "cblox-tracker", tasks, &notifier);
+  node.stop();  // finishes the frame in hand, then stops local mapping and loop closing
+  const TrackerStatus s = node.status();
+  lcm_node.publishHeartbeat(s, "stopped");
+  if (!args.quiet) progress(s, "stopped: ");
+  return exit_code;
+}
+
+}  // namespace
+}  // namespace cblox
+
+int main(int argc, char** argv) {
+  return cblox::runProcess("cblox-tracker",
+                           [&] { return cblox::run(cblox::parseArgs(argc, argv)); });
+}

@@ -1,0 +1,25 @@
+# systemd-analyze verify on the cblox units (UNITS: folder of the configured units).
+# Exits 77 (ctest: skipped) where systemd-analyze is not installed.
+find_program(SYSTEMD_ANALYZE systemd-analyze)
+if(NOT SYSTEMD_ANALYZE)
+  message("SKIP: systemd-analyze not found (install systemd to verify the units)")
+  cmake_language(EXIT 77)
+endif()
+file(GLOB units ${UNITS}/*.service ${UNITS}/*.target)
+list(LENGTH units n)
+if(NOT n EQUAL 4)
+  message(FATAL_ERROR "expected 4 units in ${UNITS}, found ${n}")
+endif()
+execute_process(COMMAND ${SYSTEMD_ANALYZE} verify --man=no ${units}
+  RESULT_VARIABLE result OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message("${out}${err}")
+# Any complaint about our units fails (systemd-analyze prints one line per problem).
+foreach(name cblox-capture cblox-tracker cblox-mapper cblox.target)
+  if("${out}${err}" MATCHES "${name}[^\n]*(: |Unknown|not executable|Failed|Invalid)")
+    message(FATAL_ERROR "systemd-analyze verify reports a problem in ${name}")
+  endif()
+endforeach()
+if(NOT result EQUAL 0)
+  message(FATAL_ERROR "systemd-analyze verify exited ${result}")
+endif()
+message("systemd-analyze verify: 4 units OK")

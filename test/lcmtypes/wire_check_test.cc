@@ -46,6 +46,7 @@
 #include <vector>
 
 #include "lcmtypes/wire_check.h"
+#include "test/test_support/lcm_samples.h"
 
 // ---------------------------------------------------------------------------------------
 // Allocation counter. While `counting` is set, every operator new/new[] of this binary
@@ -123,205 +124,42 @@ void put32(Bytes* bytes, size_t offset, uint32_t value) {
 }
 
 // ---------------------------------------------------------------------------------------
-// filled(Tag<T>): a message of type T with distinctive values, strings and non-empty arrays.
+// filled(Tag<T>): a message of type T with distinctive values, strings and non-empty arrays,
+// from the shared builders of test/test_support/lcm_samples.h.
 
 template <typename T>
 struct Tag {};
 
-cblox::pose_t filled(Tag<cblox::pose_t>, double seed = 0.25) {
-  cblox::pose_t p{};
-  for (int i = 0; i < 3; ++i) p.position[i] = 1.5 * i - seed;
-  for (int i = 0; i < 4; ++i) p.orientation[i] = 0.125 * i + seed;
-  return p;
-}
+namespace samples = cblox::test;
 
-cblox::image_t filled(Tag<cblox::image_t>, const std::string& camera_id = "cam0",
-                      int8_t format = cblox::image_t::RGB8, int bytes_per_pixel = 3) {
-  cblox::image_t m{};
-  m.utime = 1'700'000'000'000'001;
-  m.camera_id = camera_id;
-  m.width = 5;
-  m.height = 3;
-  m.row_stride = m.width * bytes_per_pixel + 1;
-  m.pixel_format = format;
-  m.depth_scale = 0.001;
-  m.size = m.row_stride * m.height;
-  for (int i = 0; i < m.size; ++i) m.data.push_back(static_cast<uint8_t>(i * 7 + 1));
-  return m;
+cblox::pose_t filled(Tag<cblox::pose_t>) { return samples::MakePose(0.25); }
+cblox::image_t filled(Tag<cblox::image_t>) {
+  return samples::MakeImage("cam0", cblox::image_t::RGB8, 5, 3, 3, 1);
 }
-
-cblox::camera_calibration_t filled(Tag<cblox::camera_calibration_t>,
-                                   const std::string& camera_id = "cam0") {
-  cblox::camera_calibration_t m{};
-  m.camera_id = camera_id;
-  m.width = 752;
-  m.height = 480;
-  m.fx = 458.6;
-  m.fy = 457.3;
-  m.cx = 367.2;
-  m.cy = 248.4;
-  m.distortion_model = "radtan";
-  m.distortion = {-0.28, 0.07, 0.0002, 1.8e-05};
-  m.num_distortion = static_cast<int8_t>(m.distortion.size());
-  m.T_B_C = filled(Tag<cblox::pose_t>{}, 0.5);
-  return m;
+cblox::camera_calibration_t filled(Tag<cblox::camera_calibration_t>) {
+  return samples::MakeCalibration("cam0", 0.0);
 }
-
-cblox::stereo_pair_t filled(Tag<cblox::stereo_pair_t>) {
-  cblox::stereo_pair_t m{};
-  m.utime = 1'700'000'000'000'002;
-  m.frame_id = 77;
-  m.left = filled(Tag<cblox::image_t>{}, "cam0", cblox::image_t::GRAY8, 1);
-  m.right = filled(Tag<cblox::image_t>{}, "cam1", cblox::image_t::GRAY8, 1);
-  m.left_calibration = filled(Tag<cblox::camera_calibration_t>{}, "cam0");
-  m.right_calibration = filled(Tag<cblox::camera_calibration_t>{}, "cam1");
-  m.T_L_R = filled(Tag<cblox::pose_t>{}, -0.11);
-  m.rectified = 1;
-  return m;
-}
-
-cblox::depth_frame_t filled(Tag<cblox::depth_frame_t>) {
-  cblox::depth_frame_t m{};
-  m.utime = 1'700'000'000'000'003;
-  m.frame_id = 78;
-  m.depth = filled(Tag<cblox::image_t>{}, "depth", cblox::image_t::DEPTH_U16, 2);
-  m.has_color = 1;
-  m.color = filled(Tag<cblox::image_t>{}, "depth", cblox::image_t::RGB8, 3);
-  m.calibration = filled(Tag<cblox::camera_calibration_t>{}, "depth");
-  m.min_depth_m = 0.3F;
-  m.max_depth_m = 4.5F;
-  return m;
-}
-
-cblox::pose_stamped_t filled(Tag<cblox::pose_stamped_t>) {
-  cblox::pose_stamped_t m{};
-  m.utime = 1'700'000'000'000'004;
-  m.frame_id = 4242;
-  m.frame = "G";
-  m.T_G_C = filled(Tag<cblox::pose_t>{}, 1.0);
-  return m;
-}
-
-cblox::frame_pose_t filled(Tag<cblox::frame_pose_t>) {
-  cblox::frame_pose_t m{};
-  m.utime = 1'700'000'000'000'005;
-  m.frame_id = 79;
-  m.T_G_C = filled(Tag<cblox::pose_t>{}, 3.0);
-  m.tracking_state = cblox::frame_pose_t::LOOP_CORRECTED;
-  m.tracking_jump = 1;
-  m.map_epoch = 3;
-  return m;
-}
-
-cblox::keyframe_t filled(Tag<cblox::keyframe_t>) {
-  cblox::keyframe_t m{};
-  m.utime = 1'700'000'000'000'006;
-  m.keyframe_id = 12;
-  m.frame_id = 80;
-  m.T_G_K = filled(Tag<cblox::pose_t>{}, 4.0);
-  m.landmark_ids = {5, 1'000'000'000'007, -3, 99};
-  m.num_landmarks = static_cast<int32_t>(m.landmark_ids.size());
-  return m;
-}
-
+cblox::stereo_pair_t filled(Tag<cblox::stereo_pair_t>) { return samples::MakeStereoPair(); }
+cblox::depth_frame_t filled(Tag<cblox::depth_frame_t>) { return samples::MakeDepthFrame(); }
+cblox::pose_stamped_t filled(Tag<cblox::pose_stamped_t>) { return samples::MakePoseStamped(); }
+cblox::frame_pose_t filled(Tag<cblox::frame_pose_t>) { return samples::MakeFramePose(); }
+cblox::keyframe_t filled(Tag<cblox::keyframe_t>) { return samples::MakeKeyframe(); }
 cblox::keyframe_pose_batch_t filled(Tag<cblox::keyframe_pose_batch_t>) {
-  cblox::keyframe_pose_batch_t m{};
-  m.utime = 1'700'000'000'000'007;
-  m.reason = cblox::keyframe_pose_batch_t::GLOBAL_BA;
-  m.keyframe_ids = {12, 13, 21};
-  m.poses = {filled(Tag<cblox::pose_t>{}, 5.0), filled(Tag<cblox::pose_t>{}, 6.0),
-             filled(Tag<cblox::pose_t>{}, 7.0)};
-  m.num_keyframes = static_cast<int32_t>(m.keyframe_ids.size());
-  return m;
+  return samples::MakeKeyframePoseBatch();
 }
-
 cblox::covariance_request_t filled(Tag<cblox::covariance_request_t>) {
-  cblox::covariance_request_t m{};
-  m.utime = 1'700'000'000'000'008;
-  m.request_id = 901;
-  m.keyframe_i = {12, 13};
-  m.keyframe_j = {40, 41};
-  m.num_pairs = static_cast<int32_t>(m.keyframe_i.size());
-  return m;
+  return samples::MakeCovarianceRequest();
 }
-
-cblox::covariance_pair_t filled(Tag<cblox::covariance_pair_t>, int64_t i = 12, bool ok = true) {
-  cblox::covariance_pair_t p{};
-  p.keyframe_i = i;
-  p.keyframe_j = i + 28;
-  p.ok = ok ? 1 : 0;
-  p.error = ok ? "" : "keyframe not in graph";
-  for (int k = 0; k < 36; ++k) p.sigma_i_given_j[k] = 0.001 * (k + 1);
-  p.q = 0.0375 * static_cast<double>(i);
-  return p;
+cblox::covariance_pair_t filled(Tag<cblox::covariance_pair_t>) {
+  return samples::MakeCovariancePair(12, 40, true);
 }
-
 cblox::covariance_reply_t filled(Tag<cblox::covariance_reply_t>) {
-  cblox::covariance_reply_t m{};
-  m.utime = 1'700'000'000'000'009;
-  m.request_id = 901;
-  m.pairs = {filled(Tag<cblox::covariance_pair_t>{}, 12, true),
-             filled(Tag<cblox::covariance_pair_t>{}, 13, false)};
-  m.num_pairs = static_cast<int32_t>(m.pairs.size());
-  return m;
+  return samples::MakeCovarianceReply();
 }
-
-cblox::command_t filled(Tag<cblox::command_t>) {
-  cblox::command_t m{};
-  m.utime = 1'700'000'000'000'010;
-  m.command_id = 31337;
-  m.sender = "cblox-ctl";
-  m.name = "export_mesh";
-  m.arg_keys = {"path", "voxel_size"};
-  m.arg_values = {"/tmp/mesh.ply", "0.05"};
-  m.num_args = static_cast<int32_t>(m.arg_keys.size());
-  return m;
-}
-
-cblox::command_reply_t filled(Tag<cblox::command_reply_t>) {
-  cblox::command_reply_t m{};
-  m.utime = 1'700'000'000'000'011;
-  m.command_id = 31337;
-  m.ok = 1;
-  m.message = "mesh written";
-  m.value_keys = {"path", "num_triangles", "empty"};
-  m.values = {"/tmp/mesh.ply", "12345", ""};
-  m.num_values = static_cast<int32_t>(m.value_keys.size());
-  return m;
-}
-
-cblox::map_status_t filled(Tag<cblox::map_status_t>) {
-  cblox::map_status_t m{};
-  m.utime = 1'700'000'000'000'012;
-  m.num_subvolumes = 17;
-  m.active_subvolume_id = 16;
-  m.num_blocks = 123'456;
-  m.memory_bytes = 5'000'000'123;
-  m.frames_received = 1001;
-  m.frames_integrated = 950;
-  m.frames_dropped = 40;
-  m.frames_rejected = 11;
-  m.integration_ms_last = 12.5F;
-  m.integration_ms_median = 10.25F;
-  m.integration_ms_p99 = 31.75F;
-  m.fusion_candidates = 9;
-  m.covariance_requested = 8;
-  m.subvolumes_fused = 5;
-  m.rejected_by_q = 2;
-  return m;
-}
-
-cblox::heartbeat_t filled(Tag<cblox::heartbeat_t>) {
-  cblox::heartbeat_t m{};
-  m.utime = 1'700'000'000'000'013;
-  m.process = "cblox-mapper";
-  m.pid = 4711;
-  m.state = "running";
-  m.counter_names = {"frames_in", "frames_out"};
-  m.counter_values = {1'000'000'000'000, -1};
-  m.num_counters = static_cast<int32_t>(m.counter_names.size());
-  return m;
-}
+cblox::command_t filled(Tag<cblox::command_t>) { return samples::MakeCommand(); }
+cblox::command_reply_t filled(Tag<cblox::command_reply_t>) { return samples::MakeCommandReply(); }
+cblox::map_status_t filled(Tag<cblox::map_status_t>) { return samples::MakeMapStatus(); }
+cblox::heartbeat_t filled(Tag<cblox::heartbeat_t>) { return samples::MakeHeartbeat(); }
 
 // ---------------------------------------------------------------------------------------
 // One case per schema type.

@@ -167,14 +167,14 @@ TEST(SystemdNotify, TheMapperProcessSaysReadyPingsAndStops) {
   ASSERT_FALSE(first.empty()) << "no notification from cblox-mapper";
   EXPECT_NE(first.front().text.find("READY=1"), std::string::npos) << first.front().text;
   EXPECT_GE(countWith(first, "STATUS="), 2u);  // READY's and the status task's
-  EXPECT_GE(countWith(first, "WATCHDOG=1"), 8u);  // every ~100 ms for ~1.4 s
+  EXPECT_GE(countWith(first, "WATCHDOG=1"), 5u);  // every 100-150 ms once serving
 
   ASSERT_EQ(::kill(pid, SIGSTOP), 0);  // the whole process hangs: no pings
   const auto stopped = socket.receiveFor(std::chrono::milliseconds(800));
   EXPECT_EQ(countWith(stopped, "WATCHDOG=1"), 0u);
   ASSERT_EQ(::kill(pid, SIGCONT), 0);
   const auto resumed = socket.receiveFor(std::chrono::milliseconds(800));
-  EXPECT_GE(countWith(resumed, "WATCHDOG=1"), 4u);
+  EXPECT_GE(countWith(resumed, "WATCHDOG=1"), 3u);
 
   ASSERT_EQ(::kill(pid, SIGTERM), 0);
   const auto last = socket.receiveFor(std::chrono::milliseconds(1000));

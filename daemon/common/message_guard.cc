@@ -51,17 +51,18 @@ void MessageGuard::handle(const lcm::ReceiveBuffer* rbuf, const std::string& cha
   }
   const size_t kind = static_cast<size_t>(check.error);
   if (kind < kNumWireErrors) ++refused_[kind];
+  const std::string description = channel + ": message of " + std::to_string(size) +
+                                  " bytes refused (" + wireErrorName(check.error) +
+                                  "): " + check.detail;
   if (entry->on_refused) {
     try {
-      entry->on_refused(channel, size, check);
+      entry->on_refused(description);
       return;
     } catch (...) {
       // Fall through to the guard's own log line.
     }
   }
-  problem_log_.report(kind, channel + ": message of " + std::to_string(size) +
-                                " bytes refused (" + wireErrorName(check.error) +
-                                "): " + check.detail);
+  problem_log_.report(kind, description);
 }
 
 MessageGuardCounts MessageGuard::counts() const {

@@ -44,9 +44,9 @@ struct MessageGuardCounts {
 class MessageGuard {
  public:
   using LogSink = std::function<void(const std::string&)>;
-  /// Called for a refused message: channel, size in bytes and what was wrong.
-  using RefusedCallback =
-      std::function<void(const std::string& channel, size_t size, const WireCheck& check)>;
+  /// Called for a refused message with one line saying which channel, how many bytes and
+  /// what was wrong, e.g. "CBLOX_DEPTH: message of 60 bytes refused (truncated): ...".
+  using RefusedCallback = std::function<void(const std::string& description)>;
 
   /// `lcm` must outlive the guard. `log` receives the guard's own lines (default: stderr).
   MessageGuard(lcm::LCM* lcm, LogSink log = nullptr,

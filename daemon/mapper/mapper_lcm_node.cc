@@ -18,10 +18,8 @@ namespace cblox {
 
 void MapperNode::subscribe() {
   const auto refusedAs = [this](InputProblem problem) {
-    return [this, problem](const std::string& channel, size_t size, const WireCheck& check) {
-      mapper_->reportProblem(problem, channel + ": message of " + std::to_string(size) +
-                                          " bytes refused (" + wireErrorName(check.error) +
-                                          "): " + check.detail);
+    return [this, problem](const std::string& description) {
+      mapper_->reportProblem(problem, description);
     };
   };
   guard_.subscribe<depth_frame_t>(

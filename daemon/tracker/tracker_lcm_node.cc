@@ -93,10 +93,8 @@ TrackerNode::Outputs TrackerLcmNode::outputs() {
 void TrackerLcmNode::subscribe(TrackerNode* node) {
   node_ = node;
   const auto refusedAs = [this](TrackerProblem problem) {
-    return [this, problem](const std::string& channel, size_t size, const WireCheck& check) {
-      node_->reportProblem(problem, channel + ": message of " + std::to_string(size) +
-                                        " bytes refused (" + wireErrorName(check.error) +
-                                        "): " + check.detail);
+    return [this, problem](const std::string& description) {
+      node_->reportProblem(problem, description);
     };
   };
   if (config_.tracker.mode == TrackerMode::kStereo) {

@@ -2,7 +2,8 @@
 # default; scripts/package.sh configures /usr and builds the DEB with cpack). The systemd units
 # get the configured prefix's paths in ExecStart, so install to the prefix you configured:
 #   <prefix>/bin/                       cblox-capture, -tracker, -mapper, -ctl, -eval,
-#                                       -integrate, -vocabulary
+#                                       -integrate, -vocabulary; cblox-launch (scripts/,
+#                                       with CBLOX_CONFIG_DIR as its default config folder)
 #   /etc/cblox/                         capture.yaml, tracker.yaml, mapper.yaml, integrate.yaml,
 #                                       calibration/ (CBLOX_CONFIG_DIR; /etc even for /usr/local,
 #                                       where operators look for it)
@@ -17,6 +18,15 @@ set(CBLOX_DATADIR "${CMAKE_INSTALL_FULL_DATADIR}/cblox")
 
 install(TARGETS cblox-capture cblox-tracker cblox-mapper cblox-ctl cblox-eval cblox-integrate
   cblox-vocabulary RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# The launcher: its default config folder becomes CBLOX_CONFIG_DIR (it finds the binaries
+# next to itself).
+set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS
+  ${PROJECT_SOURCE_DIR}/scripts/cblox-launch)
+file(READ ${PROJECT_SOURCE_DIR}/scripts/cblox-launch cblox_launch_text)
+string(REPLACE "\ninstalled_config_dir=/etc/cblox\n" "\ninstalled_config_dir=${CBLOX_CONFIG_DIR}\n"
+  cblox_launch_text "${cblox_launch_text}")
+file(WRITE ${CMAKE_BINARY_DIR}/scripts/cblox-launch "${cblox_launch_text}")
+install(PROGRAMS ${CMAKE_BINARY_DIR}/scripts/cblox-launch DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(FILES config/capture.yaml config/tracker.yaml config/mapper.yaml config/integrate.yaml
   DESTINATION ${CBLOX_CONFIG_DIR})
 install(DIRECTORY config/calibration/ DESTINATION ${CBLOX_CONFIG_DIR}/calibration)

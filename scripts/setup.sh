@@ -8,6 +8,7 @@ packages=(
   build-essential cmake ninja-build ccache pkg-config git
   libeigen3-dev libabsl-dev libyaml-cpp-dev libopencv-dev
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jdk-headless
+  openjdk-17-jre libjchart2d-java xvfb
   libembree-dev libceres-dev libsuitesparse-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libsystemd-dev libcli11-dev nlohmann-json3-dev

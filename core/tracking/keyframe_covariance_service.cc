@@ -170,6 +170,7 @@ std::unique_ptr<KeyframeCovarianceService::Linearization> KeyframeCovarianceServ
 bool KeyframeCovarianceService::reusable(const Linearization& lin,
                                          const KeyframeCovarianceRequest& request) const {
   if (!lin.error.empty()) return false;
+  if (config_.max_linearization_age_s <= 0.0) return false;  // exactly: never reused
   if (std::chrono::duration<double>(std::chrono::steady_clock::now() - lin.built).count() >
       config_.max_linearization_age_s) {
     return false;
@@ -256,6 +257,7 @@ void KeyframeCovarianceService::loop() {
     if (stop_) break;
     const KeyframeCovarianceRequest request = std::move(queue_.front());
     queue_.pop_front();
+    busy_ = true;
     lock.unlock();
     KeyframeCovarianceReply reply;
     bool fresh = false;
@@ -284,7 +286,15 @@ void KeyframeCovarianceService::loop() {
     lock.unlock();
     if (reply_) reply_(reply);
     lock.lock();
+    busy_ = false;
+    idle_cv_.notify_all();
   }
+  idle_cv_.notify_all();
+}
+
+void KeyframeCovarianceService::waitUntilIdle() const {
+  std::unique_lock<std::mutex> lock(mutex_);
+  idle_cv_.wait(lock, [this] { return stop_ || !started_ || (queue_.empty() && !busy_); });
 }
 
 KeyframeCovarianceServiceStats KeyframeCovarianceService::stats() const {

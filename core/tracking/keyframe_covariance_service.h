@@ -127,6 +127,9 @@ class KeyframeCovarianceService {
   void stop();
   /// Queues a request. Never blocks on the computation. Thread-safe.
   void submit(KeyframeCovarianceRequest request);
+  /// Waits until no request is queued or in hand (its reply callback has returned), or the
+  /// service is stopped. Thread-safe; not from the reply callback.
+  void waitUntilIdle() const;
   /// Computes a reply on the calling thread (what the service thread does per request),
   /// with a fresh linearization, neither using nor filling the kept one. Thread-safe with
   /// respect to the map (shared lock); not counted in stats().
@@ -154,9 +157,10 @@ class KeyframeCovarianceService {
 
   mutable std::mutex mutex_;  // guards everything below
   std::condition_variable cv_;
+  mutable std::condition_variable idle_cv_;
   std::deque<KeyframeCovarianceRequest> queue_;
   KeyframeCovarianceServiceStats stats_;
-  bool stop_ = false, started_ = false;
+  bool stop_ = false, started_ = false, busy_ = false;
   std::thread thread_;
   std::unique_ptr<Linearization> kept_;  // the service thread's only
 };

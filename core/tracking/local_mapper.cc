@@ -48,8 +48,11 @@ bool LocalMapper::acceptsKeyframes() const { return queue_.idle(); }
 size_t LocalMapper::queuedKeyframes() const { return queue_.size(); }
 
 void LocalMapper::insertKeyframe(Keyframe* keyframe) {
+  // A new keyframe is more useful than finishing the current BA. Raised before the push:
+  // raised after it, it could land once the worker has taken this very keyframe and reset
+  // the flag for its BA, and abort that BA for nothing (a race that made runs differ).
+  abort_ba_ = true;
   queue_.push(keyframe);
-  abort_ba_ = true;  // a new keyframe is more useful than finishing the current BA
 }
 
 void LocalMapper::stop() {

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "daemon/common/input_silence.h"
 #include "daemon/common/yaml_config.h"
 
 namespace cblox {
@@ -108,7 +109,7 @@ CaptureConfig loadCaptureConfig(const YAML::Node& root) {
   CaptureConfig config;
   requireKnownKeys(root, "capture",
                    {"source", "trajectory", "laps", "rate", "frames", "lcm_url", "channels",
-                    "publish", "depth_encoding", "sim"});
+                    "publish", "depth_encoding", "input_silence_s", "sim"});
   if (isAbsent(root)) return config;
   readOptional(root, "capture", "source", &config.source);
   readOptional(root, "capture", "trajectory", &config.source_config.trajectory);
@@ -123,6 +124,10 @@ CaptureConfig loadCaptureConfig(const YAML::Node& root) {
   if (frames < 0) throw ConfigError("capture.frames must be >= 0, got " + std::to_string(frames));
   config.source_config.max_frames = static_cast<size_t>(frames);
   readOptional(root, "capture", "lcm_url", &config.lcm_url);
+  readOptional(root, "capture", "input_silence_s", &config.input_silence_s);
+  if (const std::string e = validateInputSilence(config.input_silence_s); !e.empty()) {
+    throw ConfigError("capture." + e);
+  }
   const YAML::Node channels = root["channels"];
   requireKnownKeys(channels, "channels", {"stereo", "depth", "ground_truth", "heartbeat"});
   if (!isAbsent(channels)) {

@@ -4,6 +4,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "daemon/common/input_silence.h"
 #include "daemon/common/lcm_messages.h"
 #include "drivers/open_frame_source.h"
 
@@ -32,6 +33,10 @@ struct CaptureConfig {
   bool publish_depth = true;
   bool publish_ground_truth = true;
   DepthEncoding depth_encoding = DepthEncoding::kUint16Millimetres;
+  /// Input-silence health (daemon/common/input_watch.h): the heartbeat reports the frame
+  /// source silent when it produced no frame for this long, seconds; 0 = off. Set it above
+  /// the frame period when playing slower than 0.5 Hz.
+  double input_silence_s = kDefaultInputSilenceS;
 };
 
 /// The sensor-noise presets: "none" (exact images) and "realistic" (image noise 2 grey

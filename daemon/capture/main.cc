@@ -7,16 +7,20 @@
 //   cblox-capture --source sim:hall --write-scene out/hall.ply
 //
 // Channels (configurable): CBLOX_STEREO (stereo_pair_t), CBLOX_DEPTH (depth_frame_t),
-// CBLOX_GT_POSE (pose_stamped_t, sources with ground truth), CBLOX_HEARTBEAT (1 Hz).
+// CBLOX_GT_POSE (pose_stamped_t, sources with ground truth), CBLOX_HEARTBEAT (1 Hz, from a
+// thread of its own; with input_silence_s it reports a source that produces no frames).
 // Exit status: 0 done, 1 runtime error, 2 usage or configuration error.
 
 #include <unistd.h>
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <csignal>
 #include <cstdio>
+#include <functional>
 #include <iostream>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -28,6 +32,7 @@
 #include "daemon/capture/capture_config.h"
 #include "daemon/common/command_line.h"
 #include "daemon/common/heartbeat.h"
+#include "daemon/common/input_watch.h"
 #include "daemon/common/run_loop.h"
 #include "daemon/common/yaml_config.h"
 #include "daemon/common/lcm_messages.h"
@@ -222,21 +227,57 @@ int run(const Args& args) {
   SystemdNotifier notifier;
   notifier.ready("cblox-capture: " + info.name);
   CaptureFrame frame;
-  size_t delivered = 0, errors = 0, publish_failures = 0, gaps = 0;
+  // Counters are read by the heartbeat thread.
+  std::atomic<size_t> delivered{0}, errors{0}, publish_failures{0}, gaps{0};
   int64_t last_id = -1;
   std::optional<int64_t> first_stamp_ns;
   const auto start = Clock::now();
-  auto last_heartbeat = Clock::now() - std::chrono::seconds(2);
+  auto last_status = Clock::now() - std::chrono::seconds(2);
+  // The input is the frame source: silent when it produced no frame for input_silence_s.
+  InputWatch input_watch("cblox-capture", config.input_silence_s);
+  const std::string input_name = "source " + config.source;
+  input_watch.watch(input_name);
   auto send_heartbeat = [&](const char* state) {
     if (!lcm) return;
-    const heartbeat_t hb = HeartbeatBuilder("cblox-capture", state)
-                               .add("frames_published", static_cast<uint64_t>(delivered))
-                               .add("source_gaps", static_cast<uint64_t>(gaps))
-                               .add("source_errors", static_cast<uint64_t>(errors))
-                               .add("publish_failures", static_cast<uint64_t>(publish_failures))
-                               .build();
-    lcm->publish(config.heartbeat_channel, &hb);
+    HeartbeatBuilder hb("cblox-capture", state);
+    hb.add("frames_published", static_cast<uint64_t>(delivered.load()))
+        .add("source_gaps", static_cast<uint64_t>(gaps.load()))
+        .add("source_errors", static_cast<uint64_t>(errors.load()))
+        .add("publish_failures", static_cast<uint64_t>(publish_failures.load()));
+    input_watch.addTo(&hb);
+    const heartbeat_t msg = hb.build();
+    lcm->publish(config.heartbeat_channel, &msg);  // LCM's publish is thread-safe
   };
+  // CBLOX_HEARTBEAT at 1 Hz from a thread of its own, so that it keeps coming (and reports
+  // the silence) while the source produces nothing or the pacing waits.
+  std::mutex heartbeat_mutex;
+  std::condition_variable heartbeat_wake;
+  bool heartbeat_done = false;
+  std::thread heartbeat_thread;
+  if (lcm) {
+    heartbeat_thread = std::thread([&] {
+      std::unique_lock<std::mutex> lock(heartbeat_mutex);
+      while (!heartbeat_done) {
+        lock.unlock();
+        send_heartbeat("running");
+        lock.lock();
+        heartbeat_wake.wait_for(lock, std::chrono::seconds(1), [&] { return heartbeat_done; });
+      }
+    });
+  }
+  const auto stop_heartbeats = [&] {
+    if (!heartbeat_thread.joinable()) return;
+    {
+      std::lock_guard<std::mutex> lock(heartbeat_mutex);
+      heartbeat_done = true;
+    }
+    heartbeat_wake.notify_all();
+    heartbeat_thread.join();
+  };
+  struct StopOnExit {  // also on an early return or an exception
+    std::function<void()> stop;
+    ~StopOnExit() { stop(); }
+  } stop_on_exit{stop_heartbeats};
 
   while (!g_stop_requested) {
     const FrameSource::Status status = source->next(&frame, &error);
@@ -246,6 +287,7 @@ int run(const Args& args) {
       std::fprintf(stderr, "cblox-capture: frame skipped: %s\n", error.c_str());
       continue;
     }
+    input_watch.arrived(input_name);
     if (last_id >= 0 && frame.frame_id > last_id + 1) gaps += frame.frame_id - last_id - 1;
     last_id = frame.frame_id;
     if (!first_stamp_ns) first_stamp_ns = frame.timestamp_ns;
@@ -262,7 +304,7 @@ int run(const Args& args) {
     if (writer) {
       if (!writer->write(frame, &error)) {
         std::fprintf(stderr, "cblox-capture: %s\n", error.c_str());
-        return 1;
+        return 1;  // no heartbeat thread without LCM
       }
     } else {
       const int64_t utime = frame.timestamp_ns / 1000;
@@ -278,10 +320,9 @@ int run(const Args& args) {
         const pose_stamped_t msg = toGroundTruthMsg(frame, utime);
         publish_failures += lcm->publish(config.ground_truth_channel, &msg) != 0;
       }
-      if (Clock::now() - last_heartbeat >= std::chrono::seconds(1)) {
-        send_heartbeat("running");
-        notifier.status(std::to_string(delivered) + " frames published");
-        last_heartbeat = Clock::now();
+      if (Clock::now() - last_status >= std::chrono::seconds(1)) {
+        notifier.status(std::to_string(delivered.load()) + " frames published");
+        last_status = Clock::now();
       }
     }
     ++delivered;
@@ -289,6 +330,7 @@ int run(const Args& args) {
     notifier.pingWatchdogIfDue();
   }
   notifier.stopping();
+  stop_heartbeats();
   send_heartbeat(g_stop_requested ? "stopped" : "finished");
   if (writer && !writer->close(&error)) {
     std::fprintf(stderr, "cblox-capture: %s\n", error.c_str());
@@ -298,8 +340,9 @@ int run(const Args& args) {
   std::printf(
       "capture: %s %zu frames in %.1f s (%.1f frames/s); source gaps %zu, skipped %zu, "
       "publish failures %zu%s\n",
-      writer ? "wrote" : "published", delivered, elapsed, elapsed > 0 ? delivered / elapsed : 0.0,
-      gaps, errors, publish_failures, g_stop_requested ? " (stopped by signal)" : "");
+      writer ? "wrote" : "published", delivered.load(), elapsed,
+      elapsed > 0 ? static_cast<double>(delivered.load()) / elapsed : 0.0, gaps.load(),
+      errors.load(), publish_failures.load(), g_stop_requested ? " (stopped by signal)" : "");
   if (writer) std::printf("capture: folder %s\n", args.render_to->c_str());
   return 0;
 }

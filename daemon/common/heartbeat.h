@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 
 #include <cblox/heartbeat_t.hpp>
 
@@ -28,6 +29,14 @@ class HeartbeatBuilder {
   HeartbeatBuilder& add(const std::string& name, int64_t value);
   /// Appends a duration given in milliseconds as whole microseconds (`name` ends in _us).
   HeartbeatBuilder& addMicroseconds(const std::string& name, double ms);
+
+  /// The state given to the constructor, or the last setState().
+  const std::string& state() const { return msg_.state; }
+  /// Replaces the state (e.g. InputWatch::addTo puts the input silence before it).
+  HeartbeatBuilder& setState(std::string state) {
+    msg_.state = std::move(state);
+    return *this;
+  }
 
   /// The message: utime now (wall clock), this pid, the state, the counters added, then
   /// "cpu_ms" and "rss_kib" of this process.

@@ -31,20 +31,25 @@ void MessageGuard::onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& 
 
 void MessageGuard::handle(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
                           Entry* entry) {
-  WireCheck check;
+  // kDecodeFailed until dispatch() stores the check's result: an exception before that is not
+  // an arrival.
+  WireCheck check{WireError::kDecodeFailed, {}};
   const size_t size = rbuf->data_size;
   try {
     if (entry->dispatch(rbuf->data, size, channel, &check)) {
       ++accepted_;
+      if (input_watch_) input_watch_->arrived(channel);
       return;
     }
   } catch (const std::exception& e) {
     ++handler_errors_;
+    if (input_watch_ && check.ok()) input_watch_->arrived(channel);
     problem_log_.report(kHandlerErrorKind,
                         channel + ": message handler failed, message dropped: " + e.what());
     return;
   } catch (...) {
     ++handler_errors_;
+    if (input_watch_ && check.ok()) input_watch_->arrived(channel);
     problem_log_.report(kHandlerErrorKind,
                         channel + ": message handler failed (unknown exception), message dropped");
     return;
@@ -81,6 +86,7 @@ void MessageGuard::addTo(HeartbeatBuilder* heartbeat) const {
                    c.refused[i]);
   }
   heartbeat->add("handler_errors", c.handler_errors);
+  if (input_watch_) input_watch_->addTo(heartbeat);
 }
 
 }  // namespace cblox

@@ -19,6 +19,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "daemon/common/heartbeat.h"
+#include "daemon/common/input_watch.h"
 #include "daemon/common/rate_limited_log.h"
 #include "lcmtypes/wire_check.h"
 
@@ -39,8 +40,13 @@ struct MessageGuardCounts {
 /// or, without one, logged here once per kind with rate limiting. A handler that throws is
 /// caught, counted as handler_errors and logged the same way.
 ///
-/// Thread-safety: subscribe() before the LCM thread starts handling; the handlers run on the
-/// thread that calls lcm->handle*(); counts() and addTo() are thread-safe (atomics).
+/// With an InputWatch (setInputWatch), every message that passes the wire check on a channel
+/// the watch watches is recorded as an arrival (input-silence health), whether or not its
+/// handler then succeeds; refused messages are not input.
+///
+/// Thread-safety: subscribe() and setInputWatch() before the LCM thread starts handling; the
+/// handlers run on the thread that calls lcm->handle*(); counts() and addTo() are thread-safe
+/// (atomics; the InputWatch is thread-safe).
 class MessageGuard {
  public:
   using LogSink = std::function<void(const std::string&)>;
@@ -73,8 +79,13 @@ class MessageGuard {
     entries_.push_back(std::move(entry));
   }
 
+  /// Records arrivals on the channels `watch` watches (nullptr: none). `watch` must outlive
+  /// the guard's handling of messages and addTo() calls.
+  void setInputWatch(InputWatch* watch) { input_watch_ = watch; }
+
   MessageGuardCounts counts() const;
-  /// Adds "messages_refused_<kind>" for every WireError kind and "handler_errors".
+  /// Adds "messages_refused_<kind>" for every WireError kind and "handler_errors", then, with
+  /// an InputWatch, its counters and state (InputWatch::addTo).
   void addTo(HeartbeatBuilder* heartbeat) const;
 
  private:
@@ -91,6 +102,7 @@ class MessageGuard {
   LogSink log_;
   RateLimitedLog problem_log_;
   std::vector<std::unique_ptr<Entry>> entries_;
+  InputWatch* input_watch_ = nullptr;
   std::atomic<uint64_t> accepted_{0}, handler_errors_{0};
   std::array<std::atomic<uint64_t>, static_cast<size_t>(WireError::kCount)> refused_{};
 };

@@ -9,7 +9,8 @@
 // (pose_stamped_t); tracker mode: CBLOX_FRAME_POSE (frame_pose_t), CBLOX_KEYFRAME
 // (keyframe_t), CBLOX_COV_REPLY (covariance_reply_t); both: CBLOX_KEYFRAME_POSES
 // (keyframe_pose_batch_t), CBLOX_CMD (command_t).
-// Publishes: CBLOX_MAP_STATUS (map_status_t) and CBLOX_HEARTBEAT (heartbeat_t) every second,
+// Publishes: CBLOX_MAP_STATUS (map_status_t) and CBLOX_HEARTBEAT (heartbeat_t) every second
+// (with input_silence_s: input_silent / input_age_ms for depth and poses, in the state too),
 // CBLOX_CMD_REPLY (command_reply_t); tracker mode: CBLOX_COV_REQUEST (covariance_request_t)
 // for the map maintenance's fusion candidates.
 // Poses on CBLOX_GT_POSE / CBLOX_FRAME_POSE are of the body (primary camera) frame B; a depth
@@ -26,6 +27,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "daemon/common/command_line.h"
+#include "daemon/common/input_watch.h"
 #include "daemon/common/run_loop.h"
 #include "daemon/common/yaml_config.h"
 #include "daemon/mapper/mapper.h"
@@ -111,7 +113,13 @@ int run(const Args& args) {
     std::fflush(stdout);
   }
 
+  // Input-silence health: depth frames and the poses of the configured source.
+  InputWatch input_watch("cblox-mapper", config.input_silence_s);
+  input_watch.watch(config.depth_channel);
+  input_watch.watch(m.pose_source == PoseSource::kGroundTruth ? config.ground_truth_channel
+                                                              : config.frame_pose_channel);
   MapperNode node(config, &lcm, &mapper);
+  node.messageGuard().setInputWatch(&input_watch);
   node.subscribe();
 
   const Clock::time_point start = Clock::now();

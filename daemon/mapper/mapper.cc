@@ -305,6 +305,7 @@ bool Mapper::onDepthFrame(DepthFrame frame) {
     }
     last_depth_utime_ = frame.utime;
   }
+  advanceInputClock(frame.utime);
   pending_.push(PendingFrame{std::move(frame), Clock::now()});
   return true;
 }
@@ -332,6 +333,7 @@ bool Mapper::onFramePose(const TimedPose& pose) {
   }
   switch (result) {
     case PoseBuffer::AddResult::kAdded:
+      advanceInputClock(pose.utime);
       pending_.notify();
       return true;
     case PoseBuffer::AddResult::kDuplicate:
@@ -623,9 +625,14 @@ void Mapper::applyBatch(const std::vector<std::pair<KeyframeId, Transformationd>
 void Mapper::maintenanceLoop() {
   std::unique_lock<std::mutex> lock(queue_mutex_);
   while (true) {
-    // The 0.25 s tick lets a timed-out covariance request be followed by a new one.
-    queue_cv_.wait_for(lock, std::chrono::milliseconds(250),
-                       [this] { return stop_ || !maintenance_queue_.empty(); });
+    // The 0.25 s tick lets a timed-out covariance request be followed by a new one; on the
+    // input clock a request follows inputs only.
+    const auto ready = [this] { return stop_ || !maintenance_queue_.empty(); };
+    if (config_.maintenance_clock == MaintenanceClock::kInput) {
+      queue_cv_.wait(lock, ready);
+    } else {
+      queue_cv_.wait_for(lock, std::chrono::milliseconds(250), ready);
+    }
     if (stop_) break;
     if (maintenance_queue_.empty()) {
       lock.unlock();
@@ -680,7 +687,19 @@ void Mapper::applyMaintenanceItem(const MaintenanceItem& item) {
 // Map maintenance (maintenance thread decides, worker fuses)
 
 double Mapper::secondsSinceStart() const {
+  if (config_.maintenance_clock == MaintenanceClock::kInput) {
+    return static_cast<double>(input_clock_us_.load()) * 1e-6;
+  }
   return std::chrono::duration<double>(Clock::now() - start_time_).count();
+}
+
+void Mapper::advanceInputClock(int64_t utime) {
+  std::lock_guard<std::mutex> lock(input_clock_mutex_);
+  if (last_input_utime_ != INT64_MIN && utime > last_input_utime_) {
+    input_clock_us_.fetch_add(utime - last_input_utime_);
+  }
+  // A restarted source's time stamps start a new base; small steps back keep the newest.
+  if (utime > last_input_utime_ || isRestart(last_input_utime_, utime)) last_input_utime_ = utime;
 }
 
 void Mapper::requestCovariances() {

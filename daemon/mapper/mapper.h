@@ -294,7 +294,10 @@ class Mapper {
   // Map maintenance (maintenance thread): answers -> fusion queue; the next request.
   void applyCovarianceReply(const MaintenanceItem& item);
   void requestCovariances();
+  // Seconds on the maintenance clock (MapperConfig::maintenance_clock).
   double secondsSinceStart() const;
+  // kInput clock: an accepted depth frame or pose at `utime` moves it forward.
+  void advanceInputClock(int64_t utime);
   // Worker thread: one accepted pair.
   void fusePair(const FusionPair& pair);
   // Worker thread.
@@ -356,6 +359,9 @@ class Mapper {
   mutable std::mutex scheduler_mutex_;  // guards scheduler_ (a leaf)
   FusionScheduler scheduler_;
   std::chrono::steady_clock::time_point start_time_ = std::chrono::steady_clock::now();
+  std::mutex input_clock_mutex_;  // guards last_input_utime_ (a leaf)
+  int64_t last_input_utime_ = INT64_MIN;
+  std::atomic<int64_t> input_clock_us_{0};
 };
 
 /// A distinct colour per submap id (golden-ratio hue steps, full saturation, bright), for

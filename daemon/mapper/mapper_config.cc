@@ -60,6 +60,7 @@ std::string MapperProcessConfig::validate() const {
   if (!(status_period_s > 0.0) || !std::isfinite(status_period_s)) {
     return "status.period_s must be finite and > 0";
   }
+  if (std::string e = validateInputSilence(input_silence_s); !e.empty()) return e;
   if (!(progress_period_s > 0.0) || !std::isfinite(progress_period_s)) {
     return "status.progress_period_s must be finite and > 0";
   }

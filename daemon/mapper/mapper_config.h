@@ -14,6 +14,7 @@
 #include "core/submap/submap_creation_policy.h"
 #include "core/submap/submap_fusion.h"
 #include "core/tsdf/layer_config.h"
+#include "daemon/common/input_silence.h"
 #include "daemon/mapper/pose_buffer.h"
 
 namespace cblox {
@@ -29,6 +30,19 @@ enum class PoseSource {
   kTracker,
 };
 const char* poseSourceName(PoseSource source);
+
+/// What the map maintenance's times (covariance reply timeout, retry back-off) are measured
+/// on.
+enum class MaintenanceClock {
+  /// The computer's monotonic clock, with a 0.25 s tick that follows a timed-out request
+  /// by a new one (live).
+  kSteady,
+  /// The inputs' time: the time stamps of accepted depth frames and poses, summed over
+  /// restarts, and no tick: a request follows only a keyframe, a pose batch or a reply.
+  /// With inputs given one at a time and waitUntilIdle() after each, every decision depends
+  /// on the inputs alone (deterministic replay, cblox-replay).
+  kInput,
+};
 
 /// Settings of a Mapper (the `mapper` part of config/mapper.yaml). Plain value type.
 /// Defaults are sized for 752x480 depth at 10-20 Hz on a 2-core computer that also tracks.
@@ -78,6 +92,8 @@ struct MapperConfig {
   bool worker_sched_idle = true;
   /// Minimum interval between two log lines of the same bad-input kind, seconds (> 0).
   double log_interval_s = 10.0;
+  /// The clock of map maintenance (kInput for deterministic replay; not a YAML key).
+  MaintenanceClock maintenance_clock = MaintenanceClock::kSteady;
 
   /// The default IntegratorConfig of the mapper (see `integrator`).
   static IntegratorConfig defaultIntegratorConfig();
@@ -106,6 +122,10 @@ struct MapperProcessConfig {
   double status_period_s = 1.0;
   /// Progress lines on stdout every this many seconds (> 0).
   double progress_period_s = 5.0;
+  /// Input-silence health (daemon/common/input_watch.h): the heartbeat reports CBLOX_DEPTH or
+  /// the pose channel (CBLOX_GT_POSE or CBLOX_FRAME_POSE, by pose source) silent after this
+  /// long without a message, seconds; 0 = off (finite, >= 0; checked by loadMapperConfig).
+  double input_silence_s = kDefaultInputSilenceS;
 
   /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
   std::string validate() const;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "daemon/common/input_silence.h"
 #include "daemon/common/yaml_config.h"
 
 namespace cblox {
@@ -85,8 +86,9 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   const std::string top = "mapper";
   requireKnownKeys(
       root, top,
-      {"pose_source", "lcm_url", "output_dir", "channels", "layer", "integrator", "mesh", "fusion",
-       "maintenance", "subvolumes", "poses", "queues", "worker", "status"});
+      {"pose_source", "lcm_url", "output_dir", "input_silence_s", "channels", "layer",
+       "integrator", "mesh", "fusion", "maintenance", "subvolumes", "poses", "queues", "worker",
+       "status"});
   if (isAbsent(root)) return config;
 
   if (root["pose_source"]) {
@@ -100,6 +102,10 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   }
   readOptional(root, top, "lcm_url", &config.lcm_url);
   readOptional(root, top, "output_dir", &m.output_dir);
+  readOptional(root, top, "input_silence_s", &config.input_silence_s);
+  if (const std::string e = validateInputSilence(config.input_silence_s); !e.empty()) {
+    throw ConfigError(top + "." + e);
+  }
 
   const YAML::Node channels = root["channels"];
   requireKnownKeys(

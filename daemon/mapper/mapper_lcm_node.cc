@@ -83,6 +83,7 @@ void MapperNode::publishHeartbeat(const MapperStatus& s, const char* state) {
       .add("frames_integrated", s.frames_integrated)
       .add("frames_dropped", s.frames_dropped)
       .add("frames_rejected", s.frames_rejected)
+      .add("frames_pending", s.frames_pending)  // queue depth (cblox-ctl status --all)
       .add("subvolumes", static_cast<uint64_t>(s.num_submaps))
       .add("keyframes", s.keyframes_applied)
       .add("pose_batches", s.keyframe_batches)

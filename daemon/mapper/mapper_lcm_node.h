@@ -42,6 +42,8 @@ class MapperNode {
   void publishHeartbeat(const MapperStatus& s, const char* state);
   /// The message guard's counts (refused messages by kind, handler errors).
   MessageGuardCounts messageCounts() const { return guard_.counts(); }
+  /// The guard every subscription goes through (e.g. to set its InputWatch before handling).
+  MessageGuard& messageGuard() { return guard_; }
 
  private:
   void onDepth(const depth_frame_t& msg, const std::string& channel);

@@ -1,51 +1,74 @@
-// cblox-ctl: sends one command to the mapper over LCM and prints its reply.
+// cblox-ctl: sends one command to the mapper over LCM and prints its reply, or summarises the
+// health of every cblox process from their heartbeats.
 //
 //   cblox-ctl status
 //   cblox-ctl export-mesh map.ply
 //   cblox-ctl export-submap-meshes submaps/
 //   cblox-ctl --timeout 30 --lcm-url "udpm://239.255.76.67:7667?ttl=0" export-mesh map.ply
+//   cblox-ctl status --all                      # every process: pid, state, rates, CPU, ...
+//   cblox-ctl status --all --listen 3 --expect tracker,mapper
 //
 // Paths are relative to the mapper's configured output directory (the mapper rejects
 // absolute paths outside it and any "..").
-// Exit status: 0 the command succeeded, 1 the mapper answered with a failure, 2 usage
-// error, 3 no reply within the timeout (is cblox-mapper running, on the same LCM URL?).
+// `status --all` listens to CBLOX_HEARTBEAT and CBLOX_MAP_STATUS for --listen seconds (1.5)
+// and prints one row per process heard (and per expected process not heard), then the map.
+// Every message is decoded through the wire check (lcmtypes/wire_check.h): a malformed
+// message is counted and ignored, never trusted.
+// Exit status: 0 the command succeeded (status --all: every expected process is alive),
+// 1 the mapper answered with a failure, 2 usage error, 3 no reply within the timeout (is
+// cblox-mapper running, on the same LCM URL?), 4 status --all: an expected process was not
+// heard, or its last heartbeat said it stopped.
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
 #include <cblox/command_reply_t.hpp>
 #include <cblox/command_t.hpp>
+#include <cblox/heartbeat_t.hpp>
+#include <cblox/map_status_t.hpp>
 #include <lcm/lcm-cpp.hpp>
+
+#include "lcmtypes/wire_check.h"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
 
-void printUsage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: cblox-ctl [--lcm-url URL] [--timeout SECONDS] [--channel CBLOX_CMD]\n"
-               "                 [--reply-channel CBLOX_CMD_REPLY] COMMAND [ARG]\n"
-               "commands:\n"
-               "  status                      print the mapper's statistics\n"
-               "  export-mesh PATH            write the global mesh (PLY) to PATH\n"
-               "  export-submap-meshes DIR    write one mesh per subvolume, coloured by subvolume\n"
-               "exit status: 0 ok, 1 the mapper reported a failure, 2 usage, 3 no reply\n");
-}
+constexpr int kExitOk = 0;
+constexpr int kExitFailed = 1;
+constexpr int kExitUsage = 2;
+constexpr int kExitNoReply = 3;
+constexpr int kExitNotAlive = 4;
 
-struct Reply {
-  std::optional<cblox::command_reply_t> reply;
-  int64_t expected_id = 0;
-  void onReply(const lcm::ReceiveBuffer*, const std::string&, const cblox::command_reply_t* msg) {
-    if (msg->command_id == expected_id) reply = *msg;
-  }
-};
+void printUsage(std::FILE* out) {
+  std::fprintf(
+      out,
+      "usage: cblox-ctl [--lcm-url URL] [--timeout SECONDS] [--channel CBLOX_CMD]\n"
+      "                 [--reply-channel CBLOX_CMD_REPLY] COMMAND [ARG]\n"
+      "       cblox-ctl [--lcm-url URL] status --all [--listen SECONDS] [--expect LIST]\n"
+      "                 [--heartbeat-channel CBLOX_HEARTBEAT]\n"
+      "                 [--map-status-channel CBLOX_MAP_STATUS]\n"
+      "commands:\n"
+      "  status                      print the mapper's statistics\n"
+      "  status --all                listen to every process's heartbeat (--listen, default\n"
+      "                              1.5 s) and print one row per process and the map;\n"
+      "                              --expect: processes that must be alive (comma list,\n"
+      "                              default capture,tracker,mapper; '' = none)\n"
+      "  export-mesh PATH            write the global mesh (PLY) to PATH\n"
+      "  export-submap-meshes DIR    write one mesh per subvolume, coloured by subvolume\n"
+      "exit status: 0 ok, 1 the mapper reported a failure, 2 usage, 3 no reply,\n"
+      "             4 status --all: an expected process is not alive\n");
+}
 
 int64_t nowUtime() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -53,52 +76,373 @@ int64_t nowUtime() {
       .count();
 }
 
+bool parseSeconds(const std::string& text, double* seconds) {
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || *end != '\0' || !(value > 0.0) || !std::isfinite(value)) return false;
+  *seconds = value;
+  return true;
+}
+
+/// Handles `lcm` for `seconds` (or until `done()`); false when receiving fails.
+template <typename Done>
+bool listen(lcm::LCM& lcm, double seconds, Done done) {
+  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(seconds));
+  while (!done() && Clock::now() < deadline) {
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
+    const int wait_ms = static_cast<int>(std::max<int64_t>(1, std::min<int64_t>(left, 200)));
+    if (lcm.handleTimeout(wait_ms) < 0) return false;
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------
+// One command to the mapper.
+
+struct Reply {
+  std::optional<cblox::command_reply_t> reply;
+  int64_t expected_id = 0;
+  uint64_t refused = 0;  // replies that did not pass the wire check
+  void onReply(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    cblox::command_reply_t msg;
+    if (!cblox::decodeChecked(rbuf->data, rbuf->data_size, &msg).ok()) {
+      ++refused;
+      return;
+    }
+    if (msg.command_id == expected_id) reply = std::move(msg);
+  }
+};
+
+int runCommand(lcm::LCM& lcm, cblox::command_t command, const std::string& channel,
+               const std::string& reply_channel, double timeout_s) {
+  command.num_args = static_cast<int32_t>(command.arg_keys.size());
+  command.utime = nowUtime();
+  command.command_id = (static_cast<int64_t>(::getpid()) << 32) ^ (command.utime & 0xFFFFFFFF);
+  command.sender = "cblox-ctl";
+  Reply reply;
+  reply.expected_id = command.command_id;
+  lcm.subscribe(reply_channel, &Reply::onReply, &reply);
+  if (lcm.publish(channel, &command) != 0) {
+    std::fprintf(stderr, "cblox-ctl: cannot publish on %s\n", channel.c_str());
+    return kExitUsage;
+  }
+  if (!listen(lcm, timeout_s, [&] { return reply.reply.has_value(); })) {
+    std::fprintf(stderr, "cblox-ctl: LCM receive failed\n");
+    return kExitUsage;
+  }
+  if (!reply.reply) {
+    std::fprintf(
+        stderr,
+        "cblox-ctl: no reply to '%s' on %s within %.1f s (is cblox-mapper running on "
+        "the same LCM URL?)%s\n",
+        command.name.c_str(), reply_channel.c_str(), timeout_s,
+        reply.refused > 0
+            ? (" (" + std::to_string(reply.refused) + " malformed replies ignored)").c_str()
+            : "");
+    return kExitNoReply;
+  }
+  const cblox::command_reply_t& r = *reply.reply;
+  std::printf("%s: %s\n", r.ok ? "ok" : "failed", r.message.c_str());
+  for (int32_t i = 0; i < r.num_values && i < static_cast<int32_t>(r.values.size()) &&
+                      i < static_cast<int32_t>(r.value_keys.size());
+       ++i) {
+    std::printf("  %s: %s\n", r.value_keys[i].c_str(), r.values[i].c_str());
+  }
+  return r.ok ? kExitOk : kExitFailed;
+}
+
+// ---------------------------------------------------------------------------------------
+// status --all: the heartbeats of every process.
+
+/// "cblox-mapper" -> "mapper"; other names unchanged.
+std::string shortName(const std::string& process) {
+  const std::string prefix = "cblox-";
+  return process.rfind(prefix, 0) == 0 ? process.substr(prefix.size()) : process;
+}
+
+std::optional<int64_t> counter(const cblox::heartbeat_t& hb, const std::string& name) {
+  const size_t n = std::min(hb.counter_names.size(), hb.counter_values.size());
+  for (size_t i = 0; i < n; ++i) {
+    if (hb.counter_names[i] == name) return hb.counter_values[i];
+  }
+  return std::nullopt;
+}
+
+/// The first of `names` the heartbeat carries.
+std::optional<std::string> firstCounter(const cblox::heartbeat_t& hb,
+                                        std::initializer_list<const char*> names) {
+  for (const char* name : names) {
+    if (counter(hb, name)) return std::string(name);
+  }
+  return std::nullopt;
+}
+
+/// The process's own state without the input-silence prefix ("input silent: ...; running"
+/// -> "running").
+std::string baseState(const std::string& state) {
+  if (state.rfind("input silent: ", 0) != 0) return state;
+  const size_t separator = state.find("; ");
+  return separator == std::string::npos ? std::string() : state.substr(separator + 2);
+}
+
+/// A process's last heartbeat says it has ended (cblox processes send one on the way out).
+bool saysEnded(const cblox::heartbeat_t& hb) {
+  const std::string state = baseState(hb.state);
+  return state == "stopped" || state == "finished";
+}
+
+struct Heard {
+  cblox::heartbeat_t first;  // the first heartbeat heard of the newest pid
+  cblox::heartbeat_t last;   // the newest
+  int count = 0;
+};
+
+struct StatusListener {
+  std::map<std::string, Heard> processes;  // by process name
+  std::optional<cblox::map_status_t> map_status;
+  uint64_t refused = 0;
+
+  void onHeartbeat(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    cblox::heartbeat_t hb;
+    if (!cblox::decodeChecked(rbuf->data, rbuf->data_size, &hb).ok()) {
+      ++refused;
+      return;
+    }
+    Heard& heard = processes[hb.process];
+    if (heard.count == 0 || heard.last.pid != hb.pid) {  // first, or the process restarted
+      heard.first = hb;
+      heard.count = 0;
+    }
+    if (heard.count == 0 || hb.utime >= heard.last.utime) heard.last = hb;
+    ++heard.count;
+  }
+  void onMapStatus(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    cblox::map_status_t msg;
+    if (!cblox::decodeChecked(rbuf->data, rbuf->data_size, &msg).ok()) {
+      ++refused;
+      return;
+    }
+    if (!map_status || msg.utime >= map_status->utime) map_status = std::move(msg);
+  }
+};
+
+std::string format(const char* fmt, double value) {
+  char text[64];
+  std::snprintf(text, sizeof(text), fmt, value);
+  return text;
+}
+
+/// One row of the table (process heard).
+struct Row {
+  std::string name, pid, last;
+  // "-" where the heartbeat lacks the counters (constructed, not assigned: GCC 12 warns
+  // falsely, -Wrestrict, on assigning a literal here).
+  std::string rate{"-"}, dropped{"-"}, queue{"-"}, cpu{"-"}, rss{"-"}, input{"-"};
+  std::string state;
+};
+
+Row describe(const std::string& name, const Heard& heard, int64_t now_utime) {
+  const cblox::heartbeat_t& hb = heard.last;
+  Row row;
+  row.name = name;
+  row.pid = std::to_string(hb.pid);
+  row.last =
+      format("%.1fs", std::max<double>(0.0, static_cast<double>(now_utime - hb.utime) * 1e-6));
+  // Between the first and the last heartbeat of this pid.
+  const double dt_s = static_cast<double>(hb.utime - heard.first.utime) * 1e-6;
+  const bool two = heard.count >= 2 && dt_s > 0.0;
+  if (const auto frames = firstCounter(
+          hb, {"frames_published", "frames_processed", "frames_integrated", "frames_received"})) {
+    if (two) {
+      const auto a = counter(heard.first, *frames);
+      const auto b = counter(hb, *frames);
+      if (a && b) row.rate = format("%.1f", static_cast<double>(*b - *a) / dt_s);
+    }
+  }
+  if (const auto name_dropped = firstCounter(hb, {"frames_dropped", "source_gaps"})) {
+    row.dropped = std::to_string(*counter(hb, *name_dropped));
+  }
+  if (const auto name_queue = firstCounter(hb, {"queue_depth", "frames_pending"})) {
+    row.queue = std::to_string(*counter(hb, *name_queue));
+  }
+  if (const auto cpu = counter(hb, "cpu_ms")) {
+    const auto cpu_first = counter(heard.first, "cpu_ms");
+    if (two && cpu_first) {
+      row.cpu = format("%.0f%%", 100.0 * static_cast<double>(*cpu - *cpu_first) / (dt_s * 1000.0));
+    } else {
+      row.cpu = format("%.1fs", static_cast<double>(*cpu) / 1000.0);
+    }
+  }
+  if (const auto rss = counter(hb, "rss_kib")) {
+    row.rss = format("%.0fMiB", static_cast<double>(*rss) / 1024.0);
+  }
+  const auto silent = counter(hb, "input_silent");
+  const auto age = counter(hb, "input_age_ms");
+  if (silent && age) {
+    row.input =
+        (*silent != 0 ? "SILENT " : "ok ") + format("%.1fs", static_cast<double>(*age) / 1000.0);
+  }
+  row.state = hb.state;
+  return row;
+}
+
+std::vector<std::string> splitList(const std::string& text) {
+  std::vector<std::string> out;
+  size_t begin = 0;
+  while (begin <= text.size()) {
+    const size_t end = std::min(text.find(',', begin), text.size());
+    const std::string item = text.substr(begin, end - begin);
+    if (!item.empty()) out.push_back(shortName(item));
+    begin = end + 1;
+  }
+  return out;
+}
+
+int runStatusAll(lcm::LCM& lcm, const std::string& heartbeat_channel,
+                 const std::string& map_status_channel, double listen_s,
+                 const std::vector<std::string>& expected) {
+  StatusListener listener;
+  lcm.subscribe(heartbeat_channel, &StatusListener::onHeartbeat, &listener);
+  lcm.subscribe(map_status_channel, &StatusListener::onMapStatus, &listener);
+  if (!listen(lcm, listen_s, [] { return false; })) {
+    std::fprintf(stderr, "cblox-ctl: LCM receive failed\n");
+    return kExitUsage;
+  }
+  const int64_t now = nowUtime();
+
+  // Expected processes first (in the order given), then every other one heard.
+  std::vector<std::string> order = expected;
+  std::map<std::string, const Heard*> by_name;
+  for (const auto& [process, heard] : listener.processes) by_name[shortName(process)] = &heard;
+  for (const auto& [name, heard] : by_name) {
+    if (std::find(order.begin(), order.end(), name) == order.end()) order.push_back(name);
+  }
+
+  std::printf("cblox status: heartbeats on %s for %.1f s\n", heartbeat_channel.c_str(), listen_s);
+  const char* header_fmt = "%-10s %7s %6s %8s %7s %5s %6s %7s %-12s %s\n";
+  std::printf(header_fmt, "process", "pid", "last", "frames/s", "dropped", "queue", "cpu", "rss",
+              "input", "state");
+  std::vector<std::string> not_alive;
+  for (const std::string& name : order) {
+    const auto it = by_name.find(name);
+    const bool is_expected = std::find(expected.begin(), expected.end(), name) != expected.end();
+    if (it == by_name.end()) {
+      std::printf("%-10s %7s  not heard (no heartbeat in %.1f s)\n", name.c_str(), "-", listen_s);
+      if (is_expected) not_alive.push_back(name);
+      continue;
+    }
+    const Row r = describe(name, *it->second, now);
+    std::printf(header_fmt, r.name.c_str(), r.pid.c_str(), r.last.c_str(), r.rate.c_str(),
+                r.dropped.c_str(), r.queue.c_str(), r.cpu.c_str(), r.rss.c_str(), r.input.c_str(),
+                r.state.c_str());
+    if (is_expected && saysEnded(it->second->last)) not_alive.push_back(name);
+  }
+  if (listener.map_status) {
+    const cblox::map_status_t& m = *listener.map_status;
+    std::printf(
+        "map: %d subvolumes (active %lld), %lld blocks, %.1f MiB; frames %lld integrated, %lld "
+        "dropped, %lld rejected; integration median %.1f ms, p99 %.1f ms; %lld fused\n",
+        m.num_subvolumes, static_cast<long long>(m.active_subvolume_id),
+        static_cast<long long>(m.num_blocks), static_cast<double>(m.memory_bytes) / 1048576.0,
+        static_cast<long long>(m.frames_integrated), static_cast<long long>(m.frames_dropped),
+        static_cast<long long>(m.frames_rejected), static_cast<double>(m.integration_ms_median),
+        static_cast<double>(m.integration_ms_p99), static_cast<long long>(m.subvolumes_fused));
+  } else {
+    std::printf("map: no %s in %.1f s\n", map_status_channel.c_str(), listen_s);
+  }
+  if (listener.refused > 0) {
+    std::printf("note: %llu malformed messages ignored\n",
+                static_cast<unsigned long long>(listener.refused));
+  }
+  std::printf(
+      "cpu: share of one core between the first and last heartbeat heard (total CPU "
+      "time in s when only one was heard)\n");
+  if (expected.empty()) return kExitOk;
+  if (not_alive.empty()) {
+    std::printf("alive: all expected processes (");
+  } else {
+    std::printf("NOT ALIVE: ");
+    for (size_t i = 0; i < not_alive.size(); ++i) {
+      std::printf("%s%s", i ? ", " : "", not_alive[i].c_str());
+    }
+    std::printf(" (expected: ");
+  }
+  for (size_t i = 0; i < expected.size(); ++i) {
+    std::printf("%s%s", i ? ", " : "", expected[i].c_str());
+  }
+  std::printf(")\n");
+  return not_alive.empty() ? kExitOk : kExitNotAlive;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string url, channel = "CBLOX_CMD", reply_channel = "CBLOX_CMD_REPLY";
-  double timeout_s = 10.0;
+  std::string heartbeat_channel = "CBLOX_HEARTBEAT", map_status_channel = "CBLOX_MAP_STATUS";
+  double timeout_s = 10.0, listen_s = 1.5;
+  bool all = false, listen_given = false, expect_given = false;
+  std::vector<std::string> expected = {"capture", "tracker", "mapper"};
   std::vector<std::string> positional;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     auto value = [&]() -> std::string {
       if (i + 1 >= argc) {
         std::fprintf(stderr, "cblox-ctl: %s needs a value\n", arg.c_str());
-        std::exit(2);
+        std::exit(kExitUsage);
       }
       return argv[++i];
     };
     if (arg == "--help" || arg == "-h") {
       printUsage(stdout);
-      return 0;
+      return kExitOk;
     } else if (arg == "--lcm-url") {
       url = value();
     } else if (arg == "--timeout") {
       const std::string text = value();
-      char* end = nullptr;
-      timeout_s = std::strtod(text.c_str(), &end);
-      if (end == text.c_str() || *end != '\0' || !(timeout_s > 0.0)) {
+      if (!parseSeconds(text, &timeout_s)) {
         std::fprintf(stderr, "cblox-ctl: --timeout needs seconds > 0, got '%s'\n", text.c_str());
-        return 2;
+        return kExitUsage;
       }
+    } else if (arg == "--listen") {
+      const std::string text = value();
+      if (!parseSeconds(text, &listen_s)) {
+        std::fprintf(stderr, "cblox-ctl: --listen needs seconds > 0, got '%s'\n", text.c_str());
+        return kExitUsage;
+      }
+      listen_given = true;
+    } else if (arg == "--expect") {
+      expected = splitList(value());
+      expect_given = true;
+    } else if (arg == "--all") {
+      all = true;
     } else if (arg == "--channel") {
       channel = value();
     } else if (arg == "--reply-channel") {
       reply_channel = value();
+    } else if (arg == "--heartbeat-channel") {
+      heartbeat_channel = value();
+    } else if (arg == "--map-status-channel") {
+      map_status_channel = value();
     } else if (arg.rfind("--", 0) == 0) {
       std::fprintf(stderr, "cblox-ctl: unknown option '%s'\n", arg.c_str());
       printUsage(stderr);
-      return 2;
+      return kExitUsage;
     } else {
       positional.push_back(arg);
     }
   }
   if (positional.empty()) {
     printUsage(stderr);
-    return 2;
+    return kExitUsage;
+  }
+  const std::string& verb = positional[0];
+  if ((all || listen_given || expect_given) && !(verb == "status" && all)) {
+    std::fprintf(stderr, "cblox-ctl: --all, --listen and --expect go with 'status --all'\n");
+    return kExitUsage;
   }
   cblox::command_t command;
-  const std::string& verb = positional[0];
   if (verb == "status" && positional.size() == 1) {
     command.name = "status";
   } else if (verb == "export-mesh" && positional.size() == 2) {
@@ -112,45 +456,14 @@ int main(int argc, char** argv) {
   } else {
     std::fprintf(stderr, "cblox-ctl: unknown command or wrong arguments: '%s'\n", verb.c_str());
     printUsage(stderr);
-    return 2;
+    return kExitUsage;
   }
-  command.num_args = static_cast<int32_t>(command.arg_keys.size());
-  command.utime = nowUtime();
-  command.command_id = (static_cast<int64_t>(::getpid()) << 32) ^ (command.utime & 0xFFFFFFFF);
-  command.sender = "cblox-ctl";
 
   lcm::LCM lcm(url);
   if (!lcm.good()) {
     std::fprintf(stderr, "cblox-ctl: cannot open LCM (url '%s')\n", url.c_str());
-    return 2;
+    return kExitUsage;
   }
-  Reply reply;
-  reply.expected_id = command.command_id;
-  lcm.subscribe(reply_channel, &Reply::onReply, &reply);
-  if (lcm.publish(channel, &command) != 0) {
-    std::fprintf(stderr, "cblox-ctl: cannot publish on %s\n", channel.c_str());
-    return 2;
-  }
-  const auto deadline =
-      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
-  while (!reply.reply && Clock::now() < deadline) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-    if (lcm.handleTimeout(static_cast<int>(std::max<int64_t>(1, std::min<int64_t>(left.count(), 200)))) < 0) {
-      std::fprintf(stderr, "cblox-ctl: LCM receive failed\n");
-      return 2;
-    }
-  }
-  if (!reply.reply) {
-    std::fprintf(stderr,
-                 "cblox-ctl: no reply to '%s' on %s within %.1f s (is cblox-mapper running on "
-                 "the same LCM URL?)\n",
-                 command.name.c_str(), reply_channel.c_str(), timeout_s);
-    return 3;
-  }
-  const cblox::command_reply_t& r = *reply.reply;
-  std::printf("%s: %s\n", r.ok ? "ok" : "failed", r.message.c_str());
-  for (int32_t i = 0; i < r.num_values && i < static_cast<int32_t>(r.values.size()); ++i) {
-    std::printf("  %s: %s\n", r.value_keys[i].c_str(), r.values[i].c_str());
-  }
-  return r.ok ? 0 : 1;
+  if (all) return runStatusAll(lcm, heartbeat_channel, map_status_channel, listen_s, expected);
+  return runCommand(lcm, command, channel, reply_channel, timeout_s);
 }

@@ -12,7 +12,8 @@
 // (pose_stamped_t); CBLOX_COV_REQUEST (covariance_request_t) from the mapper.
 // Publishes: CBLOX_FRAME_POSE (frame_pose_t) for every frame processed, CBLOX_KEYFRAME
 // (keyframe_t) for every new keyframe, CBLOX_KEYFRAME_POSES (keyframe_pose_batch_t) after
-// every local BA, loop correction and global BA, CBLOX_HEARTBEAT (heartbeat_t) every second,
+// every local BA, loop correction and global BA, CBLOX_HEARTBEAT (heartbeat_t) every second
+// (with input_silence_s: input_silent / input_age_ms, and the state says which input is silent),
 // CBLOX_COV_REPLY (covariance_reply_t) for every request (computed on the covariance
 // service's own low-priority thread).
 // Frame poses are of the tracked camera (the rectified left camera, or the RGB-D camera).
@@ -30,11 +31,13 @@
 
 #include "core/vocabulary/binary_vocabulary.h"
 #include "daemon/common/command_line.h"
+#include "daemon/common/input_watch.h"
 #include "daemon/common/run_loop.h"
 #include "daemon/common/yaml_config.h"
 #include "daemon/tracker/tracker_config.h"
 #include "daemon/tracker/tracker_lcm_node.h"
 #include "daemon/tracker/tracker_node.h"
+#include "daemon/tracker/tracker_vocabulary.h"
 
 namespace cblox {
 namespace {
@@ -102,45 +105,35 @@ TrackerProcessConfig buildConfig(const Args& args) {
   return config;
 }
 
-// The vocabulary the config names (empty: the build's; "none": none). Throws ConfigError.
-std::unique_ptr<BinaryVocabulary> loadVocabulary(const std::string& configured) {
-  if (configured == "none") return nullptr;
-  const std::string path = configured.empty() ? CBLOX_DEFAULT_VOCABULARY : configured;
-  std::string error;
-  std::optional<BinaryVocabulary> vocabulary = BinaryVocabulary::load(path, &error);
-  if (!vocabulary) {
-    throw ConfigError("vocabulary: " + error +
-                      (configured.empty() ? " (the build's default vocabulary; build the "
-                                            "cblox_vocabulary_file target or set vocabulary)"
-                                          : ""));
-  }
-  return std::make_unique<BinaryVocabulary>(std::move(*vocabulary));
-}
-
 int run(const Args& args) {
   installStopHandlers();  // before the vocabulary loads: a stop then still exits 0
   const TrackerProcessConfig config = buildConfig(args);
   const TrackerNodeConfig& t = config.tracker;
-  const std::unique_ptr<BinaryVocabulary> vocabulary = loadVocabulary(config.vocabulary);
+  const std::unique_ptr<BinaryVocabulary> vocabulary = loadTrackerVocabulary(config.vocabulary);
 
   lcm::LCM lcm(config.lcm_url);
   if (!lcm.good()) {
     std::fprintf(stderr, "cblox-tracker: cannot open LCM (url '%s')\n", config.lcm_url.c_str());
     return 1;
   }
+  // Input-silence health: the frame channel of the mode (heartbeat counters and state).
+  const std::string& frame_channel =
+      t.mode == TrackerMode::kStereo ? config.stereo_channel : config.depth_channel;
+  InputWatch input_watch("cblox-tracker", config.input_silence_s);
+  input_watch.watch(frame_channel);
   TrackerLcmNode lcm_node(config, &lcm);
+  lcm_node.messageGuard().setInputWatch(&input_watch);
   TrackerNode node(t, vocabulary.get(), lcm_node.outputs());
   if (!args.quiet) {
     std::printf(
         "tracker: %s mode on %s, calibration from %s, initial pose %s, %d ORB features, "
         "vocabulary %s, loop closing %s\n",
-        trackerModeName(t.mode),
-        (t.mode == TrackerMode::kStereo ? config.stereo_channel : config.depth_channel).c_str(),
+        trackerModeName(t.mode), frame_channel.c_str(),
         config.calibration_source == CalibrationSource::kFile ? config.calibration_file.c_str()
                                                               : "the messages",
         initialPoseName(t.initial_pose), t.slam.frames.orb.num_features,
         vocabulary
-            ? (config.vocabulary.empty() ? CBLOX_DEFAULT_VOCABULARY : config.vocabulary.c_str())
+            ? trackerVocabularyPath(config.vocabulary).c_str()
             : "none",
         vocabulary && t.slam.loop_closing_enabled ? "on" : "off");
     std::fflush(stdout);

@@ -8,6 +8,7 @@
 #include <variant>
 
 #include "daemon/tracker/calibration_file.h"
+#include "daemon/common/input_silence.h"
 #include "daemon/common/yaml_config.h"
 
 namespace cblox {
@@ -208,6 +209,7 @@ std::string TrackerProcessConfig::validate() const {
   if (!(progress_period_s > 0.0) || !std::isfinite(progress_period_s)) {
     return "status.progress_period_s must be finite and > 0";
   }
+  if (std::string e = validateInputSilence(input_silence_s); !e.empty()) return e;
   return {};
 }
 
@@ -229,7 +231,10 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
   TrackerNodeConfig& t = config.tracker;
   const std::string top = "tracker";
   if (!readSection(
-          root, top, {{"lcm_url", &config.lcm_url}, {"vocabulary", &config.vocabulary}},
+          root, top,
+          {{"lcm_url", &config.lcm_url},
+           {"vocabulary", &config.vocabulary},
+           {"input_silence_s", &config.input_silence_s}},
           {"mode", "initial_pose", "channels", "camera", "frames", "tracker", "local_mapping",
            "loop_closing", "covariance", "input", "image_check", "status"})) {
     finishTrackerConfig(&config);

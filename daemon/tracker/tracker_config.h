@@ -4,6 +4,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "daemon/common/input_silence.h"
 #include "daemon/tracker/tracker_node.h"
 
 namespace cblox {
@@ -39,6 +40,10 @@ struct TrackerProcessConfig {
   double status_period_s = 1.0;
   /// Progress lines on stdout every this many seconds (> 0).
   double progress_period_s = 5.0;
+  /// Input-silence health (daemon/common/input_watch.h): the heartbeat reports the frame
+  /// channel (stereo or depth, by mode) silent after this long without a message, seconds;
+  /// 0 = off.
+  double input_silence_s = kDefaultInputSilenceS;
 
   /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
   std::string validate() const;

@@ -38,6 +38,8 @@ class TrackerLcmNode {
   void publishHeartbeat(const TrackerStatus& s, const std::string& state);
   /// The message guard's counts (refused messages by kind, handler errors).
   MessageGuardCounts messageCounts() const { return guard_.counts(); }
+  /// The guard every subscription goes through (e.g. to set its InputWatch before handling).
+  MessageGuard& messageGuard() { return guard_; }
 
  private:
   // A CBLOX_STEREO (stereo_pair_t) or CBLOX_DEPTH (depth_frame_t) message.

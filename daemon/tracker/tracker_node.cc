@@ -200,7 +200,11 @@ void TrackerNode::trackingLoop() {
     });
     if (!frame) continue;
     processFrame(*frame);
-    busy_ = false;
+    {
+      std::lock_guard<std::mutex> lock(idle_mutex_);
+      busy_ = false;
+    }
+    idle_cv_.notify_all();
   }
 }
 
@@ -417,6 +421,28 @@ TrackerStatus TrackerNode::status() const {
     s.state = state_;
   }
   return s;
+}
+
+bool TrackerNode::waitUntilSettled(std::chrono::milliseconds timeout) const {
+  const Clock::time_point deadline = Clock::now() + timeout;
+  {
+    std::unique_lock<std::mutex> lock(idle_mutex_);
+    // Slices: a frame pushed without a notification of idle_cv_ is seen at the next look.
+    while (queue_.size() > 0 || busy_) {
+      if (Clock::now() >= deadline) return false;
+      idle_cv_.wait_for(lock, std::chrono::milliseconds(20));
+    }
+  }
+  SlamSystem* system = nullptr;
+  KeyframeCovarianceService* covariance = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(system_mutex_);  // created once, kept until destruction
+    system = system_.get();
+    covariance = covariance_.get();
+  }
+  if (system != nullptr) system->waitUntilIdle();
+  if (covariance != nullptr) covariance->waitUntilIdle();
+  return true;
 }
 
 bool TrackerNode::waitUntilIdle(std::chrono::milliseconds timeout) const {

@@ -8,6 +8,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -196,6 +197,12 @@ class TrackerNode {
   /// Waits until no frame is waiting or in hand (or `timeout` passes); true when idle. Local
   /// mapping may still be busy. For tests.
   bool waitUntilIdle(std::chrono::milliseconds timeout) const;
+  /// Waits until the node is idle and so is everything it started: local mapping, loop
+  /// closing (with its global BA) and the covariance service, so that every output of the
+  /// inputs given so far has been delivered and nothing more will come without new input.
+  /// False when the tracking thread was not idle within `timeout` (the SLAM threads are
+  /// waited for without a limit). Deterministic replay calls it after every input.
+  bool waitUntilSettled(std::chrono::milliseconds timeout) const;
 
   const TrackerNodeConfig& config() const { return config_; }
 
@@ -244,6 +251,8 @@ class TrackerNode {
   std::string state_ = "waiting for frames";
 
   std::atomic<bool> stop_{false}, busy_{false};
+  mutable std::mutex idle_mutex_;  // with idle_cv_: the tracking thread went idle
+  mutable std::condition_variable idle_cv_;
   bool started_ = false, stopped_ = false;
   std::mutex lifecycle_mutex_;
   std::thread tracking_thread_;

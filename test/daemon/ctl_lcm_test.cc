@@ -17,6 +17,8 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
+#include "test/test_support/read_file.h"
+
 namespace {
 
 struct Responder {
@@ -64,14 +66,7 @@ int runCtl(Responder* responder, lcm::LCM* lcm, const std::vector<std::string>& 
     if (waitpid(pid, &status, WNOHANG) == pid) break;
   }
   (void)responder;
-  std::FILE* f = std::fopen(out_path.c_str(), "r");
-  output->clear();
-  if (f != nullptr) {
-    char buffer[4096];
-    size_t n;
-    while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) output->append(buffer, n);
-    std::fclose(f);
-  }
+  *output = cblox::test::readFile(out_path);
   std::remove(out_path.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }

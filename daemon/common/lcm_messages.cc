@@ -348,9 +348,11 @@ frame_pose_t toFramePoseMsg(int64_t utime, int64_t frame_id,
 }
 
 keyframe_t toKeyframeMsg(int64_t utime, int64_t keyframe_id, int64_t frame_id,
-                         const Transformationd& T_G_K, const std::vector<uint64_t>& landmark_ids) {
+                         const Transformationd& T_G_K, const std::vector<uint64_t>& landmark_ids,
+                         int32_t map_epoch) {
   keyframe_t msg;
   msg.utime = utime;
+  msg.map_epoch = map_epoch;
   msg.keyframe_id = keyframe_id;
   msg.frame_id = frame_id;
   msg.T_G_K = toPoseMsg(T_G_K);
@@ -360,9 +362,11 @@ keyframe_t toKeyframeMsg(int64_t utime, int64_t keyframe_id, int64_t frame_id,
 }
 
 keyframe_pose_batch_t toKeyframePoseBatchMsg(
-    int64_t utime, int8_t reason, const std::vector<std::pair<int64_t, Transformationd>>& T_G_K) {
+    int64_t utime, int8_t reason, const std::vector<std::pair<int64_t, Transformationd>>& T_G_K,
+    int32_t map_epoch) {
   keyframe_pose_batch_t msg;
   msg.utime = utime;
+  msg.map_epoch = map_epoch;
   msg.reason = reason;
   msg.keyframe_ids.reserve(T_G_K.size());
   msg.poses.reserve(T_G_K.size());

@@ -75,12 +75,15 @@ std::optional<RectifiedStereoCalibration> fromStereoCalibrationMsg(const stereo_
 frame_pose_t toFramePoseMsg(int64_t utime, int64_t frame_id,
                             const std::optional<Transformationd>& T_G_C, int8_t tracking_state,
                             bool tracking_jump, int32_t map_epoch);
-/// CBLOX_KEYFRAME message (tracker): a new keyframe and the landmarks it observes.
+/// CBLOX_KEYFRAME message (tracker): a new keyframe of map `map_epoch` and the landmarks it
+/// observes.
 keyframe_t toKeyframeMsg(int64_t utime, int64_t keyframe_id, int64_t frame_id,
-                         const Transformationd& T_G_K, const std::vector<uint64_t>& landmark_ids);
+                         const Transformationd& T_G_K, const std::vector<uint64_t>& landmark_ids,
+                         int32_t map_epoch);
 /// CBLOX_KEYFRAME_POSES message (tracker): `reason` is one of keyframe_pose_batch_t's
-/// constants; T_G_K holds (keyframe id, new pose) pairs.
+/// constants; T_G_K holds (keyframe id, new pose) pairs of map `map_epoch`.
 keyframe_pose_batch_t toKeyframePoseBatchMsg(
-    int64_t utime, int8_t reason, const std::vector<std::pair<int64_t, Transformationd>>& T_G_K);
+    int64_t utime, int8_t reason, const std::vector<std::pair<int64_t, Transformationd>>& T_G_K,
+    int32_t map_epoch);
 
 }  // namespace cblox

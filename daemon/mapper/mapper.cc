@@ -1,4 +1,5 @@
 #include "daemon/mapper/mapper.h"
+#include "daemon/mapper/map_epoch_key.h"
 
 #include <pthread.h>
 #include <sched.h>
@@ -294,8 +295,11 @@ bool Mapper::onDepthFrame(DepthFrame frame) {
       source_restarts_.fetch_add(1, std::memory_order_relaxed);
       log(what + ": depth time stamps went back by " +
           fixed(static_cast<double>(last_depth_utime_ - frame.utime) * 1e-6, 3) +
-          " s: source restarted, frame order starts afresh");
+          " s: source restarted, frame order starts afresh, pose buffer cleared");
       last_depth_utime_ = INT64_MIN;
+      // The old stream's poses must not serve the new stream's frames (same time stamps).
+      std::lock_guard<std::mutex> pose_lock(pose_order_mutex_);
+      poses_.clear();
     }
     if (frame.utime <= last_depth_utime_) {
       count(InputProblem::kDepthOutOfOrder, what + ": time stamp " + std::to_string(frame.utime) +
@@ -536,7 +540,10 @@ void Mapper::processFrame(PendingFrame pending, const Transformationd& T_G_B, bo
     {
       std::lock_guard<std::mutex> lock(policy_mutex_);
       active = collection_.activeSubmap();
-      action = policy_.onFramePose(active.get(), jump && attempt == 0);
+      // A jump at this frame is already answered when the active subvolume is anchored at a
+      // keyframe no older than the frame (the keyframe of the jump arrived first).
+      const bool answered = active && active->creationTimeNs() >= frame.utime * 1000;
+      action = policy_.onFramePose(active.get(), jump && !answered && attempt == 0);
     }
     if (action == SubmapCreationPolicy::FrameAction::kWaitForAnchor) {
       count(InputProblem::kWaitingForAnchor,
@@ -587,6 +594,11 @@ void Mapper::applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& 
       return;
     }
     std::shared_ptr<Submap> active = collection_.activeSubmap();
+    // A keyframe of another map epoch (map_epoch_key.h: the tracker started a new map) never
+    // joins a subvolume of the old map: the two maps' frames are unrelated, as after a jump.
+    if (active && epochOfKey(id) != epochOfKey(active->anchorKeyframe())) {
+      policy_.onFramePose(active.get(), /*tracking_jump=*/true);
+    }
     if (policy_.onKeyframe(active.get())) {
       // Finishes the previous submap (waits for the frame being integrated into it).
       created = collection_.createSubmap(T_G_K, id, utime * 1000);
@@ -604,7 +616,8 @@ void Mapper::applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& 
   keyframes_applied_.fetch_add(1, std::memory_order_relaxed);
   if (created) {
     log("subvolume " + std::to_string(created->id()) + " anchored at keyframe " +
-        std::to_string(id));
+        std::to_string(idOfKey(id)) +
+        (epochOfKey(id) > 0 ? " of map epoch " + std::to_string(epochOfKey(id)) : ""));
   }
 }
 

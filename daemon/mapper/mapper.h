@@ -175,7 +175,8 @@ struct MapperStatus {
 /// onKeyframe() + createSubmap() (so no frame slips into the old submap after a jump; the
 /// integrator never holds it while holding a layer lock). Counters are atomics; the timing
 /// window has its own mutex. Lock order: policy_mutex_ -> layer lock -> collection mutex ->
-/// submap metadata mutex; InTray', PoseBuffer's and scheduler_mutex_ (guards the
+/// submap metadata mutex; depth_order_mutex_ -> pose_order_mutex_ (a restarted depth
+/// stream clears the poses); InTray', PoseBuffer's and scheduler_mutex_ (guards the
 /// FusionScheduler; held for bookkeeping only, never while calling out) are leaves.
 ///
 /// Thread-safety: every public member function is thread-safe unless noted.

@@ -13,6 +13,7 @@
 #include "daemon/common/heartbeat.h"
 #include "daemon/common/lcm_messages.h"
 #include "daemon/common/run_loop.h"
+#include "daemon/mapper/map_epoch_key.h"
 
 namespace cblox {
 
@@ -88,7 +89,8 @@ void MapperNode::publishHeartbeat(const MapperStatus& s, const char* state) {
       .add("keyframes", s.keyframes_applied)
       .add("pose_batches", s.keyframe_batches)
       .add("exports_done", s.exports_done)
-      .add("exports_failed", s.exports_failed);
+      .add("exports_failed", s.exports_failed)
+      .add("source_restarts", s.source_restarts);
   for (size_t i = 0; i < kNumInputProblems; ++i) {
     hb.add(std::string("rejected_") + inputProblemName(static_cast<InputProblem>(i)),
            s.problems[i]);
@@ -145,6 +147,13 @@ void MapperNode::onGroundTruth(const pose_stamped_t& msg, const std::string& /*c
 }
 
 void MapperNode::onFramePose(const frame_pose_t& msg, const std::string& /*channel*/) {
+  if (msg.map_epoch < 0 || msg.map_epoch > kMaxMapEpoch) {
+    mapper_->reportProblem(InputProblem::kPoseUndecodable,
+                           "frame pose at " + std::to_string(msg.utime) + " us: map epoch " +
+                               std::to_string(msg.map_epoch) + " out of range");
+    return;
+  }
+  tracker_epoch_ = msg.map_epoch;
   TimedPose pose;
   pose.utime = msg.utime;
   pose.epoch = msg.map_epoch;
@@ -188,34 +197,69 @@ void MapperNode::onKeyframe(const keyframe_t& msg, const std::string& /*channel*
                            "keyframe " + std::to_string(msg.keyframe_id) + ": " + error);
     return;
   }
-  std::vector<uint64_t> landmarks;
+  const std::optional<int64_t> key = epochKey(msg.map_epoch, msg.keyframe_id);
+  if (!key) {
+    mapper_->reportProblem(InputProblem::kKeyframeInvalid,
+                           "keyframe " + std::to_string(msg.keyframe_id) + " of map epoch " +
+                               std::to_string(msg.map_epoch) + ": id or epoch out of range");
+    return;
+  }
+  tracker_epoch_ = msg.map_epoch;
+  std::vector<uint64_t> landmarks;  // keyed by epoch too: ids restart with every map
   landmarks.reserve(msg.landmark_ids.size());
   for (const int64_t id : msg.landmark_ids) {
-    if (id >= 0) landmarks.push_back(static_cast<uint64_t>(id));
+    if (const std::optional<int64_t> landmark = epochKey(msg.map_epoch, id)) {
+      landmarks.push_back(static_cast<uint64_t>(*landmark));
+    }
   }
-  mapper_->onKeyframe(msg.keyframe_id, msg.utime, *T, std::move(landmarks));
+  mapper_->onKeyframe(*key, msg.utime, *T, std::move(landmarks));
 }
 
 void MapperNode::publishCovarianceRequest(const FusionCovarianceRequest& request) {
+  // The tracker answers about its current map only: a pair of an earlier epoch goes out as
+  // ids -1 (it fails there) and its answer says why (older_epoch_pairs_).
   covariance_request_t msg;
   msg.utime = wallUtime();
+  msg.map_epoch = tracker_epoch_.load();
   msg.request_id = request.request_id;
+  std::vector<bool> older_epoch;
   for (const FusionPair& pair : request.pairs) {
-    msg.keyframe_i.push_back(pair.newer_keyframe);  // Sigma_{newer | older}
-    msg.keyframe_j.push_back(pair.older_keyframe);
+    const bool current = epochOfKey(pair.newer_keyframe) == msg.map_epoch &&
+                         epochOfKey(pair.older_keyframe) == msg.map_epoch;
+    older_epoch.push_back(!current);
+    msg.keyframe_i.push_back(current ? idOfKey(pair.newer_keyframe) : -1);  // Sigma_{i | j}
+    msg.keyframe_j.push_back(current ? idOfKey(pair.older_keyframe) : -1);  // i newer, j older
   }
   msg.num_pairs = static_cast<int32_t>(msg.keyframe_i.size());
   std::lock_guard<std::mutex> lock(publish_mutex_);
+  older_epoch_pairs_[msg.request_id] = std::move(older_epoch);
+  while (older_epoch_pairs_.size() > kMaxRequestsRemembered) {
+    older_epoch_pairs_.erase(older_epoch_pairs_.begin());
+  }
   lcm_->publish(config_.covariance_request_channel, &msg);
 }
 
 void MapperNode::onCovarianceReply(const covariance_reply_t& msg, const std::string& /*channel*/) {
+  std::vector<bool> older_epoch;
+  {
+    std::lock_guard<std::mutex> lock(publish_mutex_);
+    auto it = older_epoch_pairs_.find(msg.request_id);
+    if (it != older_epoch_pairs_.end()) {
+      older_epoch = std::move(it->second);
+      older_epoch_pairs_.erase(it);
+    }
+  }
   std::vector<FusionCovarianceAnswer> answers;
   answers.reserve(msg.pairs.size());
-  for (const covariance_pair_t& pair : msg.pairs) {
+  for (size_t k = 0; k < msg.pairs.size(); ++k) {
+    const covariance_pair_t& pair = msg.pairs[k];
     FusionCovarianceAnswer answer;
     answer.ok = pair.ok && std::isfinite(pair.q) && pair.q >= 0.0;
     answer.error = pair.ok && !answer.ok ? "q is not a finite, non-negative number" : pair.error;
+    if (k < older_epoch.size() && older_epoch[k]) {
+      answer.ok = false;
+      answer.error = "keyframes of an earlier map epoch: the tracker keeps only its current map";
+    }
     answer.q = answer.ok ? pair.q : 0.0;
     answers.push_back(std::move(answer));
   }
@@ -234,7 +278,15 @@ void MapperNode::onKeyframePoses(const keyframe_pose_batch_t& msg, const std::st
           "keyframe pose " + std::to_string(msg.keyframe_ids[i]) + ": " + error);
       continue;
     }
-    batch.emplace_back(msg.keyframe_ids[i], *T);
+    const std::optional<int64_t> key = epochKey(msg.map_epoch, msg.keyframe_ids[i]);
+    if (!key) {
+      mapper_->reportProblem(InputProblem::kKeyframePoseInvalid,
+                             "keyframe pose " + std::to_string(msg.keyframe_ids[i]) +
+                                 " of map epoch " + std::to_string(msg.map_epoch) +
+                                 ": id or epoch out of range");
+      continue;
+    }
+    batch.emplace_back(*key, *T);
   }
   if (!batch.empty()) mapper_->onKeyframePoses(std::move(batch));
 }

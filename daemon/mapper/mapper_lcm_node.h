@@ -4,7 +4,10 @@
 // turns messages into Mapper calls, and publishes status, heartbeat, covariance requests and
 // command replies.
 
+#include <atomic>
 #include <cstddef>
+#include <map>
+#include <vector>
 #include <mutex>
 #include <string>
 
@@ -60,7 +63,13 @@ class MapperNode {
   lcm::LCM* lcm_;
   Mapper* mapper_;
   MessageGuard guard_;
-  std::mutex publish_mutex_;
+  std::mutex publish_mutex_;  // also guards older_epoch_pairs_
+  // The tracker's map epoch (of its newest frame pose or keyframe): covariance requests are
+  // about it. Keyframe and landmark ids are keyed by epoch (map_epoch_key.h).
+  std::atomic<int32_t> tracker_epoch_{0};
+  // Per covariance request in flight: which pairs were of an earlier epoch (sent as -1).
+  static constexpr size_t kMaxRequestsRemembered = 64;
+  std::map<int64_t, std::vector<bool>> older_epoch_pairs_;
 };
 
 }  // namespace cblox

@@ -233,14 +233,14 @@ struct LogReplayer::Impl {
     outputs_guard.subscribe<keyframe_t>(
         config.tracker.keyframe_channel, [this](const keyframe_t& m, const std::string&) {
           if (std::optional<Transformationd> T = fromPoseMsg(m.T_G_K, nullptr)) {
-            keyframes[m.keyframe_id] = ReplayPose{m.utime, m.keyframe_id, *T};
+            keyframes[{m.map_epoch, m.keyframe_id}] = ReplayPose{m.utime, m.keyframe_id, *T};
           }
         });
     outputs_guard.subscribe<keyframe_pose_batch_t>(
         config.tracker.keyframe_poses_channel,
         [this](const keyframe_pose_batch_t& m, const std::string&) {
           for (size_t i = 0; i < m.keyframe_ids.size() && i < m.poses.size(); ++i) {
-            auto it = keyframes.find(m.keyframe_ids[i]);
+            auto it = keyframes.find({m.map_epoch, m.keyframe_ids[i]});
             if (it == keyframes.end()) continue;
             if (std::optional<Transformationd> T = fromPoseMsg(m.poses[i], nullptr)) {
               it->second.T_G_C = *T;
@@ -261,7 +261,7 @@ struct LogReplayer::Impl {
   std::optional<HeldEvent> held_frame;
   std::deque<HeldEvent> deferred_depth;
   int64_t horizon = std::numeric_limits<int64_t>::min();  // the mapper has poses up to here
-  std::map<int64_t, ReplayPose> keyframes;
+  std::map<std::pair<int32_t, int64_t>, ReplayPose> keyframes;  // by (map epoch, id)
   ReplaySummary summary;
   bool ran = false;
 };

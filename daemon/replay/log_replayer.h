@@ -65,7 +65,8 @@ struct ReplaySummary {
   double log_span_s = 0.0;  ///< time stamps of the first to the last event
   /// Frame poses the tracker published with a pose, in order (tracker mode).
   std::vector<ReplayPose> frame_poses;
-  /// Every keyframe at its final pose (after the last pose batch), by id (tracker mode).
+  /// Every keyframe at its final pose (after the last pose batch), by map epoch and id
+  /// (tracker mode).
   std::vector<ReplayPose> keyframes;
   TrackerStatus tracker;  ///< tracker mode
   MapperStatus mapper;

@@ -5,6 +5,8 @@ namespace cblox {
 void GroundTruthBuffer::add(int64_t frame_id, int64_t utime, const Transformationd& T_G_C) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    // Time going back: the source restarted; the old stream's poses could match new frames.
+    if (!entries_.empty() && utime < entries_.back().utime) entries_.clear();
     entries_.push_back(Entry{frame_id, utime, T_G_C});
     while (entries_.size() > capacity_) entries_.pop_front();
   }

@@ -24,6 +24,7 @@ class GroundTruthBuffer {
   explicit GroundTruthBuffer(size_t capacity = 64) : capacity_(capacity < 1 ? 1 : capacity) {}
 
   /// Adds the pose T_G_C of a frame (frame_id < 0: matched by utime alone) and wakes waiters.
+  /// A pose older than the newest one kept means the source restarted: the kept ones go.
   void add(int64_t frame_id, int64_t utime, const Transformationd& T_G_C);
 
   /// The pose of the frame (same frame_id, or same utime for poses added without a frame id),

@@ -57,6 +57,9 @@ struct TrackerFrame {
   /// when it is invalid, and then calibration_error says why.
   std::optional<RectifiedStereoCalibration> calibration;
   std::string calibration_error;
+  /// Set by TrackerNode::onFrame: the source restarted with time going back (a log or a
+  /// simulator run again), so this frame starts a new map (the next map epoch).
+  bool starts_new_map = false;
 };
 
 /// Decodes a CBLOX_STEREO message: images (GRAY8, or colour converted to grey), the

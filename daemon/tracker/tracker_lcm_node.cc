@@ -29,6 +29,8 @@ int8_t toStateConstant(FramePoseState state) {
       return frame_pose_t::RELOCALIZED;
     case FramePoseState::kLoopCorrected:
       return frame_pose_t::LOOP_CORRECTED;
+    case FramePoseState::kMapReset:
+      return frame_pose_t::MAP_RESET;
   }
   return frame_pose_t::LOST;
 }
@@ -51,25 +53,27 @@ TrackerNode::Outputs TrackerLcmNode::outputs() {
   TrackerNode::Outputs out;
   out.frame_pose = [this](const FramePoseReport& r) {
     const frame_pose_t msg =
-        toFramePoseMsg(r.utime, r.frame_id, r.T_G_C, toStateConstant(r.state), r.jump, 0);
+        toFramePoseMsg(r.utime, r.frame_id, r.T_G_C, toStateConstant(r.state), r.jump, r.map_epoch);
     std::lock_guard<std::mutex> lock(publish_mutex_);
     lcm_->publish(config_.frame_pose_channel, &msg);
   };
   out.keyframe = [this](const KeyframeInfo& k) {
-    const keyframe_t msg = toKeyframeMsg(
-        k.timestamp_ns / 1000, k.id, static_cast<int64_t>(k.frame_id), k.T_G_K, k.landmark_ids);
+    const keyframe_t msg =
+        toKeyframeMsg(k.timestamp_ns / 1000, k.id, static_cast<int64_t>(k.frame_id), k.T_G_K,
+                      k.landmark_ids, node_->mapEpoch());
     std::lock_guard<std::mutex> lock(publish_mutex_);
     lcm_->publish(config_.keyframe_channel, &msg);
   };
   out.keyframe_poses = [this](const KeyframePoseBatch& batch, PoseUpdateReason reason) {
     const keyframe_pose_batch_t msg =
-        toKeyframePoseBatchMsg(wallUtime(), toReasonConstant(reason), batch);
+        toKeyframePoseBatchMsg(wallUtime(), toReasonConstant(reason), batch, node_->mapEpoch());
     std::lock_guard<std::mutex> lock(publish_mutex_);
     lcm_->publish(config_.keyframe_poses_channel, &msg);
   };
   out.covariance_reply = [this](const KeyframeCovarianceReply& reply) {
     covariance_reply_t msg;
     msg.utime = wallUtime();
+    msg.map_epoch = node_->mapEpoch();
     msg.request_id = reply.request_id;
     for (const ConditionalCovariance& r : reply.results) {
       covariance_pair_t pair{};
@@ -124,6 +128,8 @@ void TrackerLcmNode::publishHeartbeat(const TrackerStatus& s, const std::string&
   HeartbeatBuilder hb("cblox-tracker", state);
   hb.add("frames_received", s.frames_received);
   hb.add("frames_processed", s.frames_processed);
+  hb.add("source_restarts", s.source_restarts);
+  hb.add("map_epoch", static_cast<uint64_t>(s.map_epoch));
   hb.add("frames_tracked", s.frames_tracked);
   hb.add("frames_lost", s.frames_lost);
   hb.add("frames_not_initialized", s.frames_not_initialized);
@@ -197,7 +203,7 @@ void TrackerLcmNode::onCovarianceRequest(const covariance_request_t& msg, const 
     request.pairs.push_back(KeyframePair{static_cast<uint64_t>(msg.keyframe_i[k]),
                                          static_cast<uint64_t>(msg.keyframe_j[k])});
   }
-  node_->onCovarianceRequest(std::move(request));
+  node_->onCovarianceRequest(std::move(request), msg.map_epoch);
 }
 
 }  // namespace cblox

@@ -69,6 +69,9 @@ std::string TrackerNodeConfig::validate() const {
     return "ground_truth_wait_s must be finite and >= 0";
   }
   if (queue_capacity < 1 || queue_capacity > 16) return "queue_capacity must be in [1, 16]";
+  if (!(restart_after_backwards_s >= 0.0) || !std::isfinite(restart_after_backwards_s)) {
+    return "restart_after_backwards_s must be finite and >= 0";
+  }
   if (std::string e = image_check.validate(); !e.empty()) return "image_check." + e;
   if (timing_window < 1) return "timing_window must be >= 1";
   if (!(log_interval_s > 0.0) || !std::isfinite(log_interval_s)) {
@@ -147,11 +150,25 @@ bool TrackerNode::onFrame(TrackerFrame frame) {
               std::to_string(camera_->baseline_m) + " m");
     return false;
   }
-  if (frame.frame_id <= last_frame_id_ || frame.utime <= last_utime_) {
+  const bool time_restarted =
+      config_.restart_after_backwards_s > 0.0 && last_utime_ != INT64_MIN &&
+      static_cast<double>(last_utime_ - frame.utime) * 1e-6 > config_.restart_after_backwards_s;
+  if (time_restarted) {
+    source_restarts_.fetch_add(1, std::memory_order_relaxed);
+    log(what + "time went back by " +
+        std::to_string(static_cast<double>(last_utime_ - frame.utime) * 1e-6) +
+        " s: the source restarted; a new map starts (map epoch " +
+        std::to_string(map_epoch_.load() + 1) + ")");
+    frame.starts_new_map = true;
+  } else if (frame.utime <= last_utime_) {
     count(TrackerProblem::kOutOfOrder, what + "not after the previous frame " +
                                            std::to_string(last_frame_id_) + " (" +
                                            std::to_string(last_utime_) + " us)");
     return false;
+  } else if (frame.frame_id <= last_frame_id_) {
+    source_restarts_.fetch_add(1, std::memory_order_relaxed);
+    log(what + "frame ids went back (from " + std::to_string(last_frame_id_) +
+        ") while time went on: the capture restarted; tracking continues in the same map");
   }
   if (!camera_) camera_ = frame.calibration;
   last_frame_id_ = frame.frame_id;
@@ -255,24 +272,28 @@ bool TrackerNode::ensureSystem(const RectifiedStereoCalibration& calibration, st
   return true;
 }
 
-void TrackerNode::onCovarianceRequest(KeyframeCovarianceRequest request) {
+void TrackerNode::onCovarianceRequest(KeyframeCovarianceRequest request, int32_t map_epoch) {
+  std::string why;
   {
     std::lock_guard<std::mutex> lock(system_mutex_);
-    if (covariance_ && !stop_) {
+    if (map_epoch != map_epoch_.load()) {
+      why = "keyframes of map epoch " + std::to_string(map_epoch) + "; the tracker's map is epoch " +
+            std::to_string(map_epoch_.load());
+    } else if (covariance_ && !stop_) {
       covariance_->submit(std::move(request));
       return;
+    } else {
+      why = stop_ ? "the tracker is stopping" : "the tracker has no map yet";
     }
   }
   KeyframeCovarianceReply reply;
   reply.request_id = request.request_id;
-  for (const KeyframePair& pair : request.pairs) {
-    reply.results.push_back(
-        failedPair(pair, stop_ ? "the tracker is stopping" : "the tracker has no map yet"));
-  }
+  for (const KeyframePair& pair : request.pairs) reply.results.push_back(failedPair(pair, why));
   if (outputs_.covariance_reply) outputs_.covariance_reply(reply);
 }
 
-void TrackerNode::publish(const FramePoseReport& report) {
+void TrackerNode::publish(FramePoseReport report) {
+  report.map_epoch = map_epoch_.load();
   frames_processed_.fetch_add(1, std::memory_order_relaxed);
   pose_published_ = report.T_G_C.has_value();
   if (outputs_.frame_pose) outputs_.frame_pose(report);
@@ -292,13 +313,35 @@ void TrackerNode::reportUntracked(const TrackerFrame& frame, TrackerProblem prob
   publish(report);
 }
 
+void TrackerNode::startNewMap(const TrackerFrame& frame) {
+  std::unique_ptr<SlamSystem> system;
+  std::unique_ptr<KeyframeCovarianceService> covariance;
+  {
+    std::lock_guard<std::mutex> lock(system_mutex_);
+    system = std::move(system_);
+    covariance = std::move(covariance_);
+  }
+  // The covariance service reads the map: it stops first. The SLAM threads finish what they
+  // hold (their last pose batches still go out in the old epoch), then the epoch moves on.
+  if (covariance) covariance->stop();
+  if (system) system->stop();
+  covariance.reset();
+  system.reset();
+  map_epoch_.fetch_add(1);
+  map_started_ = false;
+  pose_published_ = false;
+  map_reset_pending_ = true;
+  log(frameName(frame) + ": map epoch " + std::to_string(map_epoch_.load()) + " begins");
+}
+
 void TrackerNode::processFrame(TrackerFrame& frame) {
+  if (frame.starts_new_map) startNewMap(frame);
   std::string error;
   if (!ensureSystem(*frame.calibration, &error)) {
     reportUntracked(frame, TrackerProblem::kTrackingFailed, error);
     return;
   }
-  SlamSystem& system = *system_;  // only this thread replaces it (it never does)
+  SlamSystem& system = *system_;  // only this thread replaces it (startNewMap)
   const bool stereo = config_.mode == TrackerMode::kStereo;
 
   // Nothing to track at all: say so without disturbing the tracker's motion model.
@@ -367,6 +410,10 @@ void TrackerNode::processFrame(TrackerFrame& frame) {
   } else {
     report.state = FramePoseState::kOk;
   }
+  if (map_reset_pending_) {
+    report.state = FramePoseState::kMapReset;  // the new map's first pose
+    map_reset_pending_ = false;
+  }
   report.jump = report.state != FramePoseState::kOk || (!pose_published_ && !result.initialized);
   frames_tracked_.fetch_add(1, std::memory_order_relaxed);
   setState("tracking");
@@ -385,6 +432,8 @@ TrackerStatus TrackerNode::status() const {
   s.loop_corrected_frames = loop_corrected_frames_.load();
   s.keyframes = keyframes_.load();
   s.pose_batches = pose_batches_.load();
+  s.source_restarts = source_restarts_.load();
+  s.map_epoch = map_epoch_.load();
   for (size_t i = 0; i < kNumTrackerProblems; ++i) {
     s.problems[i] = problems_[i].load(std::memory_order_relaxed);
     if (isRejection(static_cast<TrackerProblem>(i))) s.frames_rejected += s.problems[i];

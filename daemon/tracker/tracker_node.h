@@ -64,6 +64,12 @@ struct TrackerNodeConfig {
   /// initial_pose ground_truth: how long a frame waits for its ground-truth pose, seconds
   /// (>= 0); without it the frame is published NOT_INITIALIZED.
   double ground_truth_wait_s = 1.0;
+  /// A frame whose time stamp is this much older than the previous frame's means the source
+  /// restarted (a log or the simulator run again): the tracker drops its map and starts a
+  /// new one in the next map epoch, instead of rejecting every frame as out of order.
+  /// Smaller steps back are rejected as out of order. Frame ids going back while time goes
+  /// on (a capture process restarted on a live clock) continue the same map. 0 = never.
+  double restart_after_backwards_s = 2.0;
   /// Frames waiting for the tracking thread, [1, 16]: the newest wins, older ones are
   /// dropped (counted) when the tracker falls behind.
   size_t queue_capacity = 1;
@@ -81,12 +87,21 @@ struct TrackerNodeConfig {
 };
 
 /// The published state of a frame (frame_pose_t's tracking states).
-enum class FramePoseState { kNotInitialized, kOk, kLost, kRelocalized, kLoopCorrected };
+enum class FramePoseState {
+  kNotInitialized,
+  kOk,
+  kLost,
+  kRelocalized,
+  kLoopCorrected,
+  kMapReset,  ///< the first pose of a new map (epoch) after the source restarted
+};
 
 /// What the tracker says about one frame (CBLOX_FRAME_POSE). Plain value type.
 struct FramePoseReport {
   int64_t utime = 0;
   int64_t frame_id = 0;
+  /// The map the pose is in: 0, then one more each time the source restarted.
+  int32_t map_epoch = 0;
   FramePoseState state = FramePoseState::kNotInitialized;
   /// The pose jumped relative to the previous published pose: relocalized, loop corrected,
   /// or the first pose after frames without one.
@@ -111,6 +126,8 @@ struct TrackerStatus {
   uint64_t loop_corrected_frames = 0;
   uint64_t keyframes = 0;     ///< CBLOX_KEYFRAME messages
   uint64_t pose_batches = 0;  ///< CBLOX_KEYFRAME_POSES messages
+  uint64_t source_restarts = 0;  ///< time or frame ids went back (see restart_after_backwards_s)
+  int32_t map_epoch = 0;         ///< the map in use: one more per restart with time going back
   uint64_t landmarks = 0;     ///< landmarks in the map now
   uint64_t loops_closed = 0;
   uint64_t local_bundle_adjustments = 0;
@@ -187,13 +204,18 @@ class TrackerNode {
   void onGroundTruth(int64_t frame_id, int64_t utime, const Transformationd& T_G_C);
   /// A covariance request (CBLOX_COV_REQUEST): queued for the covariance service, which
   /// answers through Outputs::covariance_reply; before the map exists every pair fails at
-  /// once ("the tracker has no map yet").
-  void onCovarianceRequest(KeyframeCovarianceRequest request);
+  /// once ("the tracker has no map yet"), and so does every pair of a request about another
+  /// map epoch than the one in use.
+  void onCovarianceRequest(KeyframeCovarianceRequest request, int32_t map_epoch = 0);
   /// Counts and logs a problem found outside the node (e.g. a message that did not decode).
   /// A rejection kind also counts as a received frame.
   void reportProblem(TrackerProblem problem, const std::string& detail);
 
   TrackerStatus status() const;
+  /// The map epoch of the map in use (see FramePoseReport::map_epoch). Thread-safe. Outputs
+  /// called from the SLAM threads are in this epoch: the old map's threads are stopped before
+  /// it changes.
+  int32_t mapEpoch() const { return map_epoch_.load(); }
   /// Waits until no frame is waiting or in hand (or `timeout` passes); true when idle. Local
   /// mapping may still be busy. For tests.
   bool waitUntilIdle(std::chrono::milliseconds timeout) const;
@@ -201,7 +223,8 @@ class TrackerNode {
   /// closing (with its global BA) and the covariance service, so that every output of the
   /// inputs given so far has been delivered and nothing more will come without new input.
   /// False when the tracking thread was not idle within `timeout` (the SLAM threads are
-  /// waited for without a limit). Deterministic replay calls it after every input.
+  /// waited for without a limit). Deterministic replay calls it after every input; call it
+  /// while no other thread hands frames over.
   bool waitUntilSettled(std::chrono::milliseconds timeout) const;
 
   const TrackerNodeConfig& config() const { return config_; }
@@ -211,11 +234,14 @@ class TrackerNode {
   void processFrame(TrackerFrame& frame);
   // Tracking thread: the SlamSystem for the camera in use (created on first use).
   bool ensureSystem(const RectifiedStereoCalibration& calibration, std::string* error);
+  // Tracking thread: stops and drops the SLAM system (and its covariance service) so that the
+  // next frame starts a new map, in the next epoch.
+  void startNewMap(const TrackerFrame& frame);
   // Tracking thread: publishes a frame without a pose (LOST, or NOT_INITIALIZED before the
   // map exists), counts `problem` and records the state.
   void reportUntracked(const TrackerFrame& frame, TrackerProblem problem,
                        const std::string& reason);
-  void publish(const FramePoseReport& report);
+  void publish(FramePoseReport report);  // stamps the map epoch
   void count(TrackerProblem problem, const std::string& message);
   void setState(std::string state);
   void log(const std::string& line) const;
@@ -242,10 +268,12 @@ class TrackerNode {
   // Tracking thread only.
   bool pose_published_ = false;  // the last published frame had a pose
   bool map_started_ = false;     // the tracker has initialised its map
+  bool map_reset_pending_ = false;  // the next tracked pose is the new map's first (kMapReset)
+  std::atomic<int32_t> map_epoch_{0};
 
   std::atomic<uint64_t> frames_received_{0}, frames_processed_{0}, frames_tracked_{0},
       frames_lost_{0}, frames_not_initialized_{0}, relocalizations_{0}, loop_corrected_frames_{0},
-      keyframes_{0}, pose_batches_{0};
+      keyframes_{0}, pose_batches_{0}, source_restarts_{0};
   std::array<std::atomic<uint64_t>, kNumTrackerProblems> problems_{};
   mutable std::mutex state_mutex_;
   std::string state_ = "waiting for frames";

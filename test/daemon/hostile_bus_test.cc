@@ -135,9 +135,9 @@ TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
   valid["CBLOX_GT_POSE"] = encode(toGroundTruthMsg(frame, utime));
   valid["CBLOX_FRAME_POSE"] =
       encode(toFramePoseMsg(utime, 0, *frame.T_G_C, frame_pose_t::OK, false, 0));
-  valid["CBLOX_KEYFRAME"] = encode(toKeyframeMsg(utime, 0, 0, *frame.T_G_C, {1, 2, 3}));
+  valid["CBLOX_KEYFRAME"] = encode(toKeyframeMsg(utime, 0, 0, *frame.T_G_C, {1, 2, 3}, 0));
   valid["CBLOX_KEYFRAME_POSES"] = encode(toKeyframePoseBatchMsg(
-      utime, keyframe_pose_batch_t::LOCAL_BA, {{int64_t{0}, *frame.T_G_C}}));
+      utime, keyframe_pose_batch_t::LOCAL_BA, {{int64_t{0}, *frame.T_G_C}}, 0));
   covariance_request_t request{};
   request.request_id = 1;
   request.num_pairs = 1;

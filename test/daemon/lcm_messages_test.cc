@@ -207,8 +207,9 @@ TEST(LcmMessagesTest, TrackerMessagesRoundTrip) {
       wireRoundTrip(toFramePoseMsg(1, 2, std::nullopt, frame_pose_t::LOST, false, 0));
   EXPECT_TRUE(fromPoseMsg(lost.T_G_C, &error)->isApprox(Transformationd::Identity(), 0.0));
 
-  const keyframe_t keyframe = wireRoundTrip(toKeyframeMsg(99, 3, 56, T, {4, 8, 15, 16, 23, 42}));
+  const keyframe_t keyframe = wireRoundTrip(toKeyframeMsg(99, 3, 56, T, {4, 8, 15, 16, 23, 42}, 5));
   EXPECT_EQ(keyframe.utime, 99);
+  EXPECT_EQ(keyframe.map_epoch, 5);
   EXPECT_EQ(keyframe.keyframe_id, 3);
   EXPECT_EQ(keyframe.frame_id, 56);
   EXPECT_EQ(keyframe.num_landmarks, 6);
@@ -216,14 +217,15 @@ TEST(LcmMessagesTest, TrackerMessagesRoundTrip) {
   EXPECT_TRUE(fromPoseMsg(keyframe.T_G_K, &error)->isApprox(T, 1e-12));
 
   const keyframe_pose_batch_t batch = wireRoundTrip(toKeyframePoseBatchMsg(
-      77, keyframe_pose_batch_t::GLOBAL_BA, {{0, Transformationd::Identity()}, {3, T}}));
+      77, keyframe_pose_batch_t::GLOBAL_BA, {{0, Transformationd::Identity()}, {3, T}}, 6));
   EXPECT_EQ(batch.utime, 77);
+  EXPECT_EQ(batch.map_epoch, 6);
   EXPECT_EQ(batch.reason, keyframe_pose_batch_t::GLOBAL_BA);
   EXPECT_EQ(batch.num_keyframes, 2);
   EXPECT_EQ(batch.keyframe_ids, (std::vector<int64_t>{0, 3}));
   EXPECT_TRUE(fromPoseMsg(batch.poses[1], &error)->isApprox(T, 1e-12));
   EXPECT_EQ(
-      wireRoundTrip(toKeyframePoseBatchMsg(1, keyframe_pose_batch_t::LOCAL_BA, {})).num_keyframes,
+      wireRoundTrip(toKeyframePoseBatchMsg(1, keyframe_pose_batch_t::LOCAL_BA, {}, 0)).num_keyframes,
       0);
 }
 

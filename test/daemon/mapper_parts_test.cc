@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "daemon/mapper/map_epoch_key.h"
 #include "daemon/mapper/output_path.h"
 #include "daemon/common/in_tray.h"
 #include "daemon/mapper/pose_buffer.h"
@@ -183,6 +184,22 @@ TEST(OutputPathTest, SymbolicLinksOutOfTheDirectoryAreCaught) {
       << error;
   EXPECT_FALSE(staysInsideOnDisk(root / "missing", root / "missing" / "m.ply", &error));
   fs::remove_all(root);
+}
+
+TEST(MapEpochKeyTest, PacksEpochAndIdAndRefusesWhatDoesNotFit) {
+  EXPECT_EQ(epochKey(0, 12), 12);  // epoch 0: the ids themselves
+  EXPECT_EQ(epochKey(1, 0), int64_t{1} << 40);
+  EXPECT_EQ(epochKey(3, 7), (int64_t{3} << 40) + 7);
+  const int64_t key = *epochKey(kMaxMapEpoch, kMaxIdInEpoch);
+  EXPECT_GT(key, 0);
+  EXPECT_EQ(epochOfKey(key), kMaxMapEpoch);
+  EXPECT_EQ(idOfKey(key), kMaxIdInEpoch);
+  EXPECT_EQ(epochOfKey(*epochKey(5, 99)), 5);
+  EXPECT_EQ(idOfKey(*epochKey(5, 99)), 99);
+  EXPECT_FALSE(epochKey(-1, 0));
+  EXPECT_FALSE(epochKey(0, -1));
+  EXPECT_FALSE(epochKey(0, kMaxIdInEpoch + 1));
+  EXPECT_FALSE(epochKey(kMaxMapEpoch + 1, 0));
 }
 
 }  // namespace

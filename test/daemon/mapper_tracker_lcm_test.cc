@@ -73,7 +73,7 @@ struct CovarianceResponder {
   std::vector<covariance_request_t> requests;
   void onRequest(const lcm::ReceiveBuffer*, const std::string&, const covariance_request_t* m) {
     requests.push_back(*m);
-    covariance_reply_t reply;
+    covariance_reply_t reply{};
     reply.utime = m->utime;
     reply.request_id = m->request_id;
     for (int k = 0; k < m->num_pairs; ++k) {
@@ -142,7 +142,7 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
     pose.map_epoch = 0;
     lcm.publish("CBLOX_FRAME_POSE", &pose);
     if (frame.frame_id % 5 == 0) {
-      keyframe_t keyframe;
+      keyframe_t keyframe{};
       keyframe.utime = utime;
       keyframe.keyframe_id = frame.frame_id;
       keyframe.frame_id = frame.frame_id;
@@ -180,7 +180,7 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
   lcm.publish("CBLOX_FRAME_POSE", &nan_pose);
 
   // A loop correction moves keyframe 0 (the subvolume's anchor) and names an unknown one.
-  keyframe_pose_batch_t batch;
+  keyframe_pose_batch_t batch{};
   batch.utime = t0 + 30'000'000;
   batch.reason = keyframe_pose_batch_t::LOOP_CORRECTION;
   batch.keyframe_ids = {0, 424242};

@@ -177,7 +177,7 @@ TEST(TrackerLcmTest, TracksTheSimulatedRoomCloseToGroundTruth) {
   // The covariance service (as the mapper asks it): Sigma of the last keyframe given the one
   // before, and a pair naming no keyframe, answered in order with the request's id.
   ASSERT_GE(received.keyframes.size(), 3u);
-  covariance_request_t request;
+  covariance_request_t request{};
   request.utime = 1;
   request.request_id = 77;
   request.keyframe_i = {received.keyframes.back().keyframe_id, 123456};

@@ -261,14 +261,18 @@ TEST(TrackerNodeTest, RejectsBadCalibrationSizeChangesAndDisorderCountingEachKin
   EXPECT_TRUE(node.onFrame(smallFrame(1, 2000)));              // fixes the camera
   EXPECT_FALSE(node.onFrame(smallFrame(2, 3000, 51.0)));       // fx changed
   EXPECT_FALSE(node.onFrame(smallFrame(3, 4000, 50.0, 0.2)));  // baseline changed
-  EXPECT_FALSE(node.onFrame(smallFrame(1, 5000)));             // frame id not increasing
-  EXPECT_FALSE(node.onFrame(smallFrame(4, 2000)));             // time not increasing
-  EXPECT_TRUE(node.onFrame(smallFrame(4, 2001)));
+  // Frame ids back while time goes on: a capture restarted on a live clock, same map.
+  EXPECT_TRUE(node.onFrame(smallFrame(1, 5000)));
+  EXPECT_FALSE(node.onFrame(smallFrame(4, 2000)));  // time not increasing (3 ms back)
+  EXPECT_FALSE(node.onFrame(smallFrame(5, 5000)));  // time not increasing
+  EXPECT_TRUE(node.onFrame(smallFrame(4, 5001)));
   node.reportProblem(TrackerProblem::kUndecodable, "CBLOX_STEREO: message does not decode");
   node.reportProblem(TrackerProblem::kBadGroundTruth, "not a frame");
 
   const TrackerStatus s = node.status();
-  EXPECT_EQ(s.frames_received, 9u);  // the ground-truth problem is no frame
+  EXPECT_EQ(s.frames_received, 10u);  // the ground-truth problem is no frame
+  EXPECT_EQ(s.source_restarts, 1u);
+  EXPECT_EQ(s.map_epoch, 0);  // time never went back by 2 s: the same map
   EXPECT_EQ(s.frames_rejected, 7u);
   EXPECT_EQ(s.problem(TrackerProblem::kBadCalibration), 1u);
   EXPECT_EQ(s.problem(TrackerProblem::kWrongSize), 1u);
@@ -279,7 +283,7 @@ TEST(TrackerNodeTest, RejectsBadCalibrationSizeChangesAndDisorderCountingEachKin
   EXPECT_EQ(s.state, "waiting for frames");
   // Logged once per kind: the second calibration change and out-of-order frame are not.
   std::lock_guard<std::mutex> lock(out.mutex);
-  ASSERT_EQ(out.log.size(), 6u);
+  ASSERT_EQ(out.log.size(), 7u);
   EXPECT_EQ(out.log[0], "bad_calibration: frame 0 (1000 us): stereo pair: not rectified");
   EXPECT_EQ(out.log[1], "wrong_size: frame 0 (1000 us): image 32x24, the calibration is 64x48");
   EXPECT_EQ(out.log[2].rfind("calibration_changed: frame 2 (3000 us): calibration 64x48 fx "
@@ -288,7 +292,66 @@ TEST(TrackerNodeTest, RejectsBadCalibrationSizeChangesAndDisorderCountingEachKin
             0u)
       << out.log[2];
   EXPECT_EQ(out.log[3],
-            "out_of_order: frame 1 (5000 us): not after the previous frame 1 (2000 us)");
+            "frame 1 (5000 us): frame ids went back (from 1) while time went on: the capture "
+            "restarted; tracking continues in the same map");
+  EXPECT_EQ(out.log[4],
+            "out_of_order: frame 4 (2000 us): not after the previous frame 1 (5000 us)");
+}
+
+TEST(TrackerNodeTest, ATimeStepBackStartsANewMapInTheNextEpoch) {
+  TrackerNodeConfig config;
+  config.mode = TrackerMode::kRgbd;
+  config.initial_pose = InitialPose::kGroundTruth;
+  config.restart_after_backwards_s = 2.0;
+  Collected out;
+  TrackerNode node(config, nullptr, out.outputs());
+  node.start();
+  const auto play = [&](size_t frames) {
+    auto source = simRoom(frames, kFullRig);
+    ASSERT_NE(source, nullptr);
+    CaptureFrame frame;
+    std::string error;
+    while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+      const int64_t utime = frame.timestamp_ns / 1000;
+      node.onGroundTruth(frame.frame_id, utime, *frame.T_G_C);
+      TrackerFrame input;
+      TrackerProblem problem;
+      ASSERT_TRUE(decodeRgbdFrame(
+          toDepthFrameMsg(frame, source->info(), utime, DepthEncoding::kUint16Millimetres),
+          &input, &problem, &error))
+          << error;
+      ASSERT_TRUE(node.onFrame(std::move(input)));
+      ASSERT_TRUE(node.waitUntilIdle(std::chrono::seconds(20)));
+    }
+  };
+  play(50);  // 0 .. 2.45 s
+  EXPECT_EQ(node.status().map_epoch, 0);
+  play(5);  // from 0 s again: 2.45 s back
+  const TrackerStatus s = node.status();
+  EXPECT_EQ(s.map_epoch, 1);
+  EXPECT_EQ(s.source_restarts, 1u);
+  EXPECT_EQ(s.frames_rejected, 0u);
+  {
+    std::lock_guard<std::mutex> lock(out.mutex);
+    ASSERT_EQ(out.poses.size(), 55u);
+    for (size_t i = 0; i < 50; ++i) EXPECT_EQ(out.poses[i].map_epoch, 0);
+    // The new map's first pose says so (a jump); the rest track on in epoch 1.
+    EXPECT_EQ(out.poses[50].state, FramePoseState::kMapReset) << out.poses[50].reason;
+    EXPECT_TRUE(out.poses[50].jump);
+    for (size_t i = 50; i < 55; ++i) EXPECT_EQ(out.poses[i].map_epoch, 1);
+    for (size_t i = 51; i < 55; ++i) EXPECT_EQ(out.poses[i].state, FramePoseState::kOk);
+  }
+  // A covariance request about the old map fails pair by pair, naming the epochs.
+  node.onCovarianceRequest({7, {{1, 0}}}, 0);
+  node.stop();
+  std::lock_guard<std::mutex> lock(out.mutex);
+  ASSERT_EQ(out.covariance_replies.size(), 1u);
+  ASSERT_EQ(out.covariance_replies[0].results.size(), 1u);
+  EXPECT_FALSE(out.covariance_replies[0].results[0].ok);
+  EXPECT_NE(out.covariance_replies[0].results[0].error.find(
+                "keyframes of map epoch 0; the tracker's map is epoch 1"),
+            std::string::npos)
+      << out.covariance_replies[0].results[0].error;
 }
 
 TEST(TrackerNodeTest, ConfiguredCalibrationOverridesTheMessages) {

@@ -458,9 +458,9 @@ TEST(lcm_wire, NestedMembersAreNamedByPath) {
   {
     const cblox::covariance_reply_t msg = filled(Tag<cblox::covariance_reply_t>{});
     Bytes bytes = encode(msg);
-    // fingerprint, utime, request_id, num_pairs, pairs[0], then pairs[1]'s keyframe_i,
-    // keyframe_j, ok and error.
-    const size_t at = 8 + 20 + static_cast<size_t>(msg.pairs[0].getEncodedSize() - 8) + 17;
+    // fingerprint, utime, map_epoch, request_id, num_pairs, pairs[0], then pairs[1]'s
+    // keyframe_i, keyframe_j, ok and error.
+    const size_t at = 8 + 24 + static_cast<size_t>(msg.pairs[0].getEncodedSize() - 8) + 17;
     put32(&bytes, at, 0x7FFFFFFFU);
     const WireCheck checked = check(findCase(cases, "covariance_reply_t"), bytes);
     EXPECT_EQ(checked.error, WireError::kLengthOutOfBounds);
@@ -474,7 +474,7 @@ TEST(lcm_wire, NestedMembersAreNamedByPath) {
     EXPECT_EQ(short_pairs.error, WireError::kLengthOutOfBounds);
     EXPECT_EQ(short_pairs.detail,
               "field pairs: length 2 (num_pairs) x 318 bytes exceeds the " +
-                  std::to_string(cut.size() - 28) + " bytes left");
+                  std::to_string(cut.size() - 32) + " bytes left");
   }
   {
     // stereo_pair_t ends with T_L_R (56 bytes) and rectified (1 byte): cut 10 bytes off, the

@@ -126,6 +126,7 @@ inline cblox::frame_pose_t MakeFramePose() {
 inline cblox::keyframe_t MakeKeyframe() {
   cblox::keyframe_t m{};
   m.utime = 1'700'000'000'000'005;
+  m.map_epoch = 3;
   m.keyframe_id = 12;
   m.frame_id = 80;
   m.T_G_K = MakePose(4.0);
@@ -137,6 +138,7 @@ inline cblox::keyframe_t MakeKeyframe() {
 inline cblox::keyframe_pose_batch_t MakeKeyframePoseBatch() {
   cblox::keyframe_pose_batch_t m{};
   m.utime = 1'700'000'000'000'006;
+  m.map_epoch = 3;
   m.reason = cblox::keyframe_pose_batch_t::GLOBAL_BA;
   m.keyframe_ids = {12, 13, 21};
   m.poses = {MakePose(5.0), MakePose(6.0), MakePose(7.0)};
@@ -147,6 +149,7 @@ inline cblox::keyframe_pose_batch_t MakeKeyframePoseBatch() {
 inline cblox::covariance_request_t MakeCovarianceRequest() {
   cblox::covariance_request_t m{};
   m.utime = 1'700'000'000'000'007;
+  m.map_epoch = 3;
   m.request_id = 901;
   m.keyframe_i = {12, 13};
   m.keyframe_j = {40, 41};
@@ -168,6 +171,7 @@ inline cblox::covariance_pair_t MakeCovariancePair(int64_t i, int64_t j, bool ok
 inline cblox::covariance_reply_t MakeCovarianceReply() {
   cblox::covariance_reply_t m{};
   m.utime = 1'700'000'000'000'008;
+  m.map_epoch = 3;
   m.request_id = 901;
   m.pairs = {MakeCovariancePair(12, 40, true), MakeCovariancePair(13, 41, false)};
   m.num_pairs = static_cast<int32_t>(m.pairs.size());

@@ -9,7 +9,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
-#include "core/eval/json_writer.h"
+#include <nlohmann/json.hpp>
+
 #include "core/tsdf/block_index.h"
 #include "core/tsdf/voxel.h"
 
@@ -140,16 +141,14 @@ class VertexGrid {
   std::unordered_map<uint64_t, std::vector<uint32_t>> cells_;
 };
 
-std::string alignmentJson(const std::optional<Alignment>& alignment) {
+nlohmann::ordered_json alignmentJson(const std::optional<Alignment>& alignment) {
   const Alignment a = alignment.value_or(Alignment{});
   const Eigen::Quaterniond& q = a.T_A_B.rotation();
   const Eigen::Vector3d& t = a.T_A_B.translation();
-  JsonObject json("  ");
-  json.boolean("applied", alignment.has_value());
-  json.num("scale", a.scale);
-  json.raw("rotation_xyzw", jsonArray({q.x(), q.y(), q.z(), q.w()}));
-  json.raw("translation_m", jsonArray({t.x(), t.y(), t.z()}));
-  return json.close();
+  return {{"applied", alignment.has_value()},
+          {"scale", a.scale},
+          {"rotation_xyzw", {q.x(), q.y(), q.z(), q.w()}},
+          {"translation_m", {t.x(), t.y(), t.z()}}};
 }
 
 }  // namespace
@@ -302,37 +301,27 @@ std::optional<MeshAccuracy> evaluateMeshAccuracy(const TriangleMeshRaycaster& gr
   return result;
 }
 
-std::string MeshAccuracy::toJson() const {
-  JsonObject a("  ");
-  a.count("vertices", accuracy_m.count);
-  a.count("outlier_vertices", outlier_vertices);
-  a.num("rmse_m", accuracy_m.rmse);
-  a.num("mean_m", accuracy_m.mean);
-  a.num("median_m", accuracy_m.median);
-  a.num("p90_m", accuracy_m.p90);
-  a.num("std_m", accuracy_m.stddev);
-  a.num("min_m", accuracy_m.min);
-  a.num("max_m", accuracy_m.max);
-
-  JsonObject c("  ");
-  c.num("threshold_m", completeness_threshold_m);
-  c.count("ground_truth_samples", ground_truth_samples);
-  c.num("sample_spacing_m", sample_spacing_m);
-  c.str("reference", completeness_reference);
-  c.num("completeness", completeness);
-  c.num("precision", precision);
-  c.num("f_score", f_score);
-
-  JsonObject root("");
-  root.count("reconstruction_vertices", reconstruction_vertices);
-  root.count("reconstruction_triangles", reconstruction_triangles);
-  root.count("ground_truth_triangles", ground_truth_triangles);
-  root.num("ground_truth_area_m2", ground_truth_area_m2);
-  root.raw("alignment", alignmentJson(T_G_R));
-  root.num("max_distance_m", max_distance_m);
-  root.raw("accuracy", a.close());
-  root.raw("completeness", c.close());
-  return root.close() + "\n";
+nlohmann::ordered_json MeshAccuracy::toJson() const {
+  nlohmann::ordered_json root;
+  root["reconstruction_vertices"] = reconstruction_vertices;
+  root["reconstruction_triangles"] = reconstruction_triangles;
+  root["ground_truth_triangles"] = ground_truth_triangles;
+  root["ground_truth_area_m2"] = ground_truth_area_m2;
+  root["alignment"] = alignmentJson(T_G_R);
+  root["max_distance_m"] = max_distance_m;
+  root["accuracy"] = {{"vertices", accuracy_m.count},  {"outlier_vertices", outlier_vertices},
+                      {"rmse_m", accuracy_m.rmse},     {"mean_m", accuracy_m.mean},
+                      {"median_m", accuracy_m.median}, {"p90_m", accuracy_m.p90},
+                      {"std_m", accuracy_m.stddev},    {"min_m", accuracy_m.min},
+                      {"max_m", accuracy_m.max}};
+  root["completeness"] = {{"threshold_m", completeness_threshold_m},
+                          {"ground_truth_samples", ground_truth_samples},
+                          {"sample_spacing_m", sample_spacing_m},
+                          {"reference", completeness_reference},
+                          {"completeness", completeness},
+                          {"precision", precision},
+                          {"f_score", f_score}};
+  return root;
 }
 
 std::optional<SurfaceBlockCount> countSurfaceBlocks(const Mesh& mesh, const LayerConfig& grid,

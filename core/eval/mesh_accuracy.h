@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <nlohmann/json_fwd.hpp>
 
 #include "core/eval/trajectory_metrics.h"
 #include "core/eval/umeyama.h"
@@ -87,19 +88,20 @@ struct MeshAccuracy {
   double precision = 0.0;     ///< in [0, 1]
   double f_score = 0.0;       ///< in [0, 1]
 
-  /// A JSON object (2-space indented, keys in this order):
+  /// The result as a JSON object (keys in this order):
   ///   {"reconstruction_vertices", "reconstruction_triangles", "ground_truth_triangles",
   ///    "ground_truth_area_m2",
   ///    "alignment": {"applied", "scale", "rotation_xyzw": [4], "translation_m": [3]},
-  ///    "max_distance_m" (null for infinity),
+  ///    "max_distance_m" (infinity: written as null),
   ///    "accuracy": {"vertices", "outlier_vertices", "rmse_m", "mean_m", "median_m",
   ///                 "p90_m", "std_m", "min_m", "max_m"},
   ///    "completeness": {"threshold_m", "ground_truth_samples", "sample_spacing_m",
   ///                     "reference", "completeness", "precision", "f_score"}}
-  /// The alignment is the identity with scale 1 when none was applied. Numbers are written
-  /// in the shortest form that reads back to the same double (non-finite values as null);
-  /// per-vertex errors are not included. Ends with a newline. Thread-safe.
-  std::string toJson() const;
+  /// The alignment is the identity with scale 1 when none was applied. Counts are unsigned
+  /// integers; nlohmann's dump() writes doubles in the shortest form that reads back to the
+  /// same double and non-finite ones as null. Per-vertex errors are not included.
+  /// Thread-safe.
+  nlohmann::ordered_json toJson() const;
 };
 
 /// Evaluates `reconstruction` against `ground_truth` as MeshAccuracy describes, using

@@ -6,7 +6,7 @@
 #include <numbers>
 #include <tuple>
 
-#include "core/eval/json_writer.h"
+#include <nlohmann/json.hpp>
 
 namespace cblox {
 namespace {
@@ -217,7 +217,9 @@ std::optional<RpeResult> computeRpe(const std::vector<AssociatedPose>& pairs,
     }
   }
   if (translation_errors.empty()) {
-    setError(error, "RPE: no pose pair is " + jsonNumber(options.delta) +
+    char delta[32];
+    std::snprintf(delta, sizeof(delta), "%g", options.delta);
+    setError(error, "RPE: no pose pair is " + std::string(delta) +
                         (options.unit == RpeDeltaUnit::kFrames ? " frames" : " s") + " apart (" +
                         std::to_string(pairs.size()) + " associated poses)");
     return std::nullopt;
@@ -235,52 +237,44 @@ std::string TrajectoryEvaluationConfig::validate() const {
   return "";
 }
 
-std::string TrajectoryEvaluation::toJson() const {
-  JsonObject assoc("  ");
-  assoc.str("method", associationMethodName(association.method));
-  assoc.num("max_difference_s", association.max_difference_s);
-  assoc.num("time_offset_s", association.time_offset_s);
-
-  JsonObject a("  ");
+nlohmann::ordered_json TrajectoryEvaluation::toJson() const {
   const Eigen::Quaterniond& q = ate.alignment.T_A_B.rotation();
   const Eigen::Vector3d& t = ate.alignment.T_A_B.translation();
-  a.str("alignment", alignmentTypeName(ate.alignment_type));
-  a.num("scale", ate.alignment.scale);
-  a.raw("rotation_xyzw", jsonArray({q.x(), q.y(), q.z(), q.w()}));
-  a.raw("translation_m", jsonArray({t.x(), t.y(), t.z()}));
-  a.count("pairs", ate.translation_m.count);
-  a.num("rmse_m", ate.translation_m.rmse);
-  a.num("mean_m", ate.translation_m.mean);
-  a.num("median_m", ate.translation_m.median);
-  a.num("std_m", ate.translation_m.stddev);
-  a.num("min_m", ate.translation_m.min);
-  a.num("max_m", ate.translation_m.max);
-
-  JsonObject r("  ");
-  r.num("delta", rpe.options.delta);
-  r.str("delta_unit", rpe.options.unit == RpeDeltaUnit::kFrames ? "frames" : "seconds");
-  r.num("estimate_scale", rpe.options.estimate_scale);
-  r.count("pairs", rpe.translation_m.count);
+  nlohmann::ordered_json root;
+  root["ground_truth_poses"] = ground_truth_poses;
+  root["estimate_poses"] = estimate_poses;
+  root["matched_poses"] = matched_poses;
+  root["association"] = {{"method", associationMethodName(association.method)},
+                         {"max_difference_s", association.max_difference_s},
+                         {"time_offset_s", association.time_offset_s}};
+  root["ate"] = {{"alignment", alignmentTypeName(ate.alignment_type)},
+                 {"scale", ate.alignment.scale},
+                 {"rotation_xyzw", {q.x(), q.y(), q.z(), q.w()}},
+                 {"translation_m", {t.x(), t.y(), t.z()}},
+                 {"pairs", ate.translation_m.count},
+                 {"rmse_m", ate.translation_m.rmse},
+                 {"mean_m", ate.translation_m.mean},
+                 {"median_m", ate.translation_m.median},
+                 {"std_m", ate.translation_m.stddev},
+                 {"min_m", ate.translation_m.min},
+                 {"max_m", ate.translation_m.max}};
+  nlohmann::ordered_json& r = root["rpe"];
+  r["delta"] = rpe.options.delta;
+  r["delta_unit"] = rpe.options.unit == RpeDeltaUnit::kFrames ? "frames" : "seconds";
+  r["estimate_scale"] = rpe.options.estimate_scale;
+  r["pairs"] = rpe.translation_m.count;
   const auto stats = [&r](const std::string& prefix, const std::string& unit,
                           const ErrorStatistics& s) {
-    r.num(prefix + "_rmse_" + unit, s.rmse);
-    r.num(prefix + "_mean_" + unit, s.mean);
-    r.num(prefix + "_median_" + unit, s.median);
-    r.num(prefix + "_std_" + unit, s.stddev);
-    r.num(prefix + "_min_" + unit, s.min);
-    r.num(prefix + "_max_" + unit, s.max);
+    r[prefix + "_rmse_" + unit] = s.rmse;
+    r[prefix + "_mean_" + unit] = s.mean;
+    r[prefix + "_median_" + unit] = s.median;
+    r[prefix + "_std_" + unit] = s.stddev;
+    r[prefix + "_min_" + unit] = s.min;
+    r[prefix + "_max_" + unit] = s.max;
   };
   stats("translation", "m", rpe.translation_m);
   stats("rotation", "deg", rpe.rotation_deg);
-
-  JsonObject root("");
-  root.count("ground_truth_poses", ground_truth_poses);
-  root.count("estimate_poses", estimate_poses);
-  root.count("matched_poses", matched_poses);
-  root.raw("association", assoc.close());
-  root.raw("ate", a.close());
-  root.raw("rpe", r.close());
-  return root.close() + "\n";
+  return root;
 }
 
 std::optional<TrajectoryEvaluation> evaluateTrajectory(const StampedTrajectory& ground_truth,

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "core/eval/umeyama.h"
 #include "core/geometry/se3.h"
 #include "core/io/tum_trajectory.h"
@@ -148,7 +150,7 @@ struct TrajectoryEvaluation {
   AteResult ate;
   RpeResult rpe;
 
-  /// A JSON object (2-space indented, keys in this order):
+  /// The result as a JSON object (keys in this order):
   ///   {"ground_truth_poses", "estimate_poses", "matched_poses",
   ///    "association": {"method", "max_difference_s", "time_offset_s"},
   ///    "ate": {"alignment", "scale", "rotation_xyzw": [4], "translation_m": [3], "pairs",
@@ -158,9 +160,10 @@ struct TrajectoryEvaluation {
   ///            "translation_std_m", "translation_min_m", "translation_max_m",
   ///            "rotation_rmse_deg", "rotation_mean_deg", "rotation_median_deg",
   ///            "rotation_std_deg", "rotation_min_deg", "rotation_max_deg"}}
-  /// Numbers are written in the shortest form that reads back to the same double (non-finite
-  /// values as null); per-pair errors are not included. Thread-safe.
-  std::string toJson() const;
+  /// Counts are unsigned integers; nlohmann's dump() writes doubles in the shortest form
+  /// that reads back to the same double and non-finite ones as null. Per-pair errors are not
+  /// included. Thread-safe.
+  nlohmann::ordered_json toJson() const;
 };
 
 /// Associates, then computes the ATE and the RPE. Returns std::nullopt with a message

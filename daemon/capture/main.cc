@@ -19,7 +19,6 @@
 #include <csignal>
 #include <cstdio>
 #include <functional>
-#include <iostream>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -30,12 +29,12 @@
 
 #include "core/io/ply_io.h"
 #include "daemon/capture/capture_config.h"
-#include "daemon/common/command_line.h"
+#include "daemon/common/daemon_options.h"
 #include "daemon/common/heartbeat.h"
 #include "daemon/common/input_watch.h"
+#include "daemon/common/lcm_messages.h"
 #include "daemon/common/run_loop.h"
 #include "daemon/common/yaml_config.h"
-#include "daemon/common/lcm_messages.h"
 #include "drivers/frame_folder_writer.h"
 #include "drivers/open_frame_source.h"
 
@@ -44,73 +43,15 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-void printUsage() {
-  std::cout
-      << "usage: cblox-capture [--config FILE] [--source SPEC] [--trajectory KIND|FILE] [--laps "
-         "N]\n"
-         "                     [--rate source|max|HZ] [--frames N] [--noise none|realistic]\n"
-         "                     [--lcm-url URL] [--depth-encoding u16_mm|f32]\n"
-         "                     [--render-to DIR] [--write-scene FILE.ply] [--quiet]\n"
-         "  SPEC: sim:room | sim:hall | sim:town | sim:MESH.ply|.obj | euroc:DIR | tum:DIR |\n"
-         "        7scenes:DIR\n"
-         "  KIND (sim): loop | orbit | lawnmower | figure-eight, or a TUM trajectory file\n"
-         "  --render-to DIR  writes images + lists + groundtruth.txt instead of publishing\n"
-         "  --write-scene    writes the simulator's ground-truth mesh (sim sources) and exits\n";
-}
-
 struct Args {
-  std::optional<std::string> config_file, source, trajectory, rate, noise, lcm_url, depth_encoding,
-      render_to, write_scene;
+  DaemonOptions daemon;
+  std::optional<std::string> source, trajectory, rate, noise, depth_encoding, render_to,
+      write_scene;
   std::optional<int> laps, frames;
-  bool quiet = false;
 };
 
-int64_t toInt(const std::string& flag, const std::string& value) {
-  char* end = nullptr;
-  const long long n = std::strtoll(value.c_str(), &end, 10);
-  if (end == value.c_str() || *end != '\0') {
-    throw ConfigError(flag + ": expected an integer, got '" + value + "'");
-  }
-  return n;
-}
-
-Args parseArgs(int argc, char** argv) {
-  Args args;
-  parseFlags(
-      argc, argv, printUsage, {"--quiet"}, [&](const std::string&) { args.quiet = true; },
-      [&](const std::string& flag, const std::string& value) {
-        if (flag == "--config")
-          args.config_file = value;
-        else if (flag == "--source")
-          args.source = value;
-        else if (flag == "--trajectory")
-          args.trajectory = value;
-        else if (flag == "--laps")
-          args.laps = static_cast<int>(toInt(flag, value));
-        else if (flag == "--rate")
-          args.rate = value;
-        else if (flag == "--frames")
-          args.frames = static_cast<int>(toInt(flag, value));
-        else if (flag == "--noise")
-          args.noise = value;
-        else if (flag == "--lcm-url")
-          args.lcm_url = value;
-        else if (flag == "--depth-encoding")
-          args.depth_encoding = value;
-        else if (flag == "--render-to")
-          args.render_to = value;
-        else if (flag == "--write-scene")
-          args.write_scene = value;
-        else
-          return false;
-        return true;
-      });
-  return args;
-}
-
 CaptureConfig buildConfig(const Args& args) {
-  CaptureConfig config =
-      args.config_file ? loadCaptureConfig(loadYamlFile(*args.config_file)) : CaptureConfig{};
+  CaptureConfig config = loadDaemonConfig<CaptureConfig>(args.daemon, loadCaptureConfig);
   if (args.source) config.source = *args.source;
   if (args.trajectory) config.source_config.trajectory = *args.trajectory;
   if (args.laps) {
@@ -123,7 +64,6 @@ CaptureConfig buildConfig(const Args& args) {
     config.source_config.max_frames = static_cast<size_t>(*args.frames);
   }
   if (args.noise) config.source_config.sim.noise = sensorNoisePreset(*args.noise);
-  if (args.lcm_url) config.lcm_url = *args.lcm_url;
   if (args.depth_encoding) {
     if (*args.depth_encoding == "u16_mm") {
       config.depth_encoding = DepthEncoding::kUint16Millimetres;
@@ -203,7 +143,7 @@ int run(const Args& args) {
     return 2;
   }
   const SourceInfo& info = source->info();
-  if (!args.quiet) printInfo(info);
+  if (!args.daemon.quiet) printInfo(info);
 
   installStopHandlers();
 
@@ -223,7 +163,7 @@ int run(const Args& args) {
     }
   }
 
-  Progress progress(info.frame_count, args.quiet);
+  Progress progress(info.frame_count, args.daemon.quiet);
   SystemdNotifier notifier;
   notifier.ready("cblox-capture: " + info.name);
   CaptureFrame frame;
@@ -351,6 +291,33 @@ int run(const Args& args) {
 }  // namespace cblox
 
 int main(int argc, char** argv) {
-  return cblox::runProcess("cblox-capture",
-                           [&] { return cblox::run(cblox::parseArgs(argc, argv)); });
+  cblox::Args args;
+  CLI::App app{
+      "cblox-capture: plays a capture source on the LCM channels CBLOX_STEREO, CBLOX_DEPTH,\n"
+      "CBLOX_GT_POSE and CBLOX_HEARTBEAT (at the source's rate, a fixed rate or as fast as\n"
+      "possible), or renders it to a folder.\n"
+      "Exit status: 0 done, 1 runtime error, 2 usage or configuration error.",
+      "cblox-capture"};
+  cblox::addDaemonOptions(app, &args.daemon, "config/capture.yaml");
+  app.add_option("--source", args.source,
+                 "sim:room | sim:hall | sim:town | sim:MESH.ply|.obj | euroc:DIR | tum:DIR |\n"
+                 "7scenes:DIR")
+      ->type_name("SPEC");
+  app.add_option("--trajectory", args.trajectory,
+                 "sim sources: loop | orbit | lawnmower | figure-eight, or a TUM trajectory file")
+      ->type_name("KIND|FILE");
+  app.add_option("--laps", args.laps, "laps of the trajectory (>= 1)")->type_name("N");
+  app.add_option("--rate", args.rate, "source | max | HZ")->type_name("RATE");
+  app.add_option("--frames", args.frames, "frames to play at the most (0: all)")->type_name("N");
+  app.add_option("--noise", args.noise, "sensor noise preset: none | realistic")
+      ->type_name("PRESET");
+  app.add_option("--depth-encoding", args.depth_encoding, "u16_mm | f32")->type_name("ENCODING");
+  app.add_option("--render-to", args.render_to,
+                 "writes images + lists + groundtruth.txt instead of publishing")
+      ->type_name("DIR");
+  app.add_option("--write-scene", args.write_scene,
+                 "writes the simulator's ground-truth mesh (sim sources) and exits")
+      ->type_name("FILE.ply");
+  if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
+  return cblox::runProcess("cblox-capture", [&] { return cblox::run(args); });
 }

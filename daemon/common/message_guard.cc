@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include <cblox/heartbeat_t.hpp>
+
 namespace cblox {
 
 namespace {
@@ -87,6 +89,14 @@ void MessageGuard::addTo(HeartbeatBuilder* heartbeat) const {
   }
   heartbeat->add("handler_errors", c.handler_errors);
   if (input_watch_) input_watch_->addTo(heartbeat);
+  if (peer_watch_) peer_watch_->addTo(heartbeat);
+}
+
+void MessageGuard::setPeerWatch(PeerWatch* watch, const std::string& heartbeat_channel) {
+  peer_watch_ = watch;
+  subscribe<heartbeat_t>(heartbeat_channel, [watch](const heartbeat_t& msg, const std::string&) {
+    watch->onHeartbeat(msg.process, msg.pid);
+  });
 }
 
 }  // namespace cblox

@@ -19,6 +19,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "daemon/common/heartbeat.h"
+#include "daemon/common/peer_watch.h"
 #include "daemon/common/input_watch.h"
 #include "daemon/common/rate_limited_log.h"
 #include "lcmtypes/wire_check.h"
@@ -82,10 +83,15 @@ class MessageGuard {
   /// Records arrivals on the channels `watch` watches (nullptr: none). `watch` must outlive
   /// the guard's handling of messages and addTo() calls.
   void setInputWatch(InputWatch* watch) { input_watch_ = watch; }
+  /// Subscribes `heartbeat_channel` (heartbeat_t) and tells `watch` of every heartbeat, so a
+  /// second instance of this process on the bus is noticed (PeerWatch). `watch` must outlive
+  /// the guard's handling of messages and addTo() calls. Call once, before handling.
+  void setPeerWatch(PeerWatch* watch, const std::string& heartbeat_channel);
 
   MessageGuardCounts counts() const;
   /// Adds "messages_refused_<kind>" for every WireError kind and "handler_errors", then, with
-  /// an InputWatch, its counters and state (InputWatch::addTo).
+  /// an InputWatch, its counters and state (InputWatch::addTo), and with a PeerWatch its
+  /// (PeerWatch::addTo).
   void addTo(HeartbeatBuilder* heartbeat) const;
 
  private:
@@ -103,6 +109,7 @@ class MessageGuard {
   RateLimitedLog problem_log_;
   std::vector<std::unique_ptr<Entry>> entries_;
   InputWatch* input_watch_ = nullptr;
+  PeerWatch* peer_watch_ = nullptr;
   std::atomic<uint64_t> accepted_{0}, handler_errors_{0};
   std::array<std::atomic<uint64_t>, static_cast<size_t>(WireError::kCount)> refused_{};
 };

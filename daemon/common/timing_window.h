@@ -20,6 +20,12 @@ class TimingWindow {
     while (values_.size() > capacity_) values_.pop_front();
   }
 
+  /// The newest value; 0 when empty.
+  double last() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return values_.empty() ? 0.0 : values_.back();
+  }
+
   /// The q-quantile (q in [0, 1]) of the kept values, nearest rank; 0 when empty.
   double quantile(double q) const {
     std::vector<double> sorted;

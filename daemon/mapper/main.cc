@@ -19,14 +19,13 @@
 
 #include <chrono>
 #include <cstdio>
-#include <iostream>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <lcm/lcm-cpp.hpp>
 
-#include "daemon/common/command_line.h"
+#include "daemon/common/daemon_options.h"
 #include "daemon/common/input_watch.h"
 #include "daemon/common/run_loop.h"
 #include "daemon/common/yaml_config.h"
@@ -39,45 +38,15 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-void printUsage() {
-  std::cout << "usage: cblox-mapper [--config FILE] [--pose-source ground_truth|tracker]\n"
-               "                    [--output-dir DIR] [--lcm-url URL] [--quiet]\n"
-               "  Runs until SIGINT/SIGTERM. Commands arrive on CBLOX_CMD (see cblox-ctl).\n"
-               "  exit status: 0 stopped by signal, 1 runtime error, 2 usage/configuration\n";
-}
-
 struct Args {
-  std::optional<std::string> config_file, pose_source, output_dir, lcm_url;
-  bool quiet = false;
+  DaemonOptions daemon;
+  std::optional<std::string> pose_source, output_dir;
 };
 
-Args parseArgs(int argc, char** argv) {
-  Args args;
-  parseFlags(
-      argc, argv, printUsage, {"--quiet"}, [&](const std::string&) { args.quiet = true; },
-      [&](const std::string& flag, const std::string& value) {
-        if (flag == "--config") {
-          args.config_file = value;
-        } else if (flag == "--pose-source") {
-          args.pose_source = value;
-        } else if (flag == "--output-dir") {
-          args.output_dir = value;
-        } else if (flag == "--lcm-url") {
-          args.lcm_url = value;
-        } else {
-          return false;
-        }
-        return true;
-      });
-  return args;
-}
-
 MapperProcessConfig buildConfig(const Args& args) {
-  MapperProcessConfig config =
-      args.config_file ? loadMapperConfig(loadYamlFile(*args.config_file)) : MapperProcessConfig{};
+  MapperProcessConfig config = loadDaemonConfig<MapperProcessConfig>(args.daemon, loadMapperConfig);
   if (args.pose_source) config.mapper.pose_source = parsePoseSource(*args.pose_source);
   if (args.output_dir) config.mapper.output_dir = *args.output_dir;
-  if (args.lcm_url) config.lcm_url = *args.lcm_url;
   if (const std::string e = config.validate(); !e.empty()) throw ConfigError(e);
   return config;
 }
@@ -98,7 +67,7 @@ int run(const Args& args) {
     return 1;
   }
   installStopHandlers();
-  if (!args.quiet) {
+  if (!args.daemon.quiet) {
     std::printf(
         "mapper: %s poses, %s integrator, voxel %.3f m, truncation %.3f m, %d thread(s); "
         "new subvolume every %d keyframes%s; output %s\n",
@@ -154,7 +123,7 @@ int run(const Args& args) {
                                          " frames integrated, " + std::to_string(s.num_submaps) +
                                          " subvolumes, " + std::to_string(s.num_blocks) + " blocks");
                                    }}};
-  if (!args.quiet) {
+  if (!args.daemon.quiet) {
     tasks.push_back({config.progress_period_s, config.progress_period_s,
                      [&] { progress(mapper.status(), ""); }});
   }
@@ -163,7 +132,7 @@ int run(const Args& args) {
   const MapperStatus s = mapper.status();
   node.publishStatus(s);
   node.publishHeartbeat(s, "stopped");
-  if (!args.quiet) progress(s, "stopped: ");
+  if (!args.daemon.quiet) progress(s, "stopped: ");
   return exit_code;
 }
 
@@ -171,6 +140,17 @@ int run(const Args& args) {
 }  // namespace cblox
 
 int main(int argc, char** argv) {
-  return cblox::runProcess("cblox-mapper",
-                           [&] { return cblox::run(cblox::parseArgs(argc, argv)); });
+  cblox::Args args;
+  CLI::App app{
+      "cblox-mapper: the dense mapper process: integrates the depth frames of CBLOX_DEPTH into\n"
+      "a collection of TSDF subvolumes at the poses of CBLOX_GT_POSE or of the tracker.\n"
+      "Runs until SIGINT/SIGTERM. Commands arrive on CBLOX_CMD (see cblox-ctl).\n"
+      "Exit status: 0 stopped by signal, 1 runtime error, 2 usage/configuration error.",
+      "cblox-mapper"};
+  cblox::addDaemonOptions(app, &args.daemon, "config/mapper.yaml");
+  app.add_option("--pose-source", args.pose_source, "ground_truth | tracker")->type_name("SOURCE");
+  app.add_option("--output-dir", args.output_dir, "where exports go (paths inside it only)")
+      ->type_name("DIR");
+  if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
+  return cblox::runProcess("cblox-mapper", [&] { return cblox::run(args); });
 }

@@ -1,11 +1,4 @@
 #include "daemon/mapper/mapper.h"
-#include "daemon/mapper/map_epoch_key.h"
-
-#include <pthread.h>
-#include <sched.h>
-#include <sys/resource.h>
-#include <sys/syscall.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -15,32 +8,14 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "core/io/ply_io.h"
+#include "daemon/common/text_format.h"
+#include "daemon/mapper/map_epoch_key.h"
 #include "daemon/mapper/output_path.h"
 
 namespace cblox {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
-std::string fixed(double value, int decimals) {
-  char text[64];
-  std::snprintf(text, sizeof(text), "%.*f", decimals, value);
-  return text;
-}
-
-// Copies every block of `source` into the empty `target` (same geometry). The caller holds
-// whatever lock `source` needs.
-void copyLayer(const TsdfLayer& source, TsdfLayer* target) {
-  for (const auto& [key, block] : source.blocks()) {
-    Block* copy = target->allocateBlock(block->index());
-    std::copy_n(block->voxels(), block->numVoxels(), copy->voxels());
-  }
-}
 
 }  // namespace
 
@@ -108,39 +83,6 @@ std::string MapperReply::value(const std::string& key) const {
   return {};
 }
 
-Color submapColor(SubmapId id) {
-  // Golden-ratio steps around the hue circle: neighbouring ids get far-apart hues.
-  const double hue = std::fmod(0.13 + 0.618033988749895 * static_cast<double>(id), 1.0) * 6.0;
-  const double value = 0.95, saturation = 0.85;
-  const int sector = static_cast<int>(hue) % 6;
-  const double f = hue - std::floor(hue);
-  const double p = value * (1.0 - saturation), q = value * (1.0 - saturation * f),
-               t = value * (1.0 - saturation * (1.0 - f));
-  double r = 0, g = 0, b = 0;
-  switch (sector) {
-    case 0:
-      r = value, g = t, b = p;
-      break;
-    case 1:
-      r = q, g = value, b = p;
-      break;
-    case 2:
-      r = p, g = value, b = t;
-      break;
-    case 3:
-      r = p, g = q, b = value;
-      break;
-    case 4:
-      r = t, g = p, b = value;
-      break;
-    default:
-      r = value, g = p, b = q;
-      break;
-  }
-  auto channel = [](double c) { return static_cast<uint8_t>(std::lround(c * 255.0)); };
-  return Color{channel(r), channel(g), channel(b)};
-}
-
 // ---------------------------------------------------------------------------------------------
 // The integrator bound to one submap's layer (integrator thread only).
 
@@ -188,7 +130,21 @@ Mapper::Mapper(const MapperConfig& config, LogSink log)
                        std::chrono::duration<double>(config_.log_interval_s)),
                    [this](const std::string& line) { this->log(line); }),
       policy_(config_.creation),
-      scheduler_(config_.maintenance) {}
+      integration_ms_(config_.timing_window),
+      scheduler_(config_.maintenance),
+      worker_(&collection_,
+              FusionExportWorkerConfig{MapExportConfig{config_.layer, config_.fusion, config_.mesh},
+                                       output_dir_, config_.command_queue_capacity,
+                                       config_.worker_niceness, config_.worker_sched_idle},
+              [this](const FusionPair& pair, bool fused) {
+                std::lock_guard<std::mutex> lock(scheduler_mutex_);
+                if (fused) {
+                  scheduler_.onFused(pair);
+                } else {
+                  scheduler_.onFusionFailed(pair, secondsSinceStart());
+                }
+              },
+              [this](const std::string& line) { this->log(line); }) {}
 
 void Mapper::setCovarianceRequester(CovarianceRequester requester) {
   covariance_requester_ = std::move(requester);
@@ -210,7 +166,7 @@ bool Mapper::start(std::string* error) {
   started_ = true;
   integrator_thread_ = std::thread([this] { integratorLoop(); });
   maintenance_thread_ = std::thread([this] { maintenanceLoop(); });
-  worker_thread_ = std::thread([this] { workerLoop(); });
+  worker_.start();
   return true;
 }
 
@@ -219,6 +175,7 @@ void Mapper::stop() {
   if (!started_ || stopped_) return;
   stopped_ = true;
   stop_ = true;
+  worker_.stop();  // the export in hand finishes; queued ones are answered "mapper stopping"
   {
     std::lock_guard<std::mutex> queue_lock(queue_mutex_);  // no lost wake-up
   }
@@ -226,7 +183,6 @@ void Mapper::stop() {
   pending_.notify();
   integrator_thread_.join();
   maintenance_thread_.join();
-  worker_thread_.join();
 }
 
 void Mapper::log(const std::string& line) const {
@@ -425,24 +381,7 @@ void Mapper::onCommand(const MapperCommand& command, ReplyCallback reply) {
     fail(error);
     return;
   }
-  bool queued = false, stopping = false;
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    stopping = stop_.load();
-    if (!stopping && command_queue_.size() < config_.command_queue_capacity) {
-      command_queue_.push_back(QueuedCommand{command, std::move(reply)});
-      queued = true;
-    }
-  }
-  if (queued) {
-    queue_cv_.notify_all();
-    return;
-  }
-  MapperReply r;
-  r.id = command.id;
-  r.ok = false;
-  r.message = stopping ? "mapper stopping" : "busy: too many exports waiting, try again later";
-  if (reply) reply(r);
+  worker_.submitExport(command, std::move(reply));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -561,7 +500,7 @@ void Mapper::processFrame(PendingFrame pending, const Transformationd& T_G_B, bo
     const IntegrationStats stats =
         frame_integrator_->integrate(active->T_M_C(T_G_D), frame.depth, camera, color);
     lock.unlock();
-    recordIntegrationMs(secondsSince(start) * 1e3);
+    integration_ms_.add(secondsSince(start) * 1e3);
     frames_integrated_.fetch_add(1, std::memory_order_relaxed);
     if (stats.budget_exhausted) frames_cut_by_budget_.fetch_add(1, std::memory_order_relaxed);
     ++frames_since_keyframe_;
@@ -570,12 +509,6 @@ void Mapper::processFrame(PendingFrame pending, const Transformationd& T_G_B, bo
   count(InputProblem::kIntegrationFailed, what + "the active subvolume kept changing");
 }
 
-void Mapper::recordIntegrationMs(double ms) {
-  std::lock_guard<std::mutex> lock(timing_mutex_);
-  last_ms_ = static_cast<float>(ms);
-  timing_ms_.push_back(last_ms_);
-  while (timing_ms_.size() > config_.timing_window) timing_ms_.pop_front();
-}
 
 // ---------------------------------------------------------------------------------------------
 // Keyframes and pose batches (maintenance thread; integrator thread for synthesised keyframes)
@@ -732,230 +665,17 @@ void Mapper::applyCovarianceReply(const MaintenanceItem& item) {
     std::lock_guard<std::mutex> lock(scheduler_mutex_);
     accepted = scheduler_.onReply(item.request_id, item.answers, secondsSinceStart());
   }
-  if (accepted.empty()) return;
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    for (const FusionPair& pair : accepted) fusion_queue_.push_back(pair);
-  }
-  queue_cv_.notify_all();
+  worker_.submitFusions(accepted);
 }
 
-void Mapper::fusePair(const FusionPair& pair) {
-  const std::shared_ptr<Submap> older = collection_.getSubmap(pair.older);
-  const std::shared_ptr<Submap> newer = collection_.getSubmap(pair.newer);
-  std::string failure;
-  if (!older || !newer) {
-    failure = "a subvolume of the pair no longer exists";
-  } else if (!older->isFinished() || !newer->isFinished()) {
-    failure = "a subvolume of the pair is still active";
-  } else {
-    try {
-      const SubmapFusionStats stats = fuseSubmaps(*newer, older.get(), config_.fusion);
-      collection_.removeSubmap(pair.newer);
-      {
-        std::lock_guard<std::mutex> lock(scheduler_mutex_);
-        scheduler_.onFused(pair);
-      }
-      char line[200];
-      std::snprintf(line, sizeof(line),
-                    "fused subvolume %lld into %lld (%d shared landmarks): %zu voxels in %.0f ms",
-                    static_cast<long long>(pair.newer), static_cast<long long>(pair.older),
-                    pair.shared_landmarks, stats.voxels_fused, stats.seconds * 1e3);
-      log(line);
-      return;
-    } catch (const std::exception& e) {
-      failure = e.what();
-    }
-  }
-  {
-    std::lock_guard<std::mutex> lock(scheduler_mutex_);
-    scheduler_.onFusionFailed(pair, secondsSinceStart());
-  }
-  log("fusion of subvolume " + std::to_string(pair.newer) + " into " + std::to_string(pair.older) +
-      " not done: " + failure);
-}
 
 // ---------------------------------------------------------------------------------------------
 // Fusion / export worker
 
-void Mapper::lowerWorkerPriority() {
-  const pid_t tid = static_cast<pid_t>(::syscall(SYS_gettid));
-  if (::setpriority(PRIO_PROCESS, static_cast<id_t>(tid), config_.worker_niceness) != 0) {
-    log(std::string("worker: cannot set niceness ") + std::to_string(config_.worker_niceness) +
-        ": " + std::strerror(errno));
-  }
-  if (config_.worker_sched_idle) {
-    sched_param param{};
-    param.sched_priority = 0;
-    if (const int e = pthread_setschedparam(pthread_self(), SCHED_IDLE, &param); e != 0) {
-      log(std::string("worker: cannot switch to SCHED_IDLE: ") + std::strerror(e));
-    }
-  }
-}
 
-void Mapper::workerLoop() {
-  lowerWorkerPriority();
-  std::unique_lock<std::mutex> lock(queue_mutex_);
-  while (true) {
-    queue_cv_.wait(lock,
-                   [this] { return stop_ || !command_queue_.empty() || !fusion_queue_.empty(); });
-    if (stop_) break;
-    if (command_queue_.empty()) {  // exports first: an operator is waiting for them
-      const FusionPair pair = fusion_queue_.front();
-      fusion_queue_.pop_front();
-      worker_busy_ = true;
-      lock.unlock();
-      fusePair(pair);
-      lock.lock();
-      worker_busy_ = false;
-      continue;
-    }
-    QueuedCommand queued = std::move(command_queue_.front());
-    command_queue_.pop_front();
-    worker_busy_ = true;
-    lock.unlock();
-    MapperReply reply;
-    try {
-      reply = queued.command.name == "export_mesh" ? exportMesh(queued.command)
-                                                   : exportSubmapMeshes(queued.command);
-    } catch (const std::exception& e) {
-      reply = MapperReply{};
-      reply.ok = false;
-      reply.message = std::string("export failed: ") + e.what();
-    }
-    reply.id = queued.command.id;
-    (reply.ok ? exports_done_ : exports_failed_).fetch_add(1, std::memory_order_relaxed);
-    log(queued.command.name + ": " + reply.message);
-    if (queued.reply) queued.reply(reply);
-    lock.lock();
-    worker_busy_ = false;
-  }
-  // Stopping: answer whatever is still queued; accepted fusions are left undone (the map
-  // stays valid: both subvolumes remain).
-  std::deque<QueuedCommand> left;
-  left.swap(command_queue_);
-  const size_t fusions_left = fusion_queue_.size();
-  fusion_queue_.clear();
-  lock.unlock();
-  if (fusions_left > 0) {
-    log("stopping: " + std::to_string(fusions_left) + " accepted fusion(s) not done");
-  }
-  for (QueuedCommand& queued : left) {
-    MapperReply reply;
-    reply.id = queued.command.id;
-    reply.ok = false;
-    reply.message = "mapper stopping";
-    if (queued.reply) queued.reply(reply);
-  }
-}
 
-namespace {
 
-// The layer of `submap` for reading on the worker: a finished layer is the worker's own and
-// is read in place; an active one is copied under its layer lock (held for the copy only).
-const TsdfLayer& readableLayer(const Submap& submap, std::optional<TsdfLayer>* copy) {
-  if (submap.isFinished()) return submap.layer();
-  copy->emplace(submap.layerConfig());
-  const std::unique_lock<std::mutex> lock = submap.lockLayer();
-  copyLayer(submap.layer(), &**copy);
-  return **copy;
-}
 
-}  // namespace
-
-MapperReply Mapper::exportMesh(const MapperCommand& command) {
-  MapperReply reply;
-  std::string error;
-  const auto path = resolveOutputPath(output_dir_, command.args.at("path"), &error);
-  if (!path || !staysInsideOnDisk(output_dir_, *path, &error)) {
-    reply.message = error;
-    return reply;
-  }
-  const Clock::time_point start = Clock::now();
-  TsdfLayer global(config_.layer);
-  size_t submaps = 0;
-  for (const SubmapPose& pose : collection_.poseSnapshot()) {
-    const std::shared_ptr<Submap> submap = collection_.getSubmap(pose.id);
-    if (!submap) continue;  // removed since the snapshot
-    std::optional<TsdfLayer> copy;
-    const TsdfLayer& layer = readableLayer(*submap, &copy);
-    fuseLayers(layer, pose.T_G_M, config_.fusion, &global);
-    ++submaps;
-  }
-  MeshIntegrator mesher(global, config_.mesh);
-  mesher.update(/*only_updated_blocks=*/false);
-  const Mesh mesh = mesher.extractMesh(/*connected=*/true);
-  if (mesh.numVertices() == 0) {
-    reply.message = "the map is empty (" + std::to_string(submaps) +
-                    " subvolumes, no surface yet): nothing written";
-    return reply;
-  }
-  std::error_code ec;
-  std::filesystem::create_directories(path->parent_path(), ec);
-  if (!writePly(path->string(), mesh, PlyFormat::kBinaryLittleEndian, &error)) {
-    reply.message = error;
-    return reply;
-  }
-  const double seconds = secondsSince(start);
-  reply.ok = true;
-  reply.message = "wrote " + path->string() + ": " + std::to_string(mesh.numVertices()) +
-                  " vertices, " + std::to_string(mesh.numTriangles()) + " triangles from " +
-                  std::to_string(submaps) + " subvolumes in " + fixed(seconds, 3) + " s";
-  reply.values = {{"path", path->string()},
-                  {"vertices", std::to_string(mesh.numVertices())},
-                  {"triangles", std::to_string(mesh.numTriangles())},
-                  {"subvolumes", std::to_string(submaps)},
-                  {"seconds", fixed(seconds, 3)}};
-  return reply;
-}
-
-MapperReply Mapper::exportSubmapMeshes(const MapperCommand& command) {
-  MapperReply reply;
-  std::string error;
-  const auto dir = resolveOutputPath(output_dir_, command.args.at("path"), &error);
-  if (!dir || !staysInsideOnDisk(output_dir_, *dir, &error)) {
-    reply.message = error;
-    return reply;
-  }
-  std::error_code ec;
-  std::filesystem::create_directories(*dir, ec);
-  if (ec || !std::filesystem::is_directory(*dir)) {
-    reply.message = "cannot create directory " + dir->string() + ": " + ec.message();
-    return reply;
-  }
-  const Clock::time_point start = Clock::now();
-  size_t files = 0, vertices = 0, triangles = 0;
-  for (const SubmapPose& pose : collection_.poseSnapshot()) {
-    const std::shared_ptr<Submap> submap = collection_.getSubmap(pose.id);
-    if (!submap) continue;
-    std::optional<TsdfLayer> copy;
-    const TsdfLayer& layer = readableLayer(*submap, &copy);
-    MeshIntegrator mesher(layer, config_.mesh);
-    mesher.update(/*only_updated_blocks=*/false);
-    Mesh mesh = transformMesh(pose.T_G_M.cast<float>(), mesher.extractMesh(/*connected=*/true));
-    if (mesh.numVertices() == 0) continue;
-    mesh.colors.assign(mesh.numVertices(), submapColor(pose.id));
-    char name[64];
-    std::snprintf(name, sizeof(name), "submap_%04lld.ply", static_cast<long long>(pose.id));
-    if (!writePly((*dir / name).string(), mesh, PlyFormat::kBinaryLittleEndian, &error)) {
-      reply.message = error;
-      return reply;
-    }
-    ++files;
-    vertices += mesh.numVertices();
-    triangles += mesh.numTriangles();
-  }
-  const double seconds = secondsSince(start);
-  reply.ok = true;
-  reply.message = "wrote " + std::to_string(files) + " subvolume meshes to " + dir->string() +
-                  " (" + std::to_string(vertices) + " vertices) in " + fixed(seconds, 3) + " s";
-  reply.values = {{"path", dir->string()},
-                  {"count", std::to_string(files)},
-                  {"vertices", std::to_string(vertices)},
-                  {"triangles", std::to_string(triangles)},
-                  {"seconds", fixed(seconds, 3)}};
-  return reply;
-}
 
 // ---------------------------------------------------------------------------------------------
 // Status
@@ -978,8 +698,8 @@ MapperStatus Mapper::status() const {
   s.keyframe_batches = keyframe_batches_.load();
   s.submaps_moved = submaps_moved_.load();
   s.source_restarts = source_restarts_.load();
-  s.exports_done = exports_done_.load();
-  s.exports_failed = exports_failed_.load();
+  s.exports_done = worker_.exportsDone();
+  s.exports_failed = worker_.exportsFailed();
   {
     std::lock_guard<std::mutex> lock(scheduler_mutex_);
     s.fusion = scheduler_.stats();
@@ -988,21 +708,9 @@ MapperStatus Mapper::status() const {
     s.problems[i] = problems_[i].load(std::memory_order_relaxed);
     if (isFrameProblem(static_cast<InputProblem>(i))) s.frames_rejected += s.problems[i];
   }
-  std::vector<float> times;
-  {
-    std::lock_guard<std::mutex> lock(timing_mutex_);
-    times.assign(timing_ms_.begin(), timing_ms_.end());
-    s.integration_ms_last = last_ms_;
-  }
-  if (!times.empty()) {
-    std::sort(times.begin(), times.end());
-    auto at = [&](double q) {
-      return times[std::min(times.size() - 1,
-                            static_cast<size_t>(q * static_cast<double>(times.size() - 1) + 0.5))];
-    };
-    s.integration_ms_median = at(0.5);
-    s.integration_ms_p99 = at(0.99);
-  }
+  s.integration_ms_last = static_cast<float>(integration_ms_.last());
+  s.integration_ms_median = static_cast<float>(integration_ms_.quantile(0.5));
+  s.integration_ms_p99 = static_cast<float>(integration_ms_.quantile(0.99));
   return s;
 }
 
@@ -1060,9 +768,10 @@ bool Mapper::waitUntilIdle(std::chrono::milliseconds timeout) const {
     bool idle = pending_.size() == 0 && !integrator_busy_.load();
     if (idle) {
       std::lock_guard<std::mutex> lock(queue_mutex_);
-      idle = maintenance_queue_.empty() && command_queue_.empty() && fusion_queue_.empty() &&
-             !maintenance_busy_ && !worker_busy_;
+      idle = maintenance_queue_.empty() && !maintenance_busy_;
     }
+    // After maintenance (it hands fusions to the worker while busy).
+    idle = idle && worker_.idle();
     // Re-check the in-tray: a frame may have been taken between the two looks.
     if (idle && pending_.size() == 0 && !integrator_busy_.load()) return true;
     if (Clock::now() >= deadline) return false;

@@ -36,9 +36,13 @@
 #include "core/submap/submap_fusion.h"
 #include "core/tsdf/layer_config.h"
 #include "daemon/common/in_tray.h"
+#include "daemon/mapper/fusion_export_worker.h"
+#include "daemon/mapper/map_export.h"
+#include "daemon/mapper/mapper_command.h"
 #include "daemon/mapper/mapper_config.h"
 #include "daemon/mapper/pose_buffer.h"
 #include "daemon/common/rate_limited_log.h"
+#include "daemon/common/timing_window.h"
 
 namespace cblox {
 
@@ -93,23 +97,6 @@ const char* inputProblemName(InputProblem problem);
 /// True for the kinds that reject a depth frame (summed in frames_rejected). Thread-safe.
 bool isFrameProblem(InputProblem problem);
 
-/// A command (from command_t). Plain value type.
-struct MapperCommand {
-  int64_t id = 0;
-  std::string name;  ///< "status", "export_mesh", "export_submap_meshes"
-  std::map<std::string, std::string> args;
-};
-
-/// The answer to a command (to command_reply_t). Plain value type.
-struct MapperReply {
-  int64_t id = 0;
-  bool ok = false;
-  std::string message;
-  std::vector<std::pair<std::string, std::string>> values;
-  /// The value of `key`, empty when absent. Thread-safe (const).
-  std::string value(const std::string& key) const;
-};
-
 /// A snapshot of the mapper's state and counters since start. Plain value type.
 struct MapperStatus {
   size_t num_submaps = 0;
@@ -160,8 +147,9 @@ struct MapperStatus {
 ///   covisibility graph; after each keyframe, pose batch or reply (and every 0.25 s) it asks
 ///   the covariance requester for candidate pairs; replies (onCovarianceReply) come back
 ///   through its queue and pairs with q >= q_min go to the worker's fusion queue.
-/// - Fusion/export worker thread, at low priority (nice worker_niceness, SCHED_IDLE): the
-///   single owner of FINISHED submap layers (SubmapCollection's rule); runs exports first,
+/// - Fusion/export worker thread (FusionExportWorker), at low priority (nice worker_niceness,
+///   SCHED_IDLE): the single owner of FINISHED submap layers (SubmapCollection's rule); runs
+///   exports first,
 ///   then fusions: the newer subvolume of a pair is fused into the older (fuseSubmaps:
 ///   trilinear, its keyframes join the older, so pose batches naming them stay known) and
 ///   removed from the collection. Both are finished (the active subvolume is never fused);
@@ -174,7 +162,7 @@ struct MapperStatus {
 /// integrator holds only around onFramePose() and the keyframe path holds across
 /// onKeyframe() + createSubmap() (so no frame slips into the old submap after a jump; the
 /// integrator never holds it while holding a layer lock). Counters are atomics; the timing
-/// window has its own mutex. Lock order: policy_mutex_ -> layer lock -> collection mutex ->
+/// window (TimingWindow) has its own mutex. Lock order: policy_mutex_ -> layer lock -> collection mutex ->
 /// submap metadata mutex; depth_order_mutex_ -> pose_order_mutex_ (a restarted depth
 /// stream clears the poses); InTray', PoseBuffer's and scheduler_mutex_ (guards the
 /// FusionScheduler; held for bookkeeping only, never while calling out) are leaves.
@@ -272,17 +260,12 @@ class Mapper {
     int64_t request_id = 0;
     std::vector<FusionCovarianceAnswer> answers;
   };
-  struct QueuedCommand {
-    MapperCommand command;
-    ReplyCallback reply;
-  };
   class FrameIntegrator;  // one integrator bound to one submap's layer
 
   void integratorLoop();
   void maintenanceLoop();
   /// Appends to the maintenance queue (the oldest item is dropped, and counted, when full).
   void enqueueMaintenance(MaintenanceItem item);
-  void workerLoop();
   // Integrator thread: one frame whose pose is known.
   void processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump);
   // Keyframe path (maintenance thread; integrator thread in ground-truth mode).
@@ -300,18 +283,13 @@ class Mapper {
   // kInput clock: an accepted depth frame or pose at `utime` moves it forward.
   void advanceInputClock(int64_t utime);
   // Worker thread: one accepted pair.
-  void fusePair(const FusionPair& pair);
   // Worker thread.
-  MapperReply exportMesh(const MapperCommand& command);
-  MapperReply exportSubmapMeshes(const MapperCommand& command);
   MapperReply statusReply(const MapperCommand& command) const;
-  void lowerWorkerPriority();
 
   void count(InputProblem problem, const std::string& message, uint64_t n = 1);
   // True when `utime` is more than restart_after_backwards_s older than `newest_utime`.
   bool isRestart(int64_t newest_utime, int64_t utime) const;
   void log(const std::string& line) const;
-  void recordIntegrationMs(double ms);
 
   const MapperConfig config_;
   const LogSink log_sink_;
@@ -330,22 +308,17 @@ class Mapper {
   std::unique_ptr<FrameIntegrator> frame_integrator_;
   int frames_since_keyframe_ = 0;
 
-  mutable std::mutex queue_mutex_;  // guards the two queues and the busy flags
+  mutable std::mutex queue_mutex_;  // guards the maintenance queue and its busy flag
   std::condition_variable queue_cv_;
   std::deque<MaintenanceItem> maintenance_queue_;
-  std::deque<QueuedCommand> command_queue_;
-  std::deque<FusionPair> fusion_queue_;  // accepted pairs for the worker
   bool maintenance_busy_ = false;
-  bool worker_busy_ = false;
   std::atomic<bool> integrator_busy_{false};
 
-  mutable std::mutex timing_mutex_;
-  std::deque<float> timing_ms_;
-  float last_ms_ = 0.0f;
+  TimingWindow integration_ms_;
 
   std::atomic<uint64_t> frames_received_{0}, frames_integrated_{0}, frames_cut_by_budget_{0},
       poses_received_{0}, keyframes_applied_{0}, keyframe_batches_{0}, submaps_moved_{0},
-      exports_done_{0}, exports_failed_{0}, source_restarts_{0};
+      source_restarts_{0};
   std::mutex pose_order_mutex_;  // serialises the restart decision of onFramePose
   std::array<std::atomic<uint64_t>, kNumInputProblems> problems_{};
   std::mutex depth_order_mutex_;
@@ -354,7 +327,7 @@ class Mapper {
   std::atomic<bool> stop_{false};
   bool started_ = false, stopped_ = false;
   std::mutex lifecycle_mutex_;
-  std::thread integrator_thread_, maintenance_thread_, worker_thread_;
+  std::thread integrator_thread_, maintenance_thread_;
 
   CovarianceRequester covariance_requester_;
   mutable std::mutex scheduler_mutex_;  // guards scheduler_ (a leaf)
@@ -363,10 +336,10 @@ class Mapper {
   std::mutex input_clock_mutex_;  // guards last_input_utime_ (a leaf)
   int64_t last_input_utime_ = INT64_MIN;
   std::atomic<int64_t> input_clock_us_{0};
+  // Exports and accepted fusions, on its own low-priority thread (declared last: it stops
+  // first, and its fusion callback uses scheduler_).
+  FusionExportWorker worker_;
 };
 
-/// A distinct colour per submap id (golden-ratio hue steps, full saturation, bright), for
-/// per-submap meshes. Thread-safe (pure).
-Color submapColor(SubmapId id);
 
 }  // namespace cblox

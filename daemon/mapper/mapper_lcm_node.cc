@@ -18,6 +18,7 @@
 namespace cblox {
 
 void MapperNode::subscribe() {
+  guard_.setPeerWatch(&peers_, config_.heartbeat_channel);
   const auto refusedAs = [this](InputProblem problem) {
     return [this, problem](const std::string& description) {
       mapper_->reportProblem(problem, description);

@@ -4,6 +4,8 @@
 // turns messages into Mapper calls, and publishes status, heartbeat, covariance requests and
 // command replies.
 
+#include <unistd.h>
+
 #include <atomic>
 #include <cstddef>
 #include <map>
@@ -63,6 +65,7 @@ class MapperNode {
   lcm::LCM* lcm_;
   Mapper* mapper_;
   MessageGuard guard_;
+  PeerWatch peers_{"cblox-mapper", static_cast<int32_t>(::getpid())};  // a second cblox-mapper
   std::mutex publish_mutex_;  // also guards older_epoch_pairs_
   // The tracker's map epoch (of its newest frame pose or keyframe): covariance requests are
   // about it. Keyframe and landmark ids are keyed by epoch (map_epoch_key.h).

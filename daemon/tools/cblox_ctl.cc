@@ -23,9 +23,7 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <map>
 #include <optional>
 #include <set>
@@ -38,6 +36,7 @@
 #include <cblox/map_status_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 
+#include "daemon/common/cli.h"
 #include "lcmtypes/wire_check.h"
 
 namespace {
@@ -50,38 +49,10 @@ constexpr int kExitUsage = 2;
 constexpr int kExitNoReply = 3;
 constexpr int kExitNotAlive = 4;
 
-void printUsage(std::FILE* out) {
-  std::fprintf(
-      out,
-      "usage: cblox-ctl [--lcm-url URL] [--timeout SECONDS] [--channel CBLOX_CMD]\n"
-      "                 [--reply-channel CBLOX_CMD_REPLY] COMMAND [ARG]\n"
-      "       cblox-ctl [--lcm-url URL] status --all [--listen SECONDS] [--expect LIST]\n"
-      "                 [--heartbeat-channel CBLOX_HEARTBEAT]\n"
-      "                 [--map-status-channel CBLOX_MAP_STATUS]\n"
-      "commands:\n"
-      "  status                      print the mapper's statistics\n"
-      "  status --all                listen to every process's heartbeat (--listen, default\n"
-      "                              1.5 s) and print one row per process and the map;\n"
-      "                              --expect: processes that must be alive (comma list,\n"
-      "                              default capture,tracker,mapper; '' = none)\n"
-      "  export-mesh PATH            write the global mesh (PLY) to PATH\n"
-      "  export-submap-meshes DIR    write one mesh per subvolume, coloured by subvolume\n"
-      "exit status: 0 ok, 1 the mapper reported a failure, 2 usage, 3 no reply,\n"
-      "             4 status --all: an expected process is not alive\n");
-}
-
 int64_t nowUtime() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
              std::chrono::system_clock::now().time_since_epoch())
       .count();
-}
-
-bool parseSeconds(const std::string& text, double* seconds) {
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (end == text.c_str() || *end != '\0' || !(value > 0.0) || !std::isfinite(value)) return false;
-  *seconds = value;
-  return true;
 }
 
 /// Handles `lcm` for `seconds` (or until `done()`); false when receiving fails.
@@ -382,80 +353,68 @@ int main(int argc, char** argv) {
   std::string url, channel = "CBLOX_CMD", reply_channel = "CBLOX_CMD_REPLY";
   std::string heartbeat_channel = "CBLOX_HEARTBEAT", map_status_channel = "CBLOX_MAP_STATUS";
   double timeout_s = 10.0, listen_s = 1.5;
-  bool all = false, listen_given = false, expect_given = false;
-  std::vector<std::string> expected = {"capture", "tracker", "mapper"};
-  std::vector<std::string> positional;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "cblox-ctl: %s needs a value\n", arg.c_str());
-        std::exit(kExitUsage);
-      }
-      return argv[++i];
-    };
-    if (arg == "--help" || arg == "-h") {
-      printUsage(stdout);
-      return kExitOk;
-    } else if (arg == "--lcm-url") {
-      url = value();
-    } else if (arg == "--timeout") {
-      const std::string text = value();
-      if (!parseSeconds(text, &timeout_s)) {
-        std::fprintf(stderr, "cblox-ctl: --timeout needs seconds > 0, got '%s'\n", text.c_str());
-        return kExitUsage;
-      }
-    } else if (arg == "--listen") {
-      const std::string text = value();
-      if (!parseSeconds(text, &listen_s)) {
-        std::fprintf(stderr, "cblox-ctl: --listen needs seconds > 0, got '%s'\n", text.c_str());
-        return kExitUsage;
-      }
-      listen_given = true;
-    } else if (arg == "--expect") {
-      expected = splitList(value());
-      expect_given = true;
-    } else if (arg == "--all") {
-      all = true;
-    } else if (arg == "--channel") {
-      channel = value();
-    } else if (arg == "--reply-channel") {
-      reply_channel = value();
-    } else if (arg == "--heartbeat-channel") {
-      heartbeat_channel = value();
-    } else if (arg == "--map-status-channel") {
-      map_status_channel = value();
-    } else if (arg.rfind("--", 0) == 0) {
-      std::fprintf(stderr, "cblox-ctl: unknown option '%s'\n", arg.c_str());
-      printUsage(stderr);
-      return kExitUsage;
-    } else {
-      positional.push_back(arg);
-    }
-  }
-  if (positional.empty()) {
-    printUsage(stderr);
-    return kExitUsage;
-  }
-  const std::string& verb = positional[0];
-  if ((all || listen_given || expect_given) && !(verb == "status" && all)) {
+  bool all = false;
+  std::string expect = "capture,tracker,mapper";
+  std::string verb, path;
+  CLI::App app{
+      "cblox-ctl: sends one command to the mapper over LCM and prints its reply, or (status\n"
+      "--all) summarises the health of every cblox process from their heartbeats.",
+      "cblox-ctl"};
+  app.add_option("command", verb,
+                 "status: print the mapper's statistics; status --all: one row per process\n"
+                 "(heartbeats for --listen seconds) and the map; export-mesh PATH: write the\n"
+                 "global mesh (PLY); export-submap-meshes DIR: one mesh per subvolume,\n"
+                 "coloured by subvolume")
+      ->required()
+      ->type_name("COMMAND");
+  CLI::Option* path_option =
+      app.add_option("path", path, "PATH or DIR, relative to the mapper's output directory")
+          ->type_name("ARG");
+  app.add_option("--lcm-url", url, "LCM URL (default: LCM's default)")->type_name("URL");
+  app.add_option("--timeout", timeout_s, "seconds to wait for the mapper's reply")
+      ->check(cblox::finiteNumber(cblox::NumberBound::kPositive))
+      ->capture_default_str();
+  app.add_option("--channel", channel, "command channel")->capture_default_str();
+  app.add_option("--reply-channel", reply_channel, "reply channel")->capture_default_str();
+  CLI::Option* all_flag = app.add_flag(
+      "--all", all, "status --all: every process's heartbeat, not the mapper's status");
+  CLI::Option* listen_option =
+      app.add_option("--listen", listen_s, "status --all: seconds to listen")
+          ->check(cblox::finiteNumber(cblox::NumberBound::kPositive))
+          ->capture_default_str();
+  CLI::Option* expect_option =
+      app.add_option("--expect", expect,
+                     "status --all: processes that must be alive (comma list; '' = none)")
+          ->capture_default_str();
+  app.add_option("--heartbeat-channel", heartbeat_channel, "status --all: heartbeat channel")
+      ->capture_default_str();
+  app.add_option("--map-status-channel", map_status_channel, "status --all: map status channel")
+      ->capture_default_str();
+  app.footer(
+      "Exit status: 0 ok, 1 the mapper reported a failure, 2 usage, 3 no reply,\n"
+      "4 status --all: an expected process is not alive.");
+  if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
+  const bool status_all = verb == "status" && all;
+  if ((all_flag->count() > 0 || listen_option->count() > 0 || expect_option->count() > 0) &&
+      !status_all) {
     std::fprintf(stderr, "cblox-ctl: --all, --listen and --expect go with 'status --all'\n");
     return kExitUsage;
   }
   cblox::command_t command;
-  if (verb == "status" && positional.size() == 1) {
+  const bool has_path = path_option->count() > 0;
+  if (verb == "status" && !has_path) {
     command.name = "status";
-  } else if (verb == "export-mesh" && positional.size() == 2) {
+  } else if (verb == "export-mesh" && has_path) {
     command.name = "export_mesh";
     command.arg_keys = {"path"};
-    command.arg_values = {positional[1]};
-  } else if (verb == "export-submap-meshes" && positional.size() == 2) {
+    command.arg_values = {path};
+  } else if (verb == "export-submap-meshes" && has_path) {
     command.name = "export_submap_meshes";
     command.arg_keys = {"path"};
-    command.arg_values = {positional[1]};
+    command.arg_values = {path};
   } else {
-    std::fprintf(stderr, "cblox-ctl: unknown command or wrong arguments: '%s'\n", verb.c_str());
-    printUsage(stderr);
+    std::fprintf(stderr, "cblox-ctl: unknown command or wrong arguments: '%s' (see --help)\n",
+                 verb.c_str());
     return kExitUsage;
   }
 
@@ -464,6 +423,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "cblox-ctl: cannot open LCM (url '%s')\n", url.c_str());
     return kExitUsage;
   }
-  if (all) return runStatusAll(lcm, heartbeat_channel, map_status_channel, listen_s, expected);
+  if (status_all) {
+    return runStatusAll(lcm, heartbeat_channel, map_status_channel, listen_s, splitList(expect));
+  }
   return runCommand(lcm, command, channel, reply_channel, timeout_s);
 }

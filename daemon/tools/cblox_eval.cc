@@ -16,7 +16,6 @@
 
 #include <algorithm>
 #include <cctype>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -30,7 +29,9 @@
 #include <string>
 #include <vector>
 
-#include "core/eval/json_writer.h"
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
 #include "core/eval/mesh_accuracy.h"
 #include "core/eval/mesh_error_render.h"
 #include "core/eval/trajectory_metrics.h"
@@ -39,6 +40,7 @@
 #include "core/io/ply_io.h"
 #include "core/io/tum_trajectory.h"
 #include "core/raycast/triangle_mesh_raycaster.h"
+#include "daemon/common/cli.h"
 
 namespace cblox {
 namespace {
@@ -80,29 +82,18 @@ struct Options {
   int threads = 2;
 };
 
-void printUsage(std::ostream& out) {
-  out << R"(usage: cblox-eval [--gt-mesh GT.ply|.obj] [--mesh RECON.ply|.obj]
-                  [--gt-trajectory gt.txt] [--trajectory est.txt]
-                  [--align none|se3|sim3] [--no-mesh-align]
-                  [--threshold 0.05] [--sample-spacing 0.02] [--max-distance M]
-                  [--max-time-difference 0.02] [--rpe-delta 1]
-                  [--voxel-size 0.02] [--block-voxels 8] [--map-blocks N] [--map-bytes N]
-                  [--json out.json] [--error-png err.png] [--trajectory-png traj.png]
-                  [--view eye_x,eye_y,eye_z,at_x,at_y,at_z] [--max-error 0.05] [--threads 2]
-
-Mesh accuracy (needs --gt-mesh and --mesh; PLY or Wavefront OBJ, by file extension):
+constexpr const char* kFooter =
+    R"(Mesh accuracy (needs --gt-mesh and --mesh; PLY or Wavefront OBJ, by file extension):
   accuracy       distance of every reconstructed vertex to the closest point of the
                  ground-truth triangles: RMSE, mean, median, p90, max (printed in mm)
   completeness   share of ground-truth surface samples (area-uniform, one per
                  --sample-spacing^2) within --threshold metres of the reconstruction's
                  triangles (of its vertices for a point cloud); also precision (share of
                  vertices within --threshold) and F-score
-  --max-distance vertices farther than this (metres) from the ground truth are outliers,
-                 left out of the accuracy statistics (default: none)
 Trajectory accuracy (needs --gt-trajectory and --trajectory, TUM format
   "t tx ty tz qx qy qz qw"): poses associated by time (nearest within
-  --max-time-difference seconds), ATE RMSE after --align (default se3; sim3 for a
-  scale-free estimate), RPE over --rpe-delta frames.
+  --max-time-difference seconds), ATE RMSE after --align (sim3 for a scale-free
+  estimate), RPE over --rpe-delta frames.
   When both parts run and --align is not none, the trajectory's alignment (estimate
   frame -> ground-truth frame) is applied to the reconstruction before the mesh is
   evaluated, as for a map built with estimated poses; --no-mesh-align keeps the
@@ -113,165 +104,141 @@ Map size:
                   vertex, and their voxel bytes (12 bytes per voxel). A lower bound of the
                   blocks a TSDF map at that resolution allocated for this mesh, not the
                   map's true size (it also holds the truncation band and free space).
-  --map-blocks, --map-bytes  the true figures as the mapper reported them (cblox-integrate
-                  prints them), copied into the JSON as they are.
-Outputs:
-  --json            one JSON object: "inputs", "mesh", "map", "trajectory"
-  --error-png       the (aligned) reconstruction coloured by vertex error (0 .. --max-error
-                    metres, viridis, colour bar in mm), 1024x768, from --view (eye and
-                    look-at point in ground-truth coordinates) or an automatic view
-  --trajectory-png  top view of the ground truth and the aligned estimate
-Exit status: 0 success, 1 evaluation or output failed, 2 usage error or unreadable input.
-)";
-}
+Exit status: 0 success, 1 evaluation or output failed, 2 usage error or unreadable input.)";
 
-// Parses a whole string as a finite double.
-double parseNumber(const std::string& flag, const std::string& text) {
-  double value = 0.0;
-  const char* end = text.data() + text.size();
-  const auto [ptr, ec] = std::from_chars(text.data(), end, value);
-  if (ec != std::errc() || ptr != end || !std::isfinite(value)) {
-    throw UsageError(flag + " needs a finite number, got '" + text + "'");
-  }
-  return value;
-}
-
-double parsePositive(const std::string& flag, const std::string& text) {
-  const double value = parseNumber(flag, text);
-  if (!(value > 0.0)) throw UsageError(flag + " must be > 0, got '" + text + "'");
-  return value;
-}
-
-size_t parseCount(const std::string& flag, const std::string& text, size_t min_value) {
-  size_t value = 0;
-  const char* end = text.data() + text.size();
-  const auto [ptr, ec] = std::from_chars(text.data(), end, value);
-  if (ec != std::errc() || ptr != end || value < min_value) {
-    throw UsageError(flag + " needs an integer >= " + std::to_string(min_value) + ", got '" + text +
-                     "'");
-  }
-  return value;
-}
-
+// "--view eye_x,eye_y,eye_z,at_x,at_y,at_z"; throws CLI::ValidationError (a usage error).
 MeshViewpoint parseView(const std::string& text) {
   std::vector<double> values;
   std::stringstream stream(text);
   std::string item;
-  while (std::getline(stream, item, ',')) values.push_back(parseNumber("--view", item));
+  while (std::getline(stream, item, ',')) {
+    const std::optional<double> value = parseFiniteNumber(item);
+    if (!value) throw CLI::ValidationError("--view", "needs finite numbers, got '" + item + "'");
+    values.push_back(*value);
+  }
   if (values.size() != 6) {
-    throw UsageError(
-        "--view needs 6 comma-separated numbers eye_x,eye_y,eye_z,at_x,at_y,at_z, got '" + text +
-        "'");
+    throw CLI::ValidationError(
+        "--view",
+        "needs 6 comma-separated numbers eye_x,eye_y,eye_z,at_x,at_y,at_z, got '" + text + "'");
   }
   MeshViewpoint view{Eigen::Vector3d(values[0], values[1], values[2]),
                      Eigen::Vector3d(values[3], values[4], values[5])};
   if ((view.eye - view.look_at).norm() <= 0.0) {
-    throw UsageError("--view: the eye and the look-at point coincide");
+    throw CLI::ValidationError("--view", "the eye and the look-at point coincide");
   }
   return view;
 }
 
-Options parseArguments(int argc, char** argv, bool* help) {
-  Options options;
-  *help = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw UsageError(arg + " needs a value");
-      return argv[++i];
-    };
-    if (arg == "--help" || arg == "-h") {
-      *help = true;
-      return options;
-    } else if (arg == "--gt-mesh") {
-      options.gt_mesh = value();
-    } else if (arg == "--mesh") {
-      options.mesh = value();
-    } else if (arg == "--gt-trajectory") {
-      options.gt_trajectory = value();
-    } else if (arg == "--trajectory") {
-      options.trajectory = value();
-    } else if (arg == "--align") {
-      const std::string name = value();
-      const std::optional<AlignmentType> type = parseAlignmentType(name);
-      if (!type) throw UsageError("--align must be none, se3 or sim3, got '" + name + "'");
-      options.alignment = *type;
-    } else if (arg == "--no-mesh-align") {
-      options.mesh_align = false;
-    } else if (arg == "--threshold") {
-      options.threshold_m = parsePositive(arg, value());
-    } else if (arg == "--sample-spacing") {
-      options.sample_spacing_m = parsePositive(arg, value());
-    } else if (arg == "--max-distance") {
-      options.max_distance_m = parsePositive(arg, value());
-    } else if (arg == "--max-time-difference") {
-      options.max_time_difference_s = parseNumber(arg, value());
-      if (options.max_time_difference_s < 0.0) throw UsageError(arg + " must be >= 0");
-    } else if (arg == "--rpe-delta") {
-      options.rpe_delta_frames =
-          static_cast<int>(std::min<size_t>(parseCount(arg, value(), 1), 1 << 30));
-    } else if (arg == "--voxel-size") {
-      options.voxel_size_m = parsePositive(arg, value());
-    } else if (arg == "--block-voxels") {
-      options.block_voxels =
-          static_cast<int>(std::min<size_t>(parseCount(arg, value(), 1), 1 << 30));
-    } else if (arg == "--map-blocks") {
-      options.map_blocks = parseCount(arg, value(), 0);
-    } else if (arg == "--map-bytes") {
-      options.map_bytes = parseCount(arg, value(), 0);
-    } else if (arg == "--json") {
-      options.json = value();
-    } else if (arg == "--error-png") {
-      options.error_png = value();
-    } else if (arg == "--trajectory-png") {
-      options.trajectory_png = value();
-    } else if (arg == "--view") {
-      options.view = parseView(value());
-    } else if (arg == "--max-error") {
-      options.max_error_m = parsePositive(arg, value());
-    } else if (arg == "--threads") {
-      options.threads = static_cast<int>(std::min<size_t>(parseCount(arg, value(), 1), 64));
-    } else {
-      throw UsageError("unknown argument '" + arg + "' (see --help)");
-    }
-  }
+/// The options of the command line, written into *options when it is parsed.
+void addOptions(CLI::App& app, Options* options) {
+  const auto file = [&](const char* name, std::string* value, const char* what) {
+    app.add_option(name, *value, what)->type_name("FILE");
+  };
+  const auto positive = [&](const char* name, auto* value, const char* what) {
+    return app.add_option(name, *value, what)
+        ->check(finiteNumber(NumberBound::kPositive))
+        ->capture_default_str();
+  };
+  file("--gt-mesh", &options->gt_mesh, "ground-truth mesh (.ply or .obj)");
+  file("--mesh", &options->mesh, "the reconstruction (.ply or .obj)");
+  file("--gt-trajectory", &options->gt_trajectory, "ground-truth trajectory (TUM)");
+  file("--trajectory", &options->trajectory, "estimated trajectory (TUM)");
+  app.add_option_function<std::string>(
+         "--align",
+         [options](const std::string& name) {
+           const std::optional<AlignmentType> type = parseAlignmentType(name);
+           if (!type) {
+             throw CLI::ValidationError("--align", "must be none, se3 or sim3, got '" + name + "'");
+           }
+           options->alignment = *type;
+         },
+         "trajectory alignment: none | se3 | sim3 (default se3)")
+      ->type_name("KIND");
+  app.add_flag_callback(
+      "--no-mesh-align", [options] { options->mesh_align = false; },
+      "do not apply the trajectory's alignment to the reconstruction");
+  positive("--threshold", &options->threshold_m, "completeness distance, metres");
+  positive("--sample-spacing", &options->sample_spacing_m,
+           "spacing of the ground-truth surface samples, metres");
+  app.add_option("--max-distance", options->max_distance_m,
+                 "vertices farther than this (metres) from the ground truth are outliers, left\n"
+                 "out of the accuracy statistics (default: none)")
+      ->check(finiteNumber(NumberBound::kPositive))
+      ->type_name("M");
+  app.add_option("--max-time-difference", options->max_time_difference_s,
+                 "association of poses by time, seconds")
+      ->check(finiteNumber(NumberBound::kNonNegative))
+      ->capture_default_str();
+  positive("--rpe-delta", &options->rpe_delta_frames, "RPE over this many frames");
+  positive("--voxel-size", &options->voxel_size_m, "surface blocks: voxel size, metres");
+  positive("--block-voxels", &options->block_voxels, "surface blocks: voxels per block side");
+  const auto reported = [&](const char* name, std::optional<size_t>* value, const char* what) {
+    app.add_option(name, *value,
+                   std::string("the map's true ") + what +
+                       " as the mapper reported it (copied into the JSON)")
+        ->check(finiteNumber(NumberBound::kNonNegative))
+        ->type_name("N");
+  };
+  reported("--map-blocks", &options->map_blocks, "block count");
+  reported("--map-bytes", &options->map_bytes, "size in bytes");
+  app.add_option("--json", options->json,
+                 "one JSON object: \"inputs\", \"mesh\", \"map\", \"trajectory\"")
+      ->type_name("FILE");
+  app.add_option("--error-png", options->error_png,
+                 "the (aligned) reconstruction coloured by vertex error (0 .. --max-error\n"
+                 "metres, viridis, colour bar in mm), 1024x768")
+      ->type_name("FILE");
+  app.add_option("--trajectory-png", options->trajectory_png,
+                 "top view of the ground truth and the aligned estimate")
+      ->type_name("FILE");
+  app.add_option_function<std::string>(
+         "--view", [options](const std::string& text) { options->view = parseView(text); },
+         "error picture: eye and look-at point in ground-truth coordinates (default: an\n"
+         "automatic view)")
+      ->type_name("EX,EY,EZ,AX,AY,AZ");
+  positive("--max-error", &options->max_error_m, "error picture: error of the top colour, metres");
+  positive("--threads", &options->threads, "threads (at most 64)");
+  app.footer(kFooter);
+}
 
-  if (options.gt_mesh.empty() != options.mesh.empty()) {
-    throw UsageError(options.mesh.empty() ? "--gt-mesh needs --mesh (the reconstruction)"
-                                          : "--mesh needs --gt-mesh (the ground truth)");
+/// Checks between options and that the inputs exist; throws UsageError.
+void checkOptions(Options* options) {
+  options->threads = std::min(options->threads, 64);
+  if (options->gt_mesh.empty() != options->mesh.empty()) {
+    throw UsageError(options->mesh.empty() ? "--gt-mesh needs --mesh (the reconstruction)"
+                                           : "--mesh needs --gt-mesh (the ground truth)");
   }
-  if (options.gt_trajectory.empty() != options.trajectory.empty()) {
-    throw UsageError(options.trajectory.empty() ? "--gt-trajectory needs --trajectory"
-                                                : "--trajectory needs --gt-trajectory");
+  if (options->gt_trajectory.empty() != options->trajectory.empty()) {
+    throw UsageError(options->trajectory.empty() ? "--gt-trajectory needs --trajectory"
+                                                 : "--trajectory needs --gt-trajectory");
   }
-  if (options.mesh.empty() && options.trajectory.empty()) {
+  if (options->mesh.empty() && options->trajectory.empty()) {
     throw UsageError(
         "nothing to evaluate: give --gt-mesh and --mesh, and/or --gt-trajectory and "
         "--trajectory (see --help)");
   }
-  if (!options.error_png.empty() && options.mesh.empty()) {
+  if (!options->error_png.empty() && options->mesh.empty()) {
     throw UsageError("--error-png needs --gt-mesh and --mesh");
   }
-  if (!options.trajectory_png.empty() && options.trajectory.empty()) {
+  if (!options->trajectory_png.empty() && options->trajectory.empty()) {
     throw UsageError("--trajectory-png needs --gt-trajectory and --trajectory");
   }
-  if (options.view && options.error_png.empty()) throw UsageError("--view needs --error-png");
+  if (options->view && options->error_png.empty()) throw UsageError("--view needs --error-png");
   LayerConfig grid;
-  grid.voxel_size = static_cast<float>(options.voxel_size_m);
-  grid.voxels_per_side = options.block_voxels;
+  grid.voxel_size = static_cast<float>(options->voxel_size_m);
+  grid.voxels_per_side = options->block_voxels;
   if (const std::string message = grid.validate(); !message.empty()) {
     throw UsageError("--voxel-size / --block-voxels: " + message);
   }
   // Inputs must exist before any work starts.
   for (const std::string* path :
-       {&options.gt_mesh, &options.mesh, &options.gt_trajectory, &options.trajectory}) {
+       {&options->gt_mesh, &options->mesh, &options->gt_trajectory, &options->trajectory}) {
     if (path->empty()) continue;
     std::error_code ec;
     if (!std::filesystem::is_regular_file(*path, ec)) {
       throw UsageError(*path + ": no such file");
     }
   }
-  return options;
 }
 
 std::string lowerExtension(const std::string& path) {
@@ -435,39 +402,35 @@ int run(const Options& options) {
   // Outputs. Every one is attempted; the first failure decides the exit status.
   std::string failure;
   if (!options.json.empty()) {
-    JsonObject inputs("  ");
-    inputs.raw("gt_mesh", options.gt_mesh.empty() ? "null" : jsonQuoted(options.gt_mesh));
-    inputs.raw("mesh", options.mesh.empty() ? "null" : jsonQuoted(options.mesh));
-    inputs.raw("gt_trajectory",
-               options.gt_trajectory.empty() ? "null" : jsonQuoted(options.gt_trajectory));
-    inputs.raw("trajectory", options.trajectory.empty() ? "null" : jsonQuoted(options.trajectory));
-    inputs.str("align", alignmentTypeName(options.alignment));
-    inputs.boolean("mesh_aligned", mesh_result && mesh_result->T_G_R.has_value());
-
-    JsonObject map("  ");
+    using Json = nlohmann::ordered_json;
+    const auto path_or_null = [](const std::string& path) {
+      return path.empty() ? Json(nullptr) : Json(path);
+    };
+    const auto count_or_null = [](const std::optional<size_t>& count) {
+      return count ? Json(*count) : Json(nullptr);
+    };
+    Json root;
+    root["inputs"] = {{"gt_mesh", path_or_null(options.gt_mesh)},
+                      {"mesh", path_or_null(options.mesh)},
+                      {"gt_trajectory", path_or_null(options.gt_trajectory)},
+                      {"trajectory", path_or_null(options.trajectory)},
+                      {"align", alignmentTypeName(options.alignment)},
+                      {"mesh_aligned", mesh_result && mesh_result->T_G_R.has_value()}};
+    root["mesh"] = mesh_result ? mesh_result->toJson() : Json(nullptr);
+    Json surface_blocks(nullptr);
     if (blocks) {
-      JsonObject surface("    ");
-      surface.num("voxel_size_m", blocks->voxel_size_m);
-      surface.count("voxels_per_side", static_cast<size_t>(blocks->voxels_per_side));
-      surface.count("blocks", blocks->blocks);
-      surface.count("voxel_bytes", blocks->voxel_bytes);
-      map.raw("surface_blocks", surface.close());
-    } else {
-      map.raw("surface_blocks", "null");
+      surface_blocks = {{"voxel_size_m", blocks->voxel_size_m},
+                        {"voxels_per_side", static_cast<size_t>(blocks->voxels_per_side)},
+                        {"blocks", blocks->blocks},
+                        {"voxel_bytes", blocks->voxel_bytes}};
     }
-    map.raw("reported_blocks",
-            options.map_blocks ? std::to_string(*options.map_blocks) : std::string("null"));
-    map.raw("reported_bytes",
-            options.map_bytes ? std::to_string(*options.map_bytes) : std::string("null"));
-
-    JsonObject root("");
-    root.raw("inputs", inputs.close());
-    root.raw("mesh", mesh_result ? jsonNest(mesh_result->toJson(), "  ") : "null");
-    root.raw("map", map.close());
-    root.raw("trajectory",
-             trajectory_result ? jsonNest(trajectory_result->toJson(), "  ") : "null");
+    root["map"] = {{"surface_blocks", surface_blocks},
+                   {"reported_blocks", count_or_null(options.map_blocks)},
+                   {"reported_bytes", count_or_null(options.map_bytes)}};
+    root["trajectory"] = trajectory_result ? trajectory_result->toJson() : Json(nullptr);
     try {
-      writeTextFile(options.json, root.close() + "\n");
+      // Paths are copied as they are; bytes that are not UTF-8 become U+FFFD.
+      writeTextFile(options.json, root.dump(2, ' ', false, Json::error_handler_t::replace) + "\n");
       std::printf("wrote %s\n", options.json.c_str());
     } catch (const EvaluationError& e) {
       std::fprintf(stderr, "cblox-eval: %s\n", e.what());
@@ -524,13 +487,15 @@ int run(const Options& options) {
 }  // namespace cblox
 
 int main(int argc, char** argv) {
+  cblox::Options options;
+  CLI::App app{
+      "cblox-eval: accuracy of a reconstruction against ground truth (mesh and/or trajectory);\n"
+      "prints a summary and writes JSON and pictures.",
+      "cblox-eval"};
+  cblox::addOptions(app, &options);
+  if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
   try {
-    bool help = false;
-    const cblox::Options options = cblox::parseArguments(argc, argv, &help);
-    if (help) {
-      cblox::printUsage(std::cout);
-      return 0;
-    }
+    cblox::checkOptions(&options);
     return cblox::run(options);
   } catch (const cblox::UsageError& e) {
     std::cerr << "cblox-eval: " << e.what() << "\n";

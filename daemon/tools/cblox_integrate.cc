@@ -14,20 +14,21 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
-#include <iostream>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "core/eval/mesh_accuracy.h"
 #include "core/integrator/make_integrator.h"
 #include "core/io/ply_io.h"
 #include "core/mesh/mesh_integrator.h"
-#include "core/tsdf/tsdf_layer.h"
-#include "daemon/common/yaml_config.h"
-#include "core/eval/mesh_accuracy.h"
 #include "core/raycast/triangle_mesh_raycaster.h"
+#include "core/tsdf/tsdf_layer.h"
 #include "daemon/capture/capture_config.h"
+#include "daemon/common/cli.h"
+#include "daemon/common/run_loop.h"
+#include "daemon/common/yaml_config.h"
 #include "drivers/open_frame_source.h"
 #include "drivers/synthetic/scenes.h"
 #include "drivers/synthetic/synthetic_frame_source.h"
@@ -48,16 +49,6 @@ struct Options {
   std::string ground_truth_output;
   bool ascii = false;
 };
-
-void printUsage() {
-  std::cout << "usage: cblox-integrate [--config FILE] [--source SPEC] [--frames N]\n"
-               "                       [--integrator fast|simple|projective]\n"
-               "                       [--trajectory KIND|FILE] [--noise none|realistic]\n"
-               "                       [--output FILE.ply] [--write-ground-truth FILE.ply] [--ascii]\n"
-               "  SPEC: sim:room|hall|town|MESH.ply (default sim:room), tum:DIR, 7scenes:DIR,\n"
-               "        synthetic-room (analytic)\n"
-               "  KIND: orbit (default) | loop | lawnmower | figure-eight, or a TUM file\n";
-}
 
 /// One depth frame from any source.
 struct Frame {
@@ -309,54 +300,35 @@ int run(const Options& options) {
 
 int main(int argc, char** argv) {
   cblox::Options options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::cerr << "cblox-integrate: " << arg << " needs a value\n";
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (arg == "--help" || arg == "-h") {
-      cblox::printUsage();
-      return 0;
-    } else if (arg == "--config") {
-      options.config_file = value();
-    } else if (arg == "--source") {
-      options.source = value();
-    } else if (arg == "--output") {
-      options.output = value();
-    } else if (arg == "--integrator") {
-      options.integrator = value();
-    } else if (arg == "--frames") {
-      try {
-        options.frames = std::stoi(value());
-      } catch (const std::exception&) {
-        std::cerr << "cblox-integrate: --frames needs an integer\n";
-        return 2;
-      }
-    } else if (arg == "--trajectory") {
-      options.trajectory = value();
-    } else if (arg == "--noise") {
-      options.noise = value();
-    } else if (arg == "--write-ground-truth") {
-      options.ground_truth_output = value();
-    } else if (arg == "--ascii") {
-      options.ascii = true;
-    } else {
-      std::cerr << "cblox-integrate: unknown argument '" << arg << "'\n";
-      cblox::printUsage();
-      return 2;
-    }
-  }
-  try {
-    return cblox::run(options);
-  } catch (const cblox::ConfigError& e) {
-    std::cerr << "cblox-integrate: configuration error: " << e.what() << "\n";
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "cblox-integrate: " << e.what() << "\n";
-    return 1;
-  }
+  CLI::App app{
+      "cblox-integrate: integrates a depth source into one TSDF volume and writes a PLY mesh;\n"
+      "for simulated sources also the accuracy and completeness against the exact scene.\n"
+      "Exit status: 0 success, 1 runtime error, 2 usage or configuration error.",
+      "cblox-integrate"};
+  app.add_option("--config", options.config_file, "settings (YAML, as config/integrate.yaml)")
+      ->type_name("FILE");
+  app.add_option("--source", options.source,
+                 "sim:room|hall|town|MESH.ply, tum:DIR, 7scenes:DIR, synthetic-room (analytic)")
+      ->type_name("SPEC")
+      ->capture_default_str();
+  app.add_option("--frames", options.frames, "frames to integrate at the most")->type_name("N");
+  app.add_option("--integrator", options.integrator,
+                 "fast | simple | projective (default: the settings')")
+      ->type_name("KIND");
+  app.add_option("--trajectory", options.trajectory,
+                 "orbit | loop | lawnmower | figure-eight, or a TUM file")
+      ->type_name("KIND|FILE")
+      ->capture_default_str();
+  app.add_option("--noise", options.noise, "none | realistic")
+      ->type_name("PRESET")
+      ->capture_default_str();
+  app.add_option("--output", options.output, "the mesh")
+      ->type_name("FILE.ply")
+      ->capture_default_str();
+  app.add_option("--write-ground-truth", options.ground_truth_output,
+                 "also write the exact scene mesh (sim: sources)")
+      ->type_name("FILE.ply");
+  app.add_flag("--ascii", options.ascii, "ASCII PLY instead of binary");
+  if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
+  return cblox::runProcess("cblox-integrate", [&] { return cblox::run(options); });
 }

@@ -32,7 +32,8 @@
 #include "core/features/orb_extractor.h"
 #include "core/vocabulary/binary_vocabulary.h"
 #include "daemon/capture/capture_config.h"
-#include "daemon/common/command_line.h"
+#include "daemon/common/cli.h"
+#include "daemon/common/yaml_config.h"
 #include "drivers/open_frame_source.h"
 #include "drivers/sim/builtin_scenes.h"
 #include "drivers/sim/sensor_model.h"
@@ -47,27 +48,6 @@ using Clock = std::chrono::steady_clock;
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
-
-void printUsage() {
-  std::printf(
-      "usage: cblox-vocabulary train --source SPEC --out FILE [--frames N] [--every K]\n"
-      "                              [--trajectory KIND[,KIND...]] [--laps N]\n"
-      "                              [--noise none|realistic] [--texture-seed S]\n"
-      "                              [--features N] [--k K] [--levels L] [--seed S]\n"
-      "                              [--max-iterations N] [--threads T]\n"
-      "                              [--allow-evaluation-scene] [--quiet]\n"
-      "       cblox-vocabulary info FILE\n"
-      "  train   extract ORB features from N frames (every K-th frame of the source; defaults\n"
-      "          N = 400, K = 10), train a k-majority vocabulary tree (k = 10, L = 6) on T\n"
-      "          threads (default 2) and write it to FILE. SPEC as for cblox-capture\n"
-      "          (sim:yard is the training scene; sim:room|hall|town are evaluation scenes,\n"
-      "          refused without --allow-evaluation-scene). Trajectories (sim): default\n"
-      "          loop,figure-eight,orbit,lawnmower, sharing the N frames. Noise default:\n"
-      "          realistic. Texture seed default 2 (evaluation renders use 1). 1200 features\n"
-      "          per image. The defaults give the build-time vocabulary.\n"
-      "  info    print a vocabulary file's parameters and statistics\n"
-      "exit status: 0 done, 1 runtime error, 2 usage or file error\n");
-}
 
 struct TrainArgs {
   std::string source;
@@ -84,15 +64,6 @@ struct TrainArgs {
   bool quiet = false;
 };
 
-int64_t toInt(const std::string& flag, const std::string& value) {
-  char* end = nullptr;
-  const long long n = std::strtoll(value.c_str(), &end, 10);
-  if (value.empty() || *end != '\0') {
-    throw UsageError(flag + ": expected an integer, got '" + value + "'");
-  }
-  return n;
-}
-
 std::vector<std::string> splitCommas(const std::string& text) {
   std::vector<std::string> parts;
   std::stringstream stream(text);
@@ -102,53 +73,50 @@ std::vector<std::string> splitCommas(const std::string& text) {
   return parts;
 }
 
-TrainArgs parseTrainArgs(int argc, char** argv) {
-  TrainArgs args;
-  try {
-    parseFlags(
-        argc, argv, printUsage, {"--quiet", "--allow-evaluation-scene"},
-        [&](const std::string& flag) {
-          if (flag == "--quiet")
-            args.quiet = true;
-          else
-            args.allow_evaluation_scene = true;
-        },
-        [&](const std::string& flag, const std::string& value) {
-          if (flag == "--source")
-            args.source = value;
-          else if (flag == "--out")
-            args.out = value;
-          else if (flag == "--trajectory")
-            args.trajectories = splitCommas(value);
-          else if (flag == "--laps")
-            args.laps = static_cast<int>(toInt(flag, value));
-          else if (flag == "--frames")
-            args.frames = static_cast<int>(toInt(flag, value));
-          else if (flag == "--every")
-            args.every = static_cast<int>(toInt(flag, value));
-          else if (flag == "--noise")
-            args.noise = value;
-          else if (flag == "--texture-seed")
-            args.texture_seed = static_cast<uint32_t>(toInt(flag, value));
-          else if (flag == "--features")
-            args.features = static_cast<int>(toInt(flag, value));
-          else if (flag == "--k")
-            args.vocabulary.branching = static_cast<int>(toInt(flag, value));
-          else if (flag == "--levels")
-            args.vocabulary.levels = static_cast<int>(toInt(flag, value));
-          else if (flag == "--seed")
-            args.vocabulary.seed = static_cast<uint64_t>(toInt(flag, value));
-          else if (flag == "--threads")
-            args.vocabulary.num_threads = static_cast<int>(toInt(flag, value));
-          else if (flag == "--max-iterations")
-            args.vocabulary.max_iterations = static_cast<int>(toInt(flag, value));
-          else
-            return false;
-          return true;
-        });
-  } catch (const ConfigError& e) {
-    throw UsageError(e.what());
-  }
+/// The train subcommand's options, written into *args when the command line is parsed.
+void addTrainOptions(CLI::App* train, TrainArgs* args) {
+  train
+      ->add_option("--source", args->source,
+                   "as for cblox-capture; sim:yard is the training scene (sim:room|hall|town\n"
+                   "are evaluation scenes, refused without --allow-evaluation-scene)")
+      ->type_name("SPEC");
+  train->add_option("--out", args->out, "the vocabulary file to write")->type_name("FILE");
+  train->add_option("--frames", args->frames, "training frames")->capture_default_str();
+  train->add_option("--every", args->every, "take every K-th frame of the source")
+      ->type_name("K")
+      ->capture_default_str();
+  train
+      ->add_option_function<std::string>(
+          "--trajectory",
+          [args](const std::string& kinds) { args->trajectories = splitCommas(kinds); },
+          "sim: trajectories sharing the frames (default loop,figure-eight,orbit,lawnmower)")
+      ->type_name("KIND[,KIND...]");
+  train->add_option("--laps", args->laps, "laps of each trajectory")->capture_default_str();
+  train->add_option("--noise", args->noise, "none | realistic")->capture_default_str();
+  train->add_option("--texture-seed", args->texture_seed, "simulator texture (evaluation: 1)")
+      ->type_name("S")
+      ->capture_default_str();
+  train->add_option("--features", args->features, "ORB features per image")->capture_default_str();
+  train->add_option("--k", args->vocabulary.branching, "branching of the vocabulary tree")
+      ->capture_default_str();
+  train->add_option("--levels", args->vocabulary.levels, "levels of the vocabulary tree")
+      ->type_name("L")
+      ->capture_default_str();
+  train->add_option("--seed", args->vocabulary.seed, "k-majority seed")->capture_default_str();
+  train
+      ->add_option("--max-iterations", args->vocabulary.max_iterations,
+                   "k-majority iterations per split at the most")
+      ->capture_default_str();
+  train->add_option("--threads", args->vocabulary.num_threads, "training threads")
+      ->type_name("T")
+      ->capture_default_str();
+  train->add_flag("--allow-evaluation-scene", args->allow_evaluation_scene,
+                  "allow sim:room|hall|town (experiments only)");
+  train->add_flag("--quiet", args->quiet, "no progress lines");
+}
+
+/// Checks the train options; throws UsageError.
+void checkTrainArgs(const TrainArgs& args) {
   if (args.source.empty()) throw UsageError("train needs --source SPEC (see --help)");
   if (args.out.empty()) throw UsageError("train needs --out FILE (see --help)");
   if (args.frames < 1) throw UsageError("--frames must be >= 1");
@@ -166,7 +134,6 @@ TrainArgs parseTrainArgs(int argc, char** argv) {
                        "--allow-evaluation-scene for experiments)");
     }
   }
-  return args;
 }
 
 double secondsSince(Clock::time_point start) {
@@ -384,27 +351,32 @@ int info(const std::string& path) {
   return 0;
 }
 
-int run(int argc, char** argv) {
-  const std::string command = argc >= 2 ? argv[1] : "";
-  if (command == "--help" || command == "-h") {
-    printUsage();
-    return 0;
-  }
-  if (command == "train") return train(parseTrainArgs(argc - 1, argv + 1));
-  if (command == "info") {
-    if (argc != 3) throw UsageError("usage: cblox-vocabulary info FILE");
-    return info(argv[2]);
-  }
-  throw UsageError(command.empty() ? "missing command: train or info (see --help)"
-                                   : "unknown command '" + command + "' (train or info)");
-}
-
 }  // namespace
 }  // namespace cblox
 
 int main(int argc, char** argv) {
+  cblox::TrainArgs train_args;
+  std::string info_file;
+  CLI::App app{
+      "cblox-vocabulary: trains and inspects the binary (ORB) vocabulary of place recognition.\n"
+      "Exit status: 0 done, 1 runtime error, 2 usage or file error.",
+      "cblox-vocabulary"};
+  app.require_subcommand(1);
+  CLI::App* train_command = app.add_subcommand(
+      "train",
+      "extract ORB features from N frames (every K-th frame of the source), train a k-majority\n"
+      "vocabulary tree and write it to FILE. The defaults give the build-time vocabulary.");
+  cblox::addTrainOptions(train_command, &train_args);
+  CLI::App* info_command =
+      app.add_subcommand("info", "print a vocabulary file's parameters and statistics");
+  info_command->add_option("file", info_file, "the vocabulary")->required()->type_name("FILE");
+  if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
   try {
-    return cblox::run(argc, argv);
+    if (train_command->parsed()) {
+      cblox::checkTrainArgs(train_args);
+      return cblox::train(train_args);
+    }
+    return cblox::info(info_file);
   } catch (const cblox::UsageError& e) {
     std::fprintf(stderr, "cblox-vocabulary: %s\n", e.what());
     return 2;

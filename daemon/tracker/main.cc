@@ -21,7 +21,6 @@
 
 #include <chrono>
 #include <cstdio>
-#include <iostream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -30,7 +29,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "core/vocabulary/binary_vocabulary.h"
-#include "daemon/common/command_line.h"
+#include "daemon/common/daemon_options.h"
 #include "daemon/common/input_watch.h"
 #include "daemon/common/run_loop.h"
 #include "daemon/common/yaml_config.h"
@@ -44,55 +43,15 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-void printUsage() {
-  std::cout
-      << "usage: cblox-tracker [--config FILE] [--mode stereo|rgbd] [--initial-pose-from-gt]\n"
-         "                     [--calibration FILE] [--vocabulary FILE|none]\n"
-         "                     [--lcm-url URL] [--quiet]\n"
-         "  Runs until SIGINT/SIGTERM.\n"
-         "  --initial-pose-from-gt  the first keyframe takes its pose from CBLOX_GT_POSE\n"
-         "                          (initial_pose: ground_truth): G = the simulator's frame\n"
-         "  --calibration FILE      Kalibr/EuRoC-style camera file instead of the messages'\n"
-         "  exit status: 0 stopped by signal, 1 runtime error, 2 usage/configuration\n";
-}
-
 struct Args {
-  std::optional<std::string> config_file, mode, calibration, vocabulary, lcm_url;
+  DaemonOptions daemon;
+  std::optional<std::string> mode, calibration, vocabulary;
   bool initial_pose_from_gt = false;
-  bool quiet = false;
 };
 
-Args parseArgs(int argc, char** argv) {
-  Args args;
-  parseFlags(
-      argc, argv, printUsage, {"--quiet", "--initial-pose-from-gt"},
-      [&](const std::string& flag) {
-        if (flag == "--quiet") args.quiet = true;
-        if (flag == "--initial-pose-from-gt") args.initial_pose_from_gt = true;
-      },
-      [&](const std::string& flag, const std::string& value) {
-        if (flag == "--config") {
-          args.config_file = value;
-        } else if (flag == "--mode") {
-          args.mode = value;
-        } else if (flag == "--calibration") {
-          args.calibration = value;
-        } else if (flag == "--vocabulary") {
-          args.vocabulary = value;
-        } else if (flag == "--lcm-url") {
-          args.lcm_url = value;
-        } else {
-          return false;
-        }
-        return true;
-      });
-  return args;
-}
-
 TrackerProcessConfig buildConfig(const Args& args) {
-  TrackerProcessConfig config = args.config_file
-                                    ? loadTrackerConfig(loadYamlFile(*args.config_file))
-                                    : TrackerProcessConfig{};
+  TrackerProcessConfig config =
+      loadDaemonConfig<TrackerProcessConfig>(args.daemon, loadTrackerConfig);
   if (args.mode) config.tracker.mode = parseTrackerMode(*args.mode);
   if (args.initial_pose_from_gt) config.tracker.initial_pose = InitialPose::kGroundTruth;
   if (args.calibration) {
@@ -100,7 +59,6 @@ TrackerProcessConfig buildConfig(const Args& args) {
     config.calibration_file = *args.calibration;
   }
   if (args.vocabulary) config.vocabulary = *args.vocabulary;
-  if (args.lcm_url) config.lcm_url = *args.lcm_url;
   finishTrackerConfig(&config);
   return config;
 }
@@ -124,7 +82,7 @@ int run(const Args& args) {
   TrackerLcmNode lcm_node(config, &lcm);
   lcm_node.messageGuard().setInputWatch(&input_watch);
   TrackerNode node(t, vocabulary.get(), lcm_node.outputs());
-  if (!args.quiet) {
+  if (!args.daemon.quiet) {
     std::printf(
         "tracker: %s mode on %s, calibration from %s, initial pose %s, %d ORB features, "
         "vocabulary %s, loop closing %s\n",
@@ -172,7 +130,7 @@ int run(const Args& args) {
                                                      " frames, " + std::to_string(s.keyframes) +
                                                      " keyframes; " + s.state);
                                    }}};
-  if (!args.quiet) {
+  if (!args.daemon.quiet) {
     tasks.push_back(
         {config.progress_period_s, config.progress_period_s, [&] { progress(node.status(), ""); }});
   }
@@ -180,7 +138,7 @@ int run(const Args& args) {
   node.stop();  // finishes the frame in hand, then stops local mapping and loop closing
   const TrackerStatus s = node.status();
   lcm_node.publishHeartbeat(s, "stopped");
-  if (!args.quiet) progress(s, "stopped: ");
+  if (!args.daemon.quiet) progress(s, "stopped: ");
   return exit_code;
 }
 
@@ -188,6 +146,23 @@ int run(const Args& args) {
 }  // namespace cblox
 
 int main(int argc, char** argv) {
-  return cblox::runProcess("cblox-tracker",
-                           [&] { return cblox::run(cblox::parseArgs(argc, argv)); });
+  cblox::Args args;
+  CLI::App app{
+      "cblox-tracker: the sparse stereo / RGB-D SLAM process: tracks the frames of CBLOX_STEREO\n"
+      "(or CBLOX_DEPTH in rgbd mode) and publishes poses, keyframes and keyframe pose updates.\n"
+      "Runs until SIGINT/SIGTERM.\n"
+      "Exit status: 0 stopped by signal, 1 runtime error, 2 usage/configuration error.",
+      "cblox-tracker"};
+  cblox::addDaemonOptions(app, &args.daemon, "config/tracker.yaml");
+  app.add_option("--mode", args.mode, "stereo | rgbd")->type_name("MODE");
+  app.add_flag("--initial-pose-from-gt", args.initial_pose_from_gt,
+               "the first keyframe takes its pose from CBLOX_GT_POSE (initial_pose:\n"
+               "ground_truth): G = the simulator's frame");
+  app.add_option("--calibration", args.calibration,
+                 "Kalibr/EuRoC-style camera file instead of the messages'")
+      ->type_name("FILE");
+  app.add_option("--vocabulary", args.vocabulary, "vocabulary file, or none")
+      ->type_name("FILE|none");
+  if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
+  return cblox::runProcess("cblox-tracker", [&] { return cblox::run(args); });
 }

@@ -96,6 +96,7 @@ TrackerNode::Outputs TrackerLcmNode::outputs() {
 
 void TrackerLcmNode::subscribe(TrackerNode* node) {
   node_ = node;
+  guard_.setPeerWatch(&peers_, config_.heartbeat_channel);
   const auto refusedAs = [this](TrackerProblem problem) {
     return [this, problem](const std::string& description) {
       node_->reportProblem(problem, description);

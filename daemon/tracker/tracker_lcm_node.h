@@ -4,6 +4,8 @@
 // channels behind the message guard, hands them to the TrackerNode, and publishes its
 // outputs (frame poses, keyframes, pose batches, covariance replies) and the heartbeat.
 
+#include <unistd.h>
+
 #include <mutex>
 #include <string>
 
@@ -52,6 +54,7 @@ class TrackerLcmNode {
   lcm::LCM* lcm_;
   TrackerNode* node_ = nullptr;
   MessageGuard guard_;
+  PeerWatch peers_{"cblox-tracker", static_cast<int32_t>(::getpid())};  // a second cblox-tracker
   std::mutex publish_mutex_;
 };
 

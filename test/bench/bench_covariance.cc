@@ -33,16 +33,18 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <deque>
 #include <functional>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <CLI/CLI.hpp>
 
 #include "core/covariance/batch_covariance_solver.h"
 #include "core/covariance/block_ordering.h"
@@ -50,6 +52,7 @@
 #include "core/covariance/constrained_ordering_solver.h"
 #include "core/covariance/kaess_recovery_solver.h"
 #include "core/covariance/sparse_solve_solver.h"
+#include "daemon/common/cli.h"
 #include "test/covariance/ceres_reference.h"
 #include "test/covariance/loop_scene.h"
 
@@ -98,66 +101,52 @@ struct Options {
   std::string vocabulary;
 };
 
-[[noreturn]] void usage(const char* argv0) {
-  std::fprintf(stderr,
-               "usage: %s [--sizes 50,200,500,1000] [--pairs 20] [--far-pairs N]\n"
-               "          [--ceres-limit-s 60] [--ceres-max-keyframes N] [--laps 2]\n"
-               "          [--landmarks-per-keyframe 50] [--big-batch 100] [--seed 1]\n"
-               "          [--scene room|hall|town] [--rate HZ] [--vocabulary FILE]\n",
-               argv0);
-  std::exit(2);
-}
-
-Options parse(int argc, char** argv) {
-  Options o;
+/// Parses the command line into *o. Returns the exit status when the program is to stop
+/// (--help: 0, a usage error: 2).
+std::optional<int> parse(int argc, char** argv, Options* o) {
 #ifdef CBLOX_DEFAULT_VOCABULARY
-  o.vocabulary = CBLOX_DEFAULT_VOCABULARY;
+  o->vocabulary = CBLOX_DEFAULT_VOCABULARY;
 #endif
-  for (int a = 1; a < argc; ++a) {
-    const std::string arg = argv[a];
-    if (a + 1 >= argc) usage(argv[0]);
-    const char* value = argv[++a];
-    if (arg == "--sizes") {
-      o.sizes.clear();
-      for (const char* p = value; *p != '\0';) {
-        char* end = nullptr;
-        o.sizes.push_back(static_cast<int>(std::strtol(p, &end, 10)));
-        if (end == p || o.sizes.back() < 4) usage(argv[0]);
-        p = *end == ',' ? end + 1 : end;
-      }
-    } else if (arg == "--pairs") {
-      o.pairs = std::atoi(value);
-    } else if (arg == "--far-pairs") {
-      o.far_pairs = std::atoi(value);
-    } else if (arg == "--ceres-limit-s") {
-      o.ceres_limit_s = std::atof(value);
-    } else if (arg == "--ceres-max-keyframes") {
-      o.ceres_max_keyframes = std::atoi(value);
-    } else if (arg == "--big-batch") {
-      o.big_batch = std::atoi(value);
-    } else if (arg == "--laps") {
-      o.laps = std::atoi(value);
-    } else if (arg == "--landmarks-per-keyframe") {
-      o.landmarks_per_keyframe = std::atoi(value);
-    } else if (arg == "--seed") {
-      o.seed = static_cast<std::uint32_t>(std::atoi(value));
-    } else if (arg == "--scene") {
-      o.scene = value;
-    } else if (arg == "--rate") {
-      o.rate_hz = std::atof(value);
-    } else if (arg == "--vocabulary") {
-      o.vocabulary = value;
-    } else {
-      usage(argv[0]);
-    }
-  }
-  if (o.far_pairs < 0) o.far_pairs = o.scene.empty() ? 0 : 4;
-  if (o.pairs < 1 || o.sizes.empty() || o.laps < 1 || o.landmarks_per_keyframe < 1 ||
-      o.big_batch < 0) {
-    usage(argv[0]);
-  }
-  std::sort(o.sizes.begin(), o.sizes.end());
-  return o;
+  CLI::App app{
+      "cblox-bench-covariance: conditional covariance extraction (constrained ordering, Kaess,\n"
+      "batch, sparse solve, ceres::Covariance) on synthetic loop scenes or, with --scene, on BA\n"
+      "problems of the sparse SLAM running on the simulator.",
+      "cblox-bench-covariance"};
+  app.add_option("--sizes", o->sizes, "keyframes of the measured problems (each >= 4)")
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->check(CLI::Range(4, std::numeric_limits<int>::max()))
+      ->type_name("N[,N...]");
+  app.add_option("--pairs", o->pairs, "random covisible pairs")
+      ->check(finiteNumber(NumberBound::kPositive))
+      ->capture_default_str();
+  app.add_option("--far-pairs", o->far_pairs,
+                 "pairs of a keyframe and the one farthest from it (default: 0; 4 with --scene)")
+      ->type_name("N");
+  app.add_option("--ceres-limit-s", o->ceres_limit_s,
+                 "skip ceres where it is predicted to take longer")
+      ->capture_default_str();
+  app.add_option("--ceres-max-keyframes", o->ceres_max_keyframes, "skip ceres above this size")
+      ->type_name("N");
+  app.add_option("--laps", o->laps, "laps of the scene")
+      ->check(finiteNumber(NumberBound::kPositive))
+      ->capture_default_str();
+  app.add_option("--landmarks-per-keyframe", o->landmarks_per_keyframe, "synthetic scenes")
+      ->check(finiteNumber(NumberBound::kPositive))
+      ->capture_default_str();
+  app.add_option("--big-batch", o->big_batch, "pairs of the extra batch measurement (0: none)")
+      ->check(finiteNumber(NumberBound::kNonNegative))
+      ->capture_default_str();
+  app.add_option("--seed", o->seed, "random pairs")->capture_default_str();
+  app.add_option("--scene", o->scene, "room | hall | town: BA problems of the sparse SLAM");
+  app.add_option("--rate", o->rate_hz,
+                 "--scene: frames per second fed to the SLAM (default: the source's; 0: no wait)")
+      ->type_name("HZ");
+  app.add_option("--vocabulary", o->vocabulary, "--scene: vocabulary file")->capture_default_str();
+  if (const std::optional<int> code = parseCommandLine(app, argc, argv)) return code;
+  if (o->far_pairs < 0) o->far_pairs = o->scene.empty() ? 0 : 4;
+  std::sort(o->sizes.begin(), o->sizes.end());
+  return std::nullopt;
 }
 
 // Random covisible pairs (i, j), i != j: a random block and a random neighbour of it.
@@ -656,7 +645,8 @@ int runScene(const Options& o, std::vector<Row>* rows) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Options o = parse(argc, argv);
+  Options o;
+  if (const std::optional<int> code = parse(argc, argv, &o)) return *code;
   std::vector<Row> rows;
   int status = 0;
   if (o.scene.empty()) {

@@ -21,14 +21,19 @@
 #include <fstream>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include "core/geometry/depth_to_point_cloud.h"
 #include "core/integrator/projective_tsdf_integrator.h"
 #include "core/integrator/ray_casting_integrator.h"
 #include "core/mesh/mesh_integrator.h"
 #include "core/tsdf/tsdf_interpolator.h"
+#include "daemon/common/cli.h"
 #include "drivers/dataset/seven_scenes_reader.h"
 #include "test/bench/bench_frames.h"
 #ifdef CBLOX_HAVE_OPEN3D
@@ -209,26 +214,22 @@ int main(int argc, char** argv) {
   size_t simple_frames = 50;
   int repeats = 3;
   std::string only;  // run one integrator (2 threads, 8^3) for its peak memory
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--data" && i + 1 < argc) {
-      data = argv[++i];
-    } else if (arg == "--simple-frames" && i + 1 < argc) {
-      simple_frames = std::stoul(argv[++i]);
-    } else if (arg == "--only" && i + 1 < argc) {
-      only = argv[++i];
-    } else if (arg == "--repeats" && i + 1 < argc) {
-      repeats = std::max(1, std::stoi(argv[++i]));
-    } else if (arg == "--json" && i + 1 < argc) {
-      json_path = argv[++i];
-    } else {
-      std::fprintf(stderr,
-                   "usage: %s [--data DIR] [--simple-frames N] [--repeats R] [--json FILE]\n"
-                   "       %s --only simple|fast|projective|open3d  (peak memory of one)\n",
-                   argv[0], argv[0]);
-      return 2;
-    }
-  }
+  CLI::App app{
+      "cblox-bench-integrators: ms per frame of the simple, fast and projective integrators on\n"
+      "7-Scenes frames (and Open3D's ScalableTSDFVolume when built with it), mesh time and\n"
+      "accuracy against the simple integrator's TSDF.",
+      "cblox-bench-integrators"};
+  app.add_option("--data", data, "7-Scenes folder")->capture_default_str();
+  app.add_option("--simple-frames", simple_frames, "frames of the (slow) simple integrator")
+      ->capture_default_str();
+  app.add_option("--repeats", repeats, "runs per configuration (the fastest per frame counts)")
+      ->capture_default_str();
+  app.add_option("--json", json_path, "also write the figures as JSON")->type_name("FILE");
+  app.add_option("--only", only,
+                 "simple | fast | projective | open3d: one integrator (2 threads,\n"
+                 "8^3 blocks) for its peak memory");
+  if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
+  repeats = std::max(1, repeats);
   BenchSequence seq;
   try {
     seq = load(data);
@@ -349,21 +350,22 @@ int main(int argc, char** argv) {
 #endif
   std::printf("\npeak RSS of the whole benchmark process: %.0f MiB\n", peakRssMiB());
   if (!json_path.empty()) {
-    std::ofstream json(json_path);
-    json << "{\"runs\": [";
-    for (size_t i = 0; i < runs.size(); ++i) {
-      const Run& r = runs[i];
-      json << (i ? "," : "") << "{\"integrator\":\"" << r.name << "\",\"threads\":" << r.threads
-           << ",\"voxels_per_side\":" << r.voxels_per_side
-           << ",\"median_ms\":" << median(r.frame_ms)
-           << ",\"p95_ms\":" << percentile(r.frame_ms, 0.95) << ",\"blocks\":" << r.blocks
-           << ",\"layer_mib\":" << r.layer_mib << ",\"mesh_ms\":" << r.mesh_ms
-           << ",\"mesh_vertices\":" << r.mesh_vertices
-           << ",\"rmse_to_simple_mm\":" << r.rmse_to_reference_mm
-           << ",\"outside_simple\":" << r.unobserved_in_reference
-           << ",\"covers_simple\":" << r.reference_coverage << "}";
+    nlohmann::ordered_json json = {{"runs", nlohmann::ordered_json::array()}};
+    for (const Run& r : runs) {
+      json["runs"].push_back({{"integrator", r.name},
+                              {"threads", r.threads},
+                              {"voxels_per_side", r.voxels_per_side},
+                              {"median_ms", median(r.frame_ms)},
+                              {"p95_ms", percentile(r.frame_ms, 0.95)},
+                              {"blocks", r.blocks},
+                              {"layer_mib", r.layer_mib},
+                              {"mesh_ms", r.mesh_ms},
+                              {"mesh_vertices", r.mesh_vertices},
+                              {"rmse_to_simple_mm", r.rmse_to_reference_mm},
+                              {"outside_simple", r.unobserved_in_reference},
+                              {"covers_simple", r.reference_coverage}});
     }
-    json << "]}\n";
+    std::ofstream(json_path) << json.dump() << "\n";
   }
   return 0;
 }

@@ -26,18 +26,19 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
 #include <mutex>
-#include <sstream>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include "core/eval/json_writer.h"
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
 #include "core/eval/mesh_accuracy.h"
 #include "core/eval/scatter_plot.h"
 #include "core/eval/umeyama.h"
@@ -45,10 +46,10 @@
 #include "core/submap/submap_fusion.h"
 #include "core/tracking/keyframe_covariance_service.h"
 #include "core/tracking/slam_system.h"
+#include "daemon/common/cli.h"
 #include "daemon/mapper/mapper.h"
 #include "drivers/open_frame_source.h"
 #include "drivers/sim/builtin_scenes.h"
-#include "test/bench/bench_flags.h"
 
 namespace cblox {
 namespace {
@@ -68,16 +69,6 @@ struct Variant {
   double rmse_m = 0.0, median_m = 0.0;
   FusionSchedulerStats fusion;
 };
-
-std::vector<double> parseList(const std::string& text) {
-  std::vector<double> values;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    if (!item.empty()) values.push_back(std::atof(item.c_str()));
-  }
-  return values;
-}
 
 MapperConfig baseConfig(float voxel, const std::filesystem::path& out) {
   MapperConfig config;
@@ -104,36 +95,35 @@ int run(int argc, char** argv) {
 #ifdef CBLOX_DEFAULT_VOCABULARY
   vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
 #endif
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    auto value = [&] { return flagValue(argc, argv, &i); };
-    if (flag == "--scene") {
-      scene = value();
-    } else if (flag == "--laps") {
-      laps = std::atoi(value().c_str());
-    } else if (flag == "--frames") {
-      max_frames = static_cast<size_t>(std::atol(value().c_str()));
-    } else if (flag == "--voxel") {
-      voxel = static_cast<float>(std::atof(value().c_str()));
-    } else if (flag == "--keyframes-per-subvolume") {
-      keyframes_per_subvolume = std::atoi(value().c_str());
-    } else if (flag == "--min-shared-ratio") {
-      candidates.min_shared_ratio = std::atof(value().c_str());
-    } else if (flag == "--min-shared-landmarks") {
-      candidates.min_shared_landmarks = std::atoi(value().c_str());
-    } else if (flag == "--depth-noise") {
-      depth_noise = std::atof(value().c_str());
-    } else if (flag == "--q-min") {
-      sweep = parseList(value());
-    } else if (flag == "--out") {
-      out_dir = value();
-    } else if (flag == "--vocabulary") {
-      vocabulary_path = value();
-    } else {
-      std::fprintf(stderr, "unknown flag %s\n", flag.c_str());
-      return 2;
-    }
-  }
+  CLI::App app{
+      "cblox-bench-maintenance: map maintenance on a simulated scene (the paper's Table II):\n"
+      "dense maps with ground-truth poses, live poses, subvolumes without and with fusion (a\n"
+      "q_min sweep), each mesh against the exact scene.",
+      "cblox-bench-maintenance"};
+  app.add_option("--scene", scene, "room | hall | town")->capture_default_str();
+  app.add_option("--laps", laps, "laps of the loop trajectory")->capture_default_str();
+  app.add_option("--frames", max_frames, "frames at the most (0: all)")->capture_default_str();
+  app.add_option("--voxel", voxel, "voxel size, metres")->capture_default_str();
+  app.add_option("--keyframes-per-subvolume", keyframes_per_subvolume,
+                 "a new subvolume after this many keyframes")
+      ->capture_default_str();
+  app.add_option("--min-shared-ratio", candidates.min_shared_ratio,
+                 "fusion candidates: share of landmarks seen by both")
+      ->capture_default_str();
+  app.add_option("--min-shared-landmarks", candidates.min_shared_landmarks,
+                 "fusion candidates: landmarks seen by both")
+      ->capture_default_str();
+  app.add_option("--depth-noise", depth_noise, "depth noise sigma = K z^2 (metres)")
+      ->type_name("K")
+      ->capture_default_str();
+  app.add_option("--q-min", sweep, "the q_min sweep, comma-separated")
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->type_name("Q[,Q...]");
+  app.add_option("--out", out_dir, "writes DIR/maintenance_<scene>.json and the sweep picture")
+      ->type_name("DIR");
+  app.add_option("--vocabulary", vocabulary_path, "vocabulary file")->capture_default_str();
+  if (const std::optional<int> code = parseCommandLine(app, argc, argv)) return *code;
   if (sweep.empty() || !(voxel > 0.0f)) {
     std::fprintf(stderr, "--q-min needs at least one value and --voxel must be > 0\n");
     return 2;
@@ -442,31 +432,22 @@ int run(int argc, char** argv) {
 
   if (!out_dir.empty()) {
     std::filesystem::create_directories(out_dir);
-    JsonObject json("");
-    json.str("scene", scene);
-    json.count("laps", static_cast<size_t>(laps));
-    json.count("frames", n);
-    json.count("keyframes", slam.map().numKeyframes());
-    json.num("voxel_m", voxel);
-    std::string maps = "[";
-    for (size_t k = 0; k < variants.size(); ++k) {
-      const Variant& v = *variants[k];
-      JsonObject m("    ");
-      m.str("name", v.name);
-      m.num("q_min", v.q_min);
-      m.count("subvolumes", v.subvolumes);
-      m.count("blocks", v.blocks);
-      m.num("rmse_m", v.rmse_m);
-      m.num("median_m", v.median_m);
-      m.count("candidates", v.fusion.candidates);
-      m.count("requested", v.fusion.requested);
-      m.count("fused", v.fusion.fused);
-      m.count("rejected_by_q", v.fusion.rejected_by_q);
-      maps += (k == 0 ? "\n    " : ",\n    ") + m.close();
+    nlohmann::ordered_json json = {{"scene", scene},   {"laps", static_cast<size_t>(laps)},
+                                   {"frames", n},      {"keyframes", slam.map().numKeyframes()},
+                                   {"voxel_m", voxel}, {"maps", nlohmann::ordered_json::array()}};
+    for (const auto& v : variants) {
+      json["maps"].push_back({{"name", v->name},
+                              {"q_min", v->q_min},
+                              {"subvolumes", v->subvolumes},
+                              {"blocks", v->blocks},
+                              {"rmse_m", v->rmse_m},
+                              {"median_m", v->median_m},
+                              {"candidates", v->fusion.candidates},
+                              {"requested", v->fusion.requested},
+                              {"fused", v->fusion.fused},
+                              {"rejected_by_q", v->fusion.rejected_by_q}});
     }
-    maps += "\n  ]";
-    json.raw("maps", maps);
-    std::ofstream(out_dir + "/maintenance_" + scene + ".json") << json.close() << "\n";
+    std::ofstream(out_dir + "/maintenance_" + scene + ".json") << json.dump(2) << "\n";
     ScatterPlotConfig plot;
     plot.title = "map maintenance on " + scene + ": size vs accuracy";
     plot.x_label = "map size [TSDF blocks]";

@@ -12,9 +12,14 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "daemon/common/cli.h"
 #include "drivers/sim/builtin_scenes.h"
 #include "drivers/sim/sim_renderer.h"
 
@@ -39,21 +44,18 @@ double percentile(std::vector<double> v, double p) {
 int run(int argc, char** argv) {
   int frames = 60, repeats = 3;
   std::string json_path, only;
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (flag == "--frames" && i + 1 < argc) {
-      frames = std::max(1, std::atoi(argv[++i]));
-    } else if (flag == "--repeats" && i + 1 < argc) {
-      repeats = std::max(1, std::atoi(argv[++i]));
-    } else if (flag == "--json" && i + 1 < argc) {
-      json_path = argv[++i];
-    } else if (flag == "--scene" && i + 1 < argc) {
-      only = argv[++i];
-    } else {
-      std::fprintf(stderr, "usage: cblox-bench-sim-render [--frames N] [--repeats R] [--json FILE] [--scene NAME]\n");
-      return 2;
-    }
-  }
+  CLI::App app{
+      "cblox-bench-sim-render: render time per stereo + depth frame (752x480) of the built-in\n"
+      "scenes, registered and separate depth camera, 1 and 2 threads.",
+      "cblox-bench-sim-render"};
+  app.add_option("--frames", frames, "frames per configuration")->capture_default_str();
+  app.add_option("--repeats", repeats, "renders per frame (the fastest counts)")
+      ->capture_default_str();
+  app.add_option("--json", json_path, "also write the figures as JSON")->type_name("FILE");
+  app.add_option("--scene", only, "one built-in scene only")->type_name("NAME");
+  if (const std::optional<int> code = parseCommandLine(app, argc, argv)) return *code;
+  frames = std::max(1, frames);
+  repeats = std::max(1, repeats);
   std::vector<Row> rows;
   for (const std::string& name : builtinSceneNames()) {
     if (!only.empty() && name != only) continue;
@@ -112,17 +114,18 @@ int run(int argc, char** argv) {
     }
   }
   if (!json_path.empty()) {
-    std::ofstream out(json_path);
-    out << "[\n";
-    for (size_t i = 0; i < rows.size(); ++i) {
-      const Row& r = rows[i];
-      out << "  {\"scene\": \"" << r.scene << "\", \"rig\": \"" << r.rig
-          << "\", \"threads\": " << r.threads << ", \"triangles\": " << r.triangles
-          << ", \"bvh_build_ms\": " << r.build_ms << ", \"median_ms\": " << r.median_ms
-          << ", \"p90_ms\": " << r.p90_ms << ", \"max_ms\": " << r.max_ms << "}"
-          << (i + 1 < rows.size() ? "," : "") << "\n";
+    nlohmann::ordered_json json = nlohmann::ordered_json::array();
+    for (const Row& r : rows) {
+      json.push_back({{"scene", r.scene},
+                      {"rig", r.rig},
+                      {"threads", r.threads},
+                      {"triangles", r.triangles},
+                      {"bvh_build_ms", r.build_ms},
+                      {"median_ms", r.median_ms},
+                      {"p90_ms", r.p90_ms},
+                      {"max_ms", r.max_ms}});
     }
-    out << "]\n";
+    std::ofstream(json_path) << json.dump(2) << "\n";
   }
   return 0;
 }

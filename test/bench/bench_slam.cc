@@ -21,21 +21,23 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include "core/eval/json_writer.h"
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
 #include "core/eval/trajectory_metrics.h"
 #include "core/eval/trajectory_plot.h"
 #include "core/tracking/slam_system.h"
+#include "daemon/common/cli.h"
 #include "drivers/open_frame_source.h"
-#include "test/bench/bench_flags.h"
 
 namespace cblox {
 namespace {
@@ -83,30 +85,20 @@ int run(int argc, char** argv) {
 #ifdef CBLOX_DEFAULT_VOCABULARY
   vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
 #endif
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    auto value = [&] { return flagValue(argc, argv, &i); };
-    if (flag == "--scene")
-      scene = value();
-    else if (flag == "--trajectory")
-      trajectory = value();
-    else if (flag == "--laps")
-      laps = std::atoi(value().c_str());
-    else if (flag == "--frames")
-      max_frames = static_cast<size_t>(std::atol(value().c_str()));
-    else if (flag == "--rate")
-      rate = std::atof(value().c_str());
-    else if (flag == "--one-core")
-      one_core = true;
-    else if (flag == "--vocabulary")
-      vocabulary_path = value();
-    else if (flag == "--out")
-      out_dir = value();
-    else {
-      std::fprintf(stderr, "unknown flag %s\n", flag.c_str());
-      return 2;
-    }
-  }
+  CLI::App app{
+      "cblox-bench-slam: the sparse SLAM on a simulated scene: tracking, local BA and loop times,\n"
+      "CPU, loops (false ones too) and ATE.",
+      "cblox-bench-slam"};
+  app.add_option("--scene", scene, "room | hall | town")->capture_default_str();
+  app.add_option("--trajectory", trajectory, "trajectory kind")->capture_default_str();
+  app.add_option("--laps", laps, "laps of the trajectory")->capture_default_str();
+  app.add_option("--frames", max_frames, "frames at the most (0: all)")->capture_default_str();
+  app.add_option("--rate", rate, "frames fed per second (default: the source's; 0: no wait)");
+  app.add_flag("--one-core", one_core, "extract both images on the tracking thread");
+  app.add_option("--vocabulary", vocabulary_path, "vocabulary file")->capture_default_str();
+  app.add_option("--out", out_dir, "writes DIR/slam_<scene>.json and the trajectory picture")
+      ->type_name("DIR");
+  if (const std::optional<int> code = parseCommandLine(app, argc, argv)) return *code;
   std::string error;
   const auto vocabulary = BinaryVocabulary::load(vocabulary_path, &error);
   if (!vocabulary) {
@@ -268,30 +260,30 @@ int run(int argc, char** argv) {
 
   if (!out_dir.empty()) {
     std::filesystem::create_directories(out_dir);
-    JsonObject json("");
-    json.str("scene", scene);
-    json.str("trajectory", trajectory);
-    json.count("laps", static_cast<size_t>(laps));
-    json.count("frames", frames.size());
-    json.num("path_m", path);
-    json.count("lost", lost);
-    json.count("keyframes", slam.map().numKeyframes());
-    json.boolean("one_core", one_core);
-    json.num("frame_ms_median", percentile(frame_ms, 0.5));
-    json.num("frame_ms_p95", percentile(frame_ms, 0.95));
-    json.num("track_ms_median", percentile(track_ms, 0.5));
-    json.num("local_ba_ms_median", percentile(ba_ms, 0.5));
-    json.num("local_ba_ms_p95", percentile(ba_ms, 0.95));
-    json.count("loops", loops.size());
-    json.count("false_loops", false_loops);
-    json.count("loops_rejected_drift", lc.loops_rejected_drift);
-    json.num("loop_correction_ms_median", percentile(correction_ms, 0.5));
-    json.num("global_ba_ms_last", lc.last_global_ba_ms);
-    json.num("cpu_cores", cpu_s / wall_s);
-    json.num("ate_before_loop_m", ate_before.rmse);
-    json.num("ate_frames_m", ate_online.rmse);
-    json.num("ate_keyframes_m", ate_keyframes.rmse);
-    std::ofstream(out_dir + "/slam_" + scene + ".json") << json.close() << "\n";
+    const nlohmann::ordered_json json = {
+        {"scene", scene},
+        {"trajectory", trajectory},
+        {"laps", static_cast<size_t>(laps)},
+        {"frames", frames.size()},
+        {"path_m", path},
+        {"lost", lost},
+        {"keyframes", slam.map().numKeyframes()},
+        {"one_core", one_core},
+        {"frame_ms_median", percentile(frame_ms, 0.5)},
+        {"frame_ms_p95", percentile(frame_ms, 0.95)},
+        {"track_ms_median", percentile(track_ms, 0.5)},
+        {"local_ba_ms_median", percentile(ba_ms, 0.5)},
+        {"local_ba_ms_p95", percentile(ba_ms, 0.95)},
+        {"loops", loops.size()},
+        {"false_loops", false_loops},
+        {"loops_rejected_drift", lc.loops_rejected_drift},
+        {"loop_correction_ms_median", percentile(correction_ms, 0.5)},
+        {"global_ba_ms_last", lc.last_global_ba_ms},
+        {"cpu_cores", cpu_s / wall_s},
+        {"ate_before_loop_m", ate_before.rmse},
+        {"ate_frames_m", ate_online.rmse},
+        {"ate_keyframes_m", ate_keyframes.rmse}};
+    std::ofstream(out_dir + "/slam_" + scene + ".json") << json.dump(2) << "\n";
     TrajectoryPlotConfig plot;
     char title[160];
     std::snprintf(title, sizeof(title), "%s: keyframe ATE %.3f m (%.2f %% of %.0f m), %zu loops",

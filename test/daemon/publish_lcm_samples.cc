@@ -14,12 +14,16 @@
 
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <functional>
+#include <limits>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include <CLI/CLI.hpp>
+
+#include "daemon/common/cli.h"
 #include "test/test_support/lcm_samples.h"
 
 namespace {
@@ -56,40 +60,39 @@ std::vector<Sample> Samples() {
   };
 }
 
-int Usage() {
-  std::fprintf(stderr,
-               "usage: publish_lcm_samples --list\n"
-               "       publish_lcm_samples LCM_URL [ROUNDS] [PERIOD_MS]\n");
-  return 2;
-}
-
-bool ParseCount(const char* text, long min, long* out) {
-  char* end = nullptr;
-  const long value = std::strtol(text, &end, 10);
-  if (end == text || *end != '\0' || value < min) return false;
-  *out = value;
-  return true;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2 || argc > 4) return Usage();
-  const std::string first = argv[1];
+  bool list = false;
+  std::string url;
+  long rounds = 1;
+  long period_ms = 200;
+  CLI::App app{
+      "publish_lcm_samples: publishes the sample message of every top-level cblox LCM type on\n"
+      "its channel (for the lcm-spy test).",
+      "publish_lcm_samples"};
+  app.add_flag("--list", list, "print \"CHANNEL TYPE\" per line and exit");
+  CLI::Option* url_option = app.add_option("url", url, "LCM URL")->type_name("LCM_URL");
+  app.add_option("rounds", rounds, "times the whole set is published")
+      ->check(CLI::Range(1L, std::numeric_limits<long>::max()))
+      ->capture_default_str();
+  app.add_option("period_ms", period_ms, "milliseconds between rounds")
+      ->check(CLI::Range(0L, std::numeric_limits<long>::max()))
+      ->capture_default_str();
+  if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
+  if (list == (url_option->count() > 0)) {
+    std::fprintf(stderr, "publish_lcm_samples: give --list or an LCM URL (see --help)\n");
+    return 2;
+  }
   const std::vector<Sample> samples = Samples();
-  if (first == "--list") {
-    if (argc != 2) return Usage();
+  if (list) {
     for (const Sample& s : samples) std::printf("%s %s\n", s.channel, s.type);
     return 0;
   }
-  long rounds = 1;
-  long period_ms = 200;
-  if (argc >= 3 && !ParseCount(argv[2], 1, &rounds)) return Usage();
-  if (argc >= 4 && !ParseCount(argv[3], 0, &period_ms)) return Usage();
 
-  lcm::LCM lcm(first);
+  lcm::LCM lcm(url);
   if (!lcm.good()) {
-    std::fprintf(stderr, "publish_lcm_samples: cannot set up LCM on %s\n", first.c_str());
+    std::fprintf(stderr, "publish_lcm_samples: cannot set up LCM on %s\n", url.c_str());
     return 1;
   }
   for (long round = 0; round < rounds; ++round) {

@@ -156,14 +156,14 @@ function(expect_usage_error what pattern)
     message(FATAL_ERROR "${what}: expected exit 2 and '${pattern}', got ${rc}: ${err}")
   endif()
 endfunction()
-expect_usage_error("unknown flag" "unknown argument '--bogus'" --bogus)
+expect_usage_error("unknown flag" "not expected: --bogus" --bogus)
 expect_usage_error("nothing to do" "nothing to evaluate")
 expect_usage_error("missing file" "${WORK}/missing.ply: no such file"
                    --gt-mesh ${WORK}/missing.ply --mesh ${WORK}/recon.ply)
 expect_usage_error("unpaired mesh" "--mesh needs --gt-mesh" --mesh ${WORK}/recon.ply)
-expect_usage_error("bad number" "--threshold needs a finite number"
+expect_usage_error("bad number" "--threshold: needs a finite number"
                    --gt-mesh ${WORK}/gt.ply --mesh ${WORK}/recon.ply --threshold abc)
-expect_usage_error("bad alignment" "--align must be none, se3 or sim3"
+expect_usage_error("bad alignment" "--align: must be none, se3 or sim3"
                    --gt-trajectory ${WORK}/gt.txt --trajectory ${WORK}/est.txt --align affine)
 file(WRITE ${WORK}/broken.ply "ply\nformat ascii 1.0\nelement vertex 1\nend_header\n")
 expect_usage_error("malformed mesh" "broken.ply"

@@ -5,6 +5,7 @@
 # tracker must start a new map (map epoch 1) instead of rejecting every frame as out of
 # order, and the mapper must keep the first run's subvolumes and integrate the second run's
 # frames into new ones (keyed by epoch, so the tracker's repeated keyframe ids are new keys).
+# Then a second cblox-mapper joins the bus: both say so in their logs, nothing is lost.
 # Usage: run_restart_test.sh BIN_DIR WORK_DIR
 set -euo pipefail
 bin=$1
@@ -52,6 +53,19 @@ grep -q "map epoch 1 begins" tracker.log || fail "the tracker did not start map 
   || fail "integration did not resume: $((integrated2 - integrated1)) of $frames frames after the restart"
 (( subvolumes2 > subvolumes1 )) || fail "no new subvolume after the restart ($subvolumes1 -> $subvolumes2)"
 (( restarts >= 1 )) || fail "the mapper counted no source restart"
+
+# A second mapper on the same bus: the first one says so (and keeps its map), the second too.
+"$bin/cblox-mapper" --config "$repo/config/mapper.yaml" --pose-source tracker \
+  --output-dir "$work/second" --lcm-url "$url" --quiet > second.log 2>&1 &
+second=$!
+sleep 3
+kill -TERM $second
+wait $second || fail "the second cblox-mapper exited with $?"
+grep -q "another cblox-mapper (pid $second) is on this bus" mapper.log \
+  || fail "the first mapper did not notice the second: $(tail -3 mapper.log)"
+grep -q "another cblox-mapper (pid $mapper) is on this bus" second.log \
+  || fail "the second mapper did not notice the first: $(tail -3 second.log)"
+(( $(value frames_integrated) == integrated2 )) || fail "the second mapper changed the first's map"
 
 kill -TERM $mapper $tracker
 wait $mapper || fail "cblox-mapper exited with $?"

@@ -5,8 +5,10 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "core/mesh/primitive_meshes.h"
 #include "core/tsdf/tsdf_layer.h"
@@ -291,43 +293,65 @@ TEST(MeshAccuracyTest, RejectsBadInputWithMessages) {
   EXPECT_NE(error.find("no surface area"), std::string::npos) << error;
 }
 
+// The keys of a JSON object, in its order.
+std::vector<std::string> keysOf(const nlohmann::ordered_json& object) {
+  std::vector<std::string> keys;
+  for (const auto& item : object.items()) keys.push_back(item.key());
+  return keys;
+}
+
 TEST(MeshAccuracyTest, JsonHasAllKeys) {
   MeshAccuracyConfig options;
   options.T_G_R = Alignment{Transformationd(), 1.0};
   const MeshAccuracy result = evaluate(plane(0.0f), plane(0.03f, 4), options);
-  const std::string json = result.toJson();
-  for (const char* expected : {"\"reconstruction_vertices\": 25,",
-                               "\"reconstruction_triangles\": 32,",
-                               "\"ground_truth_triangles\": 800,",
-                               "\"ground_truth_area_m2\": 4,",
-                               "\"alignment\": {",
-                               "\"applied\": true,",
-                               "\"scale\": 1,",
-                               "\"rotation_xyzw\": [0, 0, 0, 1],",
-                               "\"translation_m\": [0, 0, 0]",
-                               "\"max_distance_m\": null,",
-                               "\"accuracy\": {",
-                               "\"vertices\": 25,",
-                               "\"outlier_vertices\": 0,",
-                               "\"rmse_m\": ",
-                               "\"mean_m\": ",
-                               "\"median_m\": ",
-                               "\"p90_m\": ",
-                               "\"std_m\": ",
-                               "\"min_m\": ",
-                               "\"max_m\": ",
-                               "\"completeness\": {",
-                               "\"threshold_m\": 0.05,",
-                               "\"ground_truth_samples\": 10000,",
-                               "\"sample_spacing_m\": 0.02,",
-                               "\"reference\": \"triangles\",",
-                               "\"completeness\": 1,",
-                               "\"precision\": 1,",
-                               "\"f_score\": 1\n"}) {
-    EXPECT_NE(json.find(expected), std::string::npos) << expected << "\n" << json;
+  const nlohmann::ordered_json json = result.toJson();
+  using Keys = std::vector<std::string>;
+  EXPECT_EQ(keysOf(json), (Keys{"reconstruction_vertices", "reconstruction_triangles",
+                                "ground_truth_triangles", "ground_truth_area_m2", "alignment",
+                                "max_distance_m", "accuracy", "completeness"}));
+  EXPECT_EQ(keysOf(json.at("alignment")),
+            (Keys{"applied", "scale", "rotation_xyzw", "translation_m"}));
+  EXPECT_EQ(keysOf(json.at("accuracy")), (Keys{"vertices", "outlier_vertices", "rmse_m", "mean_m",
+                                               "median_m", "p90_m", "std_m", "min_m", "max_m"}));
+  EXPECT_EQ(keysOf(json.at("completeness")),
+            (Keys{"threshold_m", "ground_truth_samples", "sample_spacing_m", "reference",
+                  "completeness", "precision", "f_score"}));
+  // Counts are unsigned integers, measures doubles.
+  for (const nlohmann::ordered_json& count :
+       {json.at("reconstruction_vertices"), json.at("reconstruction_triangles"),
+        json.at("ground_truth_triangles"), json.at("accuracy").at("vertices"),
+        json.at("accuracy").at("outlier_vertices"),
+        json.at("completeness").at("ground_truth_samples")}) {
+    EXPECT_TRUE(count.is_number_unsigned()) << count;
   }
-  EXPECT_EQ(json.front(), '{');
-  EXPECT_EQ(json.substr(json.size() - 2), "}\n");
+  EXPECT_EQ(json.at("reconstruction_vertices"), 25u);
+  EXPECT_EQ(json.at("reconstruction_triangles"), 32u);
+  EXPECT_EQ(json.at("ground_truth_triangles"), 800u);
+  EXPECT_TRUE(json.at("ground_truth_area_m2").is_number_float());
+  EXPECT_NEAR(json.at("ground_truth_area_m2").get<double>(), 4.0, kTolerance);
+  EXPECT_EQ(json.at("alignment"), (nlohmann::ordered_json{{"applied", true},
+                                                          {"scale", 1.0},
+                                                          {"rotation_xyzw", {0.0, 0.0, 0.0, 1.0}},
+                                                          {"translation_m", {0.0, 0.0, 0.0}}}));
+  EXPECT_EQ(json.at("accuracy").at("vertices"), 25u);
+  EXPECT_EQ(json.at("accuracy").at("outlier_vertices"), 0u);
+  EXPECT_NEAR(json.at("accuracy").at("median_m").get<double>(), 0.03, kTolerance);
+  const nlohmann::ordered_json& c = json.at("completeness");
+  EXPECT_EQ(c.at("threshold_m"), 0.05);
+  EXPECT_EQ(c.at("ground_truth_samples"), 10000u);
+  EXPECT_EQ(c.at("sample_spacing_m"), 0.02);
+  EXPECT_EQ(c.at("reference"), "triangles");
+  for (const char* key : {"completeness", "precision", "f_score"}) {
+    EXPECT_TRUE(c.at(key).is_number_float()) << key;
+    EXPECT_EQ(c.at(key), 1.0) << key;
+  }
+  // As written: the infinite max_distance_m (no outlier bound) becomes null, JSON having no
+  // infinity; every other number reads back exactly.
+  const nlohmann::ordered_json written = nlohmann::ordered_json::parse(json.dump(2));
+  EXPECT_TRUE(written.at("max_distance_m").is_null());
+  nlohmann::ordered_json finite = json;
+  finite["max_distance_m"] = nullptr;
+  EXPECT_EQ(written, finite);
 }
 
 TEST(SurfaceBlocksTest, CountsBlocksHoldingVerticesLikeTsdfLayer) {

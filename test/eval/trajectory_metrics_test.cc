@@ -1,12 +1,12 @@
 #include "core/eval/trajectory_metrics.h"
 
-#include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <numbers>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 namespace cblox {
 namespace {
@@ -42,14 +42,6 @@ Transformationd someTransform() {
 std::vector<AssociatedPose> exactPairs(const StampedTrajectory& truth,
                                        const StampedTrajectory& estimate) {
   return associateTrajectories(truth, estimate, AssociationConfig{});
-}
-
-// The number after the first "key": in `json` (NaN if absent).
-double jsonNumber(const std::string& json, const std::string& key) {
-  const std::string pattern = "\"" + key + "\": ";
-  const size_t at = json.find(pattern);
-  if (at == std::string::npos) return std::nan("");
-  return std::strtod(json.c_str() + at + pattern.size(), nullptr);
 }
 
 TEST(ErrorStatisticsTest, ComputesRmseMeanMedianStdMinMax) {
@@ -280,30 +272,43 @@ TEST(EvaluateTrajectoryTest, JsonHasAllKeysAndNumbers) {
   EXPECT_EQ(evaluation->matched_poses, 80u);
   EXPECT_NEAR(evaluation->ate.translation_m.rmse, 0.5, 1e-12);
 
-  const std::string json = evaluation->toJson();
-  // Exact text of the counts, strings and exactly representable numbers.
-  for (const char* expected :
-       {"\"ground_truth_poses\": 100,", "\"estimate_poses\": 80,", "\"matched_poses\": 80,",
-        "\"association\": {", "\"method\": \"nearest\",", "\"max_difference_s\": 0.02,",
-        "\"time_offset_s\": 0\n", "\"ate\": {", "\"alignment\": \"none\",", "\"scale\": 1,",
-        "\"rotation_xyzw\": [0, 0, 0, 1],", "\"translation_m\": [0, 0, 0],", "\"pairs\": 80,",
-        "\"rpe\": {", "\"delta\": 1,", "\"delta_unit\": \"frames\",", "\"estimate_scale\": 1,",
-        "\"pairs\": 79,"}) {
-    EXPECT_NE(json.find(expected), std::string::npos) << expected << "\n" << json;
-  }
-  // Statistics, read back as numbers.
+  const nlohmann::ordered_json json = evaluation->toJson();
+  using Json = nlohmann::ordered_json;
+  // Keys in order; counts as unsigned integers; exactly representable numbers exactly.
+  EXPECT_EQ(json.at("ground_truth_poses"), 100u);
+  EXPECT_EQ(json.at("estimate_poses"), 80u);
+  EXPECT_EQ(json.at("matched_poses"), 80u);
+  EXPECT_TRUE(json.at("matched_poses").is_number_unsigned());
+  std::vector<std::string> keys;
+  for (const auto& item : json.items()) keys.push_back(item.key());
+  EXPECT_EQ(keys, (std::vector<std::string>{"ground_truth_poses", "estimate_poses", "matched_poses",
+                                            "association", "ate", "rpe"}));
+  EXPECT_EQ(json.at("association"),
+            (Json{{"method", "nearest"}, {"max_difference_s", 0.02}, {"time_offset_s", 0.0}}));
+  const Json& ate = json.at("ate");
+  EXPECT_EQ(ate.at("alignment"), "none");
+  EXPECT_EQ(ate.at("scale"), 1.0);
+  EXPECT_EQ(ate.at("rotation_xyzw"), (Json{0.0, 0.0, 0.0, 1.0}));
+  EXPECT_EQ(ate.at("translation_m"), (Json{0.0, 0.0, 0.0}));
+  EXPECT_EQ(ate.at("pairs"), 80u);
   for (const char* key : {"rmse_m", "mean_m", "median_m", "min_m", "max_m"}) {
-    EXPECT_NEAR(jsonNumber(json, key), 0.5, 1e-12) << key;
+    EXPECT_NEAR(ate.at(key).get<double>(), 0.5, 1e-12) << key;
   }
-  EXPECT_NEAR(jsonNumber(json, "std_m"), 0.0, 1e-12);
+  EXPECT_NEAR(ate.at("std_m").get<double>(), 0.0, 1e-12);
+  EXPECT_EQ(ate.size(), 11u);
+  const Json& rpe = json.at("rpe");
+  EXPECT_EQ(rpe.at("delta"), 1.0);
+  EXPECT_EQ(rpe.at("delta_unit"), "frames");
+  EXPECT_EQ(rpe.at("estimate_scale"), 1.0);
+  EXPECT_EQ(rpe.at("pairs"), 79u);
   for (const char* stat : {"rmse", "mean", "median", "std", "min", "max"}) {
-    EXPECT_NEAR(jsonNumber(json, std::string("translation_") + stat + "_m"), 0.0, 1e-12) << stat;
-    EXPECT_NEAR(jsonNumber(json, std::string("rotation_") + stat + "_deg"), 0.0, 1e-6) << stat;
+    EXPECT_NEAR(rpe.at(std::string("translation_") + stat + "_m").get<double>(), 0.0, 1e-12)
+        << stat;
+    EXPECT_NEAR(rpe.at(std::string("rotation_") + stat + "_deg").get<double>(), 0.0, 1e-6) << stat;
   }
-  EXPECT_EQ(json.front(), '{');
-  EXPECT_EQ(json.substr(json.size() - 2), "}\n");
-  EXPECT_EQ(std::count(json.begin(), json.end(), '{'), 4);
-  EXPECT_EQ(std::count(json.begin(), json.end(), '}'), 4);
+  EXPECT_EQ(rpe.size(), 16u);
+  // Written and read back: the same document.
+  EXPECT_EQ(Json::parse(json.dump(2)), json);
 }
 
 TEST(EvaluateTrajectoryTest, RejectsEmptyUnmatchedAndInvalidInput) {

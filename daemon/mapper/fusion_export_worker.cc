@@ -1,0 +1,186 @@
+#include "daemon/mapper/fusion_export_worker.h"
+
+#include <pthread.h>
+#include <sched.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <utility>
+
+#include "core/submap/submap_fusion.h"
+
+namespace cblox {
+
+FusionExportWorker::FusionExportWorker(SubmapCollection* collection,
+                                       FusionExportWorkerConfig config, FusionCallback on_fusion,
+                                       LogSink log)
+    : collection_(collection),
+      config_(std::move(config)),
+      on_fusion_(std::move(on_fusion)),
+      log_(std::move(log)) {}
+
+FusionExportWorker::~FusionExportWorker() { stop(); }
+
+void FusionExportWorker::start() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (started_) return;
+  started_ = true;
+  thread_ = std::thread([this] { loop(); });
+}
+
+void FusionExportWorker::stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stop_) return;
+    stop_ = true;
+  }
+  cv_.notify_all();
+  if (thread_.joinable()) thread_.join();
+  // Not started, or stopped: answer what is still queued.
+  std::deque<QueuedCommand> left;
+  size_t fusions_left = 0;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    left.swap(commands_);
+    fusions_left = fusions_.size();
+    fusions_.clear();
+  }
+  if (fusions_left > 0) {
+    log_("stopping: " + std::to_string(fusions_left) + " accepted fusion(s) not done");
+  }
+  for (QueuedCommand& queued : left) {
+    MapperReply reply;
+    reply.id = queued.command.id;
+    reply.ok = false;
+    reply.message = "mapper stopping";
+    if (queued.reply) queued.reply(reply);
+  }
+}
+
+void FusionExportWorker::submitExport(MapperCommand command, ReplyCallback reply) {
+  bool queued = false, stopping = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping = stop_;
+    if (!stopping && commands_.size() < config_.command_queue_capacity) {
+      commands_.push_back(QueuedCommand{std::move(command), std::move(reply)});
+      queued = true;
+    }
+  }
+  if (queued) {
+    cv_.notify_all();
+    return;
+  }
+  MapperReply r;
+  r.id = command.id;
+  r.ok = false;
+  r.message = stopping ? "mapper stopping" : "busy: too many exports waiting, try again later";
+  if (reply) reply(r);
+}
+
+void FusionExportWorker::submitFusions(const std::vector<FusionPair>& pairs) {
+  if (pairs.empty()) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stop_) return;
+    fusions_.insert(fusions_.end(), pairs.begin(), pairs.end());
+  }
+  cv_.notify_all();
+}
+
+bool FusionExportWorker::idle() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return commands_.empty() && fusions_.empty() && !busy_;
+}
+
+void FusionExportWorker::lowerPriority() {
+  const pid_t tid = static_cast<pid_t>(::syscall(SYS_gettid));
+  if (::setpriority(PRIO_PROCESS, static_cast<id_t>(tid), config_.niceness) != 0) {
+    log_(std::string("worker: cannot set niceness ") + std::to_string(config_.niceness) +
+        ": " + std::strerror(errno));
+  }
+  if (config_.sched_idle) {
+    sched_param param{};
+    param.sched_priority = 0;
+    if (const int e = pthread_setschedparam(pthread_self(), SCHED_IDLE, &param); e != 0) {
+      log_(std::string("worker: cannot switch to SCHED_IDLE: ") + std::strerror(e));
+    }
+  }
+}
+
+void FusionExportWorker::loop() {
+  lowerPriority();
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    cv_.wait(lock, [this] { return stop_ || !commands_.empty() || !fusions_.empty(); });
+    if (stop_) break;
+    busy_ = true;
+    if (commands_.empty()) {  // exports first: an operator is waiting for them
+      const FusionPair pair = fusions_.front();
+      fusions_.pop_front();
+      lock.unlock();
+      fuse(pair);
+    } else {
+      QueuedCommand queued = std::move(commands_.front());
+      commands_.pop_front();
+      lock.unlock();
+      runExport(queued);
+    }
+    lock.lock();
+    busy_ = false;
+  }
+}
+
+void FusionExportWorker::runExport(QueuedCommand& queued) {
+  MapperReply reply;
+  try {
+    const std::string& path = queued.command.args.at("path");
+    reply = queued.command.name == "export_mesh"
+                ? exportGlobalMesh(*collection_, config_.exports, config_.output_dir, path)
+                : exportSubvolumeMeshes(*collection_, config_.exports, config_.output_dir, path);
+  } catch (const std::exception& e) {
+    reply = MapperReply{};
+    reply.ok = false;
+    reply.message = std::string("export failed: ") + e.what();
+  }
+  reply.id = queued.command.id;
+  (reply.ok ? exports_done_ : exports_failed_).fetch_add(1, std::memory_order_relaxed);
+  log_(queued.command.name + ": " + reply.message);
+  if (queued.reply) queued.reply(reply);
+}
+
+void FusionExportWorker::fuse(const FusionPair& pair) {
+  const std::shared_ptr<Submap> older = collection_->getSubmap(pair.older);
+  const std::shared_ptr<Submap> newer = collection_->getSubmap(pair.newer);
+  std::string failure;
+  if (!older || !newer) {
+    failure = "a subvolume of the pair no longer exists";
+  } else if (!older->isFinished() || !newer->isFinished()) {
+    failure = "a subvolume of the pair is still active";
+  } else {
+    try {
+      const SubmapFusionStats stats = fuseSubmaps(*newer, older.get(), config_.exports.fusion);
+      collection_->removeSubmap(pair.newer);
+      if (on_fusion_) on_fusion_(pair, true);
+      char line[200];
+      std::snprintf(line, sizeof(line),
+                    "fused subvolume %lld into %lld (%d shared landmarks): %zu voxels in %.0f ms",
+                    static_cast<long long>(pair.newer), static_cast<long long>(pair.older),
+                    pair.shared_landmarks, stats.voxels_fused, stats.seconds * 1e3);
+      log_(line);
+      return;
+    } catch (const std::exception& e) {
+      failure = e.what();
+    }
+  }
+  if (on_fusion_) on_fusion_(pair, false);
+  log_("fusion of subvolume " + std::to_string(pair.newer) + " into " +
+       std::to_string(pair.older) + " not done: " + failure);
+}
+
+}  // namespace cblox

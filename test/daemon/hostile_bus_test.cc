@@ -110,6 +110,15 @@ TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
                                             "--quiet"});
   ASSERT_GT(mapper, 0);
   ASSERT_GT(tracker, 0);
+  // On a failed assertion the processes must not outlive the test.
+  struct KillOnExit {
+    std::vector<pid_t> pids;
+    ~KillOnExit() {
+      for (const pid_t pid : pids) {
+        if (::kill(pid, SIGKILL) == 0) ::waitpid(pid, nullptr, 0);
+      }
+    }
+  } kill_on_exit{{mapper, tracker}};
   std::this_thread::sleep_for(std::chrono::milliseconds(1000));
 
   lcm::LCM lcm(kUrl);
@@ -188,10 +197,16 @@ TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
   command.num_args = 0;
   command.arg_keys.clear();
   command.arg_values.clear();
-  lcm.publish("CBLOX_CMD", &command);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(8);
+  // UDP: while the mapper still drains the barrage a command datagram may be dropped with a
+  // full socket buffer, as on any LCM bus; it is sent again each second until answered.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  auto next_send = std::chrono::steady_clock::now();
   while (std::chrono::steady_clock::now() < deadline &&
          (!listener.reply || listener.heartbeats.size() < 2)) {
+    if (!listener.reply && std::chrono::steady_clock::now() >= next_send) {
+      lcm.publish("CBLOX_CMD", &command);
+      next_send += std::chrono::seconds(1);
+    }
     lcm.handleTimeout(50);
   }
   ASSERT_TRUE(listener.reply.has_value()) << "the mapper no longer answers commands";
@@ -210,6 +225,7 @@ TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
 
   ASSERT_EQ(::kill(mapper, SIGTERM), 0);
   ASSERT_EQ(::kill(tracker, SIGTERM), 0);
+  kill_on_exit.pids.clear();  // reaped here
   for (const pid_t pid : {mapper, tracker}) {
     int status = 0;
     ASSERT_EQ(::waitpid(pid, &status, 0), pid);

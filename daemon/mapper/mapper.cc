@@ -22,59 +22,6 @@ using Clock = std::chrono::steady_clock;
 // ---------------------------------------------------------------------------------------------
 // Names, config, small helpers
 
-const char* inputProblemName(InputProblem problem) {
-  switch (problem) {
-    case InputProblem::kDepthUndecodable:
-      return "depth_undecodable";
-    case InputProblem::kDepthInvalid:
-      return "depth_invalid";
-    case InputProblem::kDepthOutOfOrder:
-      return "depth_out_of_order";
-    case InputProblem::kNoPose:
-      return "no_pose";
-    case InputProblem::kPoseTooOld:
-      return "pose_too_old";
-    case InputProblem::kPoseGap:
-      return "pose_gap";
-    case InputProblem::kAcrossJump:
-      return "across_jump";
-    case InputProblem::kTrackingLost:
-      return "tracking_lost";
-    case InputProblem::kWaitingForAnchor:
-      return "waiting_for_anchor";
-    case InputProblem::kIntegrationFailed:
-      return "integration_failed";
-    case InputProblem::kPoseUndecodable:
-      return "pose_undecodable";
-    case InputProblem::kPoseInvalid:
-      return "pose_invalid";
-    case InputProblem::kPoseDuplicate:
-      return "pose_duplicate";
-    case InputProblem::kPoseOutOfOrder:
-      return "pose_out_of_order";
-    case InputProblem::kKeyframeInvalid:
-      return "keyframe_invalid";
-    case InputProblem::kKeyframeDuplicate:
-      return "keyframe_duplicate";
-    case InputProblem::kKeyframePoseUnknown:
-      return "keyframe_pose_unknown";
-    case InputProblem::kKeyframePoseInvalid:
-      return "keyframe_pose_invalid";
-    case InputProblem::kMaintenanceDropped:
-      return "maintenance_dropped";
-    case InputProblem::kCovarianceReplyInvalid:
-      return "covariance_reply_invalid";
-    case InputProblem::kCommandInvalid:
-      return "command_invalid";
-    case InputProblem::kCount:
-      break;
-  }
-  return "?";
-}
-
-bool isFrameProblem(InputProblem problem) {
-  return static_cast<int>(problem) <= static_cast<int>(InputProblem::kIntegrationFailed);
-}
 
 std::string MapperReply::value(const std::string& key) const {
   for (const auto& [k, v] : values) {
@@ -131,23 +78,25 @@ Mapper::Mapper(const MapperConfig& config, LogSink log)
                    [this](const std::string& line) { this->log(line); }),
       policy_(config_.creation),
       integration_ms_(config_.timing_window),
-      scheduler_(config_.maintenance),
       worker_(&collection_,
               FusionExportWorkerConfig{MapExportConfig{config_.layer, config_.fusion, config_.mesh},
                                        output_dir_, config_.command_queue_capacity,
                                        config_.worker_niceness, config_.worker_sched_idle},
               [this](const FusionPair& pair, bool fused) {
-                std::lock_guard<std::mutex> lock(scheduler_mutex_);
-                if (fused) {
-                  scheduler_.onFused(pair);
-                } else {
-                  scheduler_.onFusionFailed(pair, secondsSinceStart());
-                }
+                maintenance_.onFusionResult(pair, fused);
               },
-              [this](const std::string& line) { this->log(line); }) {}
+              [this](const std::string& line) { this->log(line); }),
+      maintenance_(
+          MapMaintenanceConfig{config_.maintenance, config_.maintenance_queue_capacity,
+                               config_.maintenance_clock, config_.restart_after_backwards_s},
+          &collection_, &policy_, &policy_mutex_, &worker_,
+          [this](InputProblem problem, const std::string& message, uint64_t n) {
+            count(problem, message, n);
+          },
+          [this](const std::string& line) { this->log(line); }) {}
 
 void Mapper::setCovarianceRequester(CovarianceRequester requester) {
-  covariance_requester_ = std::move(requester);
+  maintenance_.setCovarianceRequester(std::move(requester));
 }
 
 Mapper::~Mapper() { stop(); }
@@ -165,7 +114,7 @@ bool Mapper::start(std::string* error) {
   }
   started_ = true;
   integrator_thread_ = std::thread([this] { integratorLoop(); });
-  maintenance_thread_ = std::thread([this] { maintenanceLoop(); });
+  maintenance_.start();
   worker_.start();
   return true;
 }
@@ -176,13 +125,11 @@ void Mapper::stop() {
   stopped_ = true;
   stop_ = true;
   worker_.stop();  // the export in hand finishes; queued ones are answered "mapper stopping"
-  {
-    std::lock_guard<std::mutex> queue_lock(queue_mutex_);  // no lost wake-up
-  }
-  queue_cv_.notify_all();
   pending_.notify();
+  // The integrator first: in ground-truth mode it may wait for maintenance to apply a
+  // keyframe. Maintenance then applies what is still queued, so the map's frames are final.
   integrator_thread_.join();
-  maintenance_thread_.join();
+  maintenance_.stop();
 }
 
 void Mapper::log(const std::string& line) const {
@@ -210,8 +157,7 @@ void Mapper::reportProblem(InputProblem problem, const std::string& detail) {
 // Inputs (any thread)
 
 bool Mapper::isRestart(int64_t newest_utime, int64_t utime) const {
-  if (config_.restart_after_backwards_s <= 0.0 || newest_utime == INT64_MIN) return false;
-  return static_cast<double>(newest_utime - utime) * 1e-6 > config_.restart_after_backwards_s;
+  return isTimeRestart(newest_utime, utime, config_.restart_after_backwards_s);
 }
 
 bool Mapper::onDepthFrame(DepthFrame frame) {
@@ -265,7 +211,7 @@ bool Mapper::onDepthFrame(DepthFrame frame) {
     }
     last_depth_utime_ = frame.utime;
   }
-  advanceInputClock(frame.utime);
+  maintenance_.advanceInputClock(frame.utime);
   pending_.push(PendingFrame{std::move(frame), Clock::now()});
   return true;
 }
@@ -293,7 +239,7 @@ bool Mapper::onFramePose(const TimedPose& pose) {
   }
   switch (result) {
     case PoseBuffer::AddResult::kAdded:
-      advanceInputClock(pose.utime);
+      maintenance_.advanceInputClock(pose.utime);
       pending_.notify();
       return true;
     case PoseBuffer::AddResult::kDuplicate:
@@ -316,43 +262,18 @@ bool Mapper::onKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G
     count(InputProblem::kKeyframeInvalid, "keyframe " + std::to_string(id) + ": non-finite pose");
     return false;
   }
-  MaintenanceItem item;
-  item.keyframe_id = id;
-  item.utime = utime;
-  item.T_G_K = T_G_K;
-  item.landmark_ids = std::move(landmark_ids);
-  enqueueMaintenance(std::move(item));
+  maintenance_.enqueueKeyframe(id, utime, T_G_K, std::move(landmark_ids));
   return true;
 }
 
 void Mapper::onKeyframePoses(std::vector<std::pair<KeyframeId, Transformationd>> T_G_K) {
-  MaintenanceItem item;
-  item.kind = MaintenanceItem::Kind::kBatch;
-  item.batch = std::move(T_G_K);
-  enqueueMaintenance(std::move(item));
+  maintenance_.enqueueBatch(std::move(T_G_K));
 }
 
 void Mapper::onCovarianceReply(int64_t request_id, std::vector<FusionCovarianceAnswer> answers) {
-  MaintenanceItem item;
-  item.kind = MaintenanceItem::Kind::kCovarianceReply;
-  item.request_id = request_id;
-  item.answers = std::move(answers);
-  enqueueMaintenance(std::move(item));
+  maintenance_.enqueueReply(request_id, std::move(answers));
 }
 
-void Mapper::enqueueMaintenance(MaintenanceItem item) {
-  bool dropped = false;
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    maintenance_queue_.push_back(std::move(item));
-    if (maintenance_queue_.size() > config_.maintenance_queue_capacity) {
-      maintenance_queue_.pop_front();
-      dropped = true;
-    }
-  }
-  queue_cv_.notify_all();
-  if (dropped) count(InputProblem::kMaintenanceDropped, "maintenance queue full: oldest dropped");
-}
 
 void Mapper::onCommand(const MapperCommand& command, ReplyCallback reply) {
   auto fail = [&](const std::string& message) {
@@ -459,7 +380,8 @@ void Mapper::processFrame(PendingFrame pending, const Transformationd& T_G_B, bo
   if (config_.pose_source == PoseSource::kGroundTruth &&
       (collection_.activeSubmap() == nullptr ||
        frames_since_keyframe_ >= config_.keyframe_every_n_frames)) {
-    applyKeyframe(frame.frame_id, frame.utime, T_G_B, /*synthesised=*/true);
+    // Made by map maintenance (its thread applies keyframes); the frame waits for it.
+    if (!maintenance_.applySynthesisedKeyframe(frame.frame_id, frame.utime, T_G_B)) return;
     frames_since_keyframe_ = 0;
   }
 
@@ -513,160 +435,16 @@ void Mapper::processFrame(PendingFrame pending, const Transformationd& T_G_B, bo
 // ---------------------------------------------------------------------------------------------
 // Keyframes and pose batches (maintenance thread; integrator thread for synthesised keyframes)
 
-void Mapper::applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K,
-                           bool synthesised, std::span<const uint64_t> landmark_ids) {
-  std::shared_ptr<Submap> created;
-  SubmapId joined = -1;
-  {
-    std::lock_guard<std::mutex> lock(policy_mutex_);
-    if (synthesised && keyframes_seen_.count(id) > 0) id = max_keyframe_seen_ + 1;
-    max_keyframe_seen_ = std::max(max_keyframe_seen_, id);
-    if (!keyframes_seen_.insert(id).second) {
-      count(InputProblem::kKeyframeDuplicate,
-            "keyframe " + std::to_string(id) + ": id already applied");
-      return;
-    }
-    std::shared_ptr<Submap> active = collection_.activeSubmap();
-    // A keyframe of another map epoch (map_epoch_key.h: the tracker started a new map) never
-    // joins a subvolume of the old map: the two maps' frames are unrelated, as after a jump.
-    if (active && epochOfKey(id) != epochOfKey(active->anchorKeyframe())) {
-      policy_.onFramePose(active.get(), /*tracking_jump=*/true);
-    }
-    if (policy_.onKeyframe(active.get())) {
-      // Finishes the previous submap (waits for the frame being integrated into it).
-      created = collection_.createSubmap(T_G_K, id, utime * 1000);
-      joined = created->id();
-    } else {
-      active->addKeyframe(id);
-      joined = active->id();
-    }
-  }
-  {
-    std::lock_guard<std::mutex> lock(scheduler_mutex_);
-    if (created) scheduler_.addSubvolume(created->id(), id);
-    scheduler_.addKeyframeLandmarks(joined, landmark_ids);
-  }
-  keyframes_applied_.fetch_add(1, std::memory_order_relaxed);
-  if (created) {
-    log("subvolume " + std::to_string(created->id()) + " anchored at keyframe " +
-        std::to_string(idOfKey(id)) +
-        (epochOfKey(id) > 0 ? " of map epoch " + std::to_string(epochOfKey(id)) : ""));
-  }
-}
 
-void Mapper::applyBatch(const std::vector<std::pair<KeyframeId, Transformationd>>& batch) {
-  const KeyframePoseUpdateResult result = collection_.updateKeyframePoses(batch);
-  keyframe_batches_.fetch_add(1, std::memory_order_relaxed);
-  submaps_moved_.fetch_add(result.submaps_moved, std::memory_order_relaxed);
-  count(InputProblem::kKeyframePoseUnknown,
-        std::to_string(result.keyframes_unknown) + " of " + std::to_string(batch.size()) +
-            " keyframe poses in a batch name keyframes no subvolume knows",
-        result.keyframes_unknown);
-  count(InputProblem::kKeyframePoseInvalid,
-        std::to_string(result.poses_invalid) + " of " + std::to_string(batch.size()) +
-            " keyframe poses in a batch are not finite",
-        result.poses_invalid);
-}
 
-void Mapper::maintenanceLoop() {
-  std::unique_lock<std::mutex> lock(queue_mutex_);
-  while (true) {
-    // The 0.25 s tick lets a timed-out covariance request be followed by a new one; on the
-    // input clock a request follows inputs only.
-    const auto ready = [this] { return stop_ || !maintenance_queue_.empty(); };
-    if (config_.maintenance_clock == MaintenanceClock::kInput) {
-      queue_cv_.wait(lock, ready);
-    } else {
-      queue_cv_.wait_for(lock, std::chrono::milliseconds(250), ready);
-    }
-    if (stop_) break;
-    if (maintenance_queue_.empty()) {
-      lock.unlock();
-      requestCovariances();
-      lock.lock();
-      continue;
-    }
-    MaintenanceItem item = std::move(maintenance_queue_.front());
-    maintenance_queue_.pop_front();
-    maintenance_busy_ = true;
-    lock.unlock();
-    applyMaintenanceItem(item);
-    requestCovariances();
-    lock.lock();
-    maintenance_busy_ = false;
-  }
-  // Stopping: keyframes and pose batches still queued are applied (no voxel is touched, so
-  // this is quick and bounded by the queue's capacity), so the map's frames are final.
-  std::deque<MaintenanceItem> left;
-  left.swap(maintenance_queue_);
-  lock.unlock();
-  for (const MaintenanceItem& item : left) applyMaintenanceItem(item);
-  if (!left.empty()) {
-    log("stopping: applied " + std::to_string(left.size()) +
-        " queued keyframe / pose-batch message(s)");
-  }
-}
 
-void Mapper::applyMaintenanceItem(const MaintenanceItem& item) {
-  using Kind = MaintenanceItem::Kind;
-  try {
-    switch (item.kind) {
-      case Kind::kBatch:
-        applyBatch(item.batch);
-        break;
-      case Kind::kKeyframe:
-        applyKeyframe(item.keyframe_id, item.utime, item.T_G_K, false, item.landmark_ids);
-        break;
-      case Kind::kCovarianceReply:
-        applyCovarianceReply(item);
-        break;
-    }
-  } catch (const std::exception& e) {
-    count(item.kind == Kind::kBatch      ? InputProblem::kKeyframePoseInvalid
-          : item.kind == Kind::kKeyframe ? InputProblem::kKeyframeInvalid
-                                         : InputProblem::kCovarianceReplyInvalid,
-          e.what());
-  }
-}
 
 // ---------------------------------------------------------------------------------------------
 // Map maintenance (maintenance thread decides, worker fuses)
 
-double Mapper::secondsSinceStart() const {
-  if (config_.maintenance_clock == MaintenanceClock::kInput) {
-    return static_cast<double>(input_clock_us_.load()) * 1e-6;
-  }
-  return std::chrono::duration<double>(Clock::now() - start_time_).count();
-}
 
-void Mapper::advanceInputClock(int64_t utime) {
-  std::lock_guard<std::mutex> lock(input_clock_mutex_);
-  if (last_input_utime_ != INT64_MIN && utime > last_input_utime_) {
-    input_clock_us_.fetch_add(utime - last_input_utime_);
-  }
-  // A restarted source's time stamps start a new base; small steps back keep the newest.
-  if (utime > last_input_utime_ || isRestart(last_input_utime_, utime)) last_input_utime_ = utime;
-}
 
-void Mapper::requestCovariances() {
-  if (!covariance_requester_) return;
-  std::optional<FusionCovarianceRequest> request;
-  {
-    std::lock_guard<std::mutex> lock(scheduler_mutex_);
-    const std::shared_ptr<Submap> active = collection_.activeSubmap();
-    request = scheduler_.nextRequest(active ? active->id() : -1, secondsSinceStart());
-  }
-  if (request) covariance_requester_(*request);
-}
 
-void Mapper::applyCovarianceReply(const MaintenanceItem& item) {
-  std::vector<FusionPair> accepted;
-  {
-    std::lock_guard<std::mutex> lock(scheduler_mutex_);
-    accepted = scheduler_.onReply(item.request_id, item.answers, secondsSinceStart());
-  }
-  worker_.submitFusions(accepted);
-}
 
 
 // ---------------------------------------------------------------------------------------------
@@ -694,16 +472,13 @@ MapperStatus Mapper::status() const {
   s.frames_dropped = pending.dropped;
   s.frames_pending = pending_.size();
   s.poses_received = poses_received_.load();
-  s.keyframes_applied = keyframes_applied_.load();
-  s.keyframe_batches = keyframe_batches_.load();
-  s.submaps_moved = submaps_moved_.load();
+  s.keyframes_applied = maintenance_.keyframesApplied();
+  s.keyframe_batches = maintenance_.keyframeBatches();
+  s.submaps_moved = maintenance_.submapsMoved();
   s.source_restarts = source_restarts_.load();
   s.exports_done = worker_.exportsDone();
   s.exports_failed = worker_.exportsFailed();
-  {
-    std::lock_guard<std::mutex> lock(scheduler_mutex_);
-    s.fusion = scheduler_.stats();
-  }
+  s.fusion = maintenance_.schedulerStats();
   for (size_t i = 0; i < kNumInputProblems; ++i) {
     s.problems[i] = problems_[i].load(std::memory_order_relaxed);
     if (isFrameProblem(static_cast<InputProblem>(i))) s.frames_rejected += s.problems[i];
@@ -715,11 +490,7 @@ MapperStatus Mapper::status() const {
 }
 
 std::vector<CovisibilityCandidate> Mapper::covisibilityEdges() const {
-  CovisibilityGraphConfig all;
-  all.min_shared_landmarks = 1;
-  all.min_shared_ratio = 0.0;
-  std::lock_guard<std::mutex> lock(scheduler_mutex_);
-  return scheduler_.graph().candidates(all);
+  return maintenance_.covisibilityEdges();
 }
 
 MapperReply Mapper::statusReply(const MapperCommand& command) const {
@@ -765,13 +536,9 @@ MapperReply Mapper::statusReply(const MapperCommand& command) const {
 bool Mapper::waitUntilIdle(std::chrono::milliseconds timeout) const {
   const Clock::time_point deadline = Clock::now() + timeout;
   while (true) {
-    bool idle = pending_.size() == 0 && !integrator_busy_.load();
-    if (idle) {
-      std::lock_guard<std::mutex> lock(queue_mutex_);
-      idle = maintenance_queue_.empty() && !maintenance_busy_;
-    }
-    // After maintenance (it hands fusions to the worker while busy).
-    idle = idle && worker_.idle();
+    // Maintenance before the worker: it hands fusions to the worker while busy.
+    const bool idle = pending_.size() == 0 && !integrator_busy_.load() && maintenance_.idle() &&
+                      worker_.idle();
     // Re-check the in-tray: a frame may have been taken between the two looks.
     if (idle && pending_.size() == 0 && !integrator_busy_.load()) return true;
     if (Clock::now() >= deadline) return false;

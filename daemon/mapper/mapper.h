@@ -39,7 +39,9 @@
 #include "daemon/mapper/fusion_export_worker.h"
 #include "daemon/mapper/map_export.h"
 #include "daemon/mapper/mapper_command.h"
+#include "daemon/mapper/map_maintenance.h"
 #include "daemon/mapper/mapper_config.h"
+#include "daemon/mapper/mapper_problems.h"
 #include "daemon/mapper/pose_buffer.h"
 #include "daemon/common/rate_limited_log.h"
 #include "daemon/common/timing_window.h"
@@ -62,40 +64,6 @@ struct DepthFrame {
   float max_depth_m = 1e9f;
 };
 
-/// Kinds of bad or unusable input, each counted (MapperStatus::problems) and logged once per
-/// kind with rate limiting.
-enum class InputProblem : int {
-  // Depth frames (counted in frames_rejected):
-  kDepthUndecodable = 0,  ///< the depth message failed to decode (reported by the adapter)
-  kDepthInvalid,          ///< bad intrinsics, sizes that disagree, non-finite extrinsics
-  kDepthOutOfOrder,       ///< time stamp not newer than the previous depth frame's
-  kNoPose,                ///< no pose arrived within max_pose_wait_s
-  kPoseTooOld,            ///< older than every pose kept
-  kPoseGap,               ///< the poses around it are further apart than the gap bound
-  kAcrossJump,            ///< a tracking jump or epoch change lies between its poses
-  kTrackingLost,          ///< a pose around it is LOST / NOT_INITIALIZED
-  kWaitingForAnchor,      ///< after a tracking jump / before the first keyframe
-  kIntegrationFailed,     ///< the integrator threw (never expected; the frame is dropped)
-  // Poses, keyframes, batches, commands (not frames):
-  kPoseUndecodable,         ///< pose message failed to decode, unknown tracking state
-  kPoseInvalid,             ///< non-finite pose or non-unit quaternion
-  kPoseDuplicate,           ///< same time stamp as the previous pose
-  kPoseOutOfOrder,          ///< older than the previous pose
-  kKeyframeInvalid,         ///< non-finite keyframe pose or undecodable keyframe message
-  kKeyframeDuplicate,       ///< keyframe id already applied
-  kKeyframePoseUnknown,     ///< batch entry for a keyframe no subvolume knows
-  kKeyframePoseInvalid,     ///< batch entry with a non-finite pose; undecodable batch
-  kMaintenanceDropped,      ///< keyframe / batch dropped because the queue was full
-  kCovarianceReplyInvalid,  ///< covariance reply failed to decode or has a bad entry
-  kCommandInvalid,          ///< unknown command, missing or bad argument, path outside
-  kCount
-};
-inline constexpr size_t kNumInputProblems = static_cast<size_t>(InputProblem::kCount);
-/// Short snake_case name of a problem kind, e.g. "pose_gap" (heartbeat counter names).
-/// Thread-safe (pure).
-const char* inputProblemName(InputProblem problem);
-/// True for the kinds that reject a depth frame (summed in frames_rejected). Thread-safe.
-bool isFrameProblem(InputProblem problem);
 
 /// A snapshot of the mapper's state and counters since start. Plain value type.
 struct MapperStatus {
@@ -135,37 +103,36 @@ struct MapperStatus {
 ///   validate, count, and hand the input over: depth frames to the bounded InTray
 ///   in-tray (newest wins), poses to the PoseBuffer, keyframes and pose batches to the
 ///   maintenance queue, export commands to the worker queue. They never block on the map.
-/// - Integrator thread: takes the newest pending frame whose pose the PoseBuffer can give
-///   (waiting up to max_pose_wait_s for a pose that is not there yet; frames it can never
-///   serve are rejected and counted by reason), applies the creation policy (ground-truth
-///   mode: synthesises the keyframes itself), and integrates into the active submap under
-///   Submap::lockForIntegration() with T_M_D = T_G_M^-1 * T_G_B * T_B_D.
-/// - Maintenance thread: applies keyframes (SubmapCreationPolicy::onKeyframe ->
-///   SubmapCollection::createSubmap, or Submap::addKeyframe) and keyframe pose batches
-///   (SubmapCollection::updateKeyframePoses: frames move, no voxel is touched). Map
-///   maintenance (FusionScheduler): each keyframe's landmark ids go into the subvolume
-///   covisibility graph; after each keyframe, pose batch or reply (and every 0.25 s) it asks
-///   the covariance requester for candidate pairs; replies (onCovarianceReply) come back
+/// - Integrator thread: takes the newest pending frame whose pose the PoseBuffer can give (waiting
+///   up to max_pose_wait_s for a pose that is not there yet; frames it can never serve are rejected
+///   and counted by reason), applies the creation policy (ground-truth mode: synthesises keyframes,
+///   which map maintenance applies while the frame waits), and integrates into the active submap
+///   under Submap::lockForIntegration() with T_M_D = T_G_M^-1 * T_G_B * T_B_D.
+/// - Maintenance thread (MapMaintenance, map_maintenance.h): applies keyframes
+///   (SubmapCreationPolicy::onKeyframe -> SubmapCollection::createSubmap, or Submap::addKeyframe)
+///   and keyframe pose batches (SubmapCollection::updateKeyframePoses: frames move, no voxel is
+///   touched). Map maintenance (FusionScheduler): each keyframe's landmark ids go into the
+///   subvolume covisibility graph; after each keyframe, pose batch or reply (and every 0.25 s) it
+///   asks the covariance requester for candidate pairs; replies (onCovarianceReply) come back
 ///   through its queue and pairs with q >= q_min go to the worker's fusion queue.
 /// - Fusion/export worker thread (FusionExportWorker), at low priority (nice worker_niceness,
 ///   SCHED_IDLE): the single owner of FINISHED submap layers (SubmapCollection's rule); runs
-///   exports first,
-///   then fusions: the newer subvolume of a pair is fused into the older (fuseSubmaps:
-///   trilinear, its keyframes join the older, so pose batches naming them stay known) and
-///   removed from the collection. Both are finished (the active subvolume is never fused);
-///   only the worker reads finished layers, so no reader sees a half-fused subvolume. It
-///   holds the ACTIVE submap's layer lock only while copying that layer (a block memcpy),
-///   never while fusing, meshing or writing, so an export delays integration by the copy.
+///   exports first, then fusions: the newer subvolume of a pair is fused into the older
+///   (fuseSubmaps: trilinear, its keyframes join the older, so pose batches naming them stay known)
+///   and removed from the collection. Both are finished (the active subvolume is never fused); only
+///   the worker reads finished layers, so no reader sees a half-fused subvolume. It holds the
+///   ACTIVE submap's layer lock only while copying that layer (a block memcpy), never while fusing,
+///   meshing or writing, so an export delays integration by the copy.
 ///
-/// Shared state and its guards: the SubmapCollection and Submaps are thread-safe by their
-/// own rule; the creation policy (not thread-safe) is guarded by policy_mutex_, which the
-/// integrator holds only around onFramePose() and the keyframe path holds across
-/// onKeyframe() + createSubmap() (so no frame slips into the old submap after a jump; the
-/// integrator never holds it while holding a layer lock). Counters are atomics; the timing
-/// window (TimingWindow) has its own mutex. Lock order: policy_mutex_ -> layer lock -> collection mutex ->
-/// submap metadata mutex; depth_order_mutex_ -> pose_order_mutex_ (a restarted depth
-/// stream clears the poses); InTray', PoseBuffer's and scheduler_mutex_ (guards the
-/// FusionScheduler; held for bookkeeping only, never while calling out) are leaves.
+/// Shared state and its guards: the SubmapCollection and Submaps are thread-safe by their own rule;
+/// the creation policy (not thread-safe) is guarded by policy_mutex_, which the integrator holds
+/// only around onFramePose() and the keyframe path holds across onKeyframe() + createSubmap() (so
+/// no frame slips into the old submap after a jump; the integrator never holds it while holding a
+/// layer lock). Counters are atomics; the timing window (TimingWindow) has its own mutex. Lock
+/// order: policy_mutex_ -> layer lock -> collection mutex -> submap metadata mutex;
+/// depth_order_mutex_ -> pose_order_mutex_ (a restarted depth stream clears the poses); the InTray's and
+/// PoseBuffer's mutexes and those of MapMaintenance and FusionExportWorker (their queues, the
+/// FusionScheduler; never held while calling out) are leaves.
 ///
 /// Thread-safety: every public member function is thread-safe unless noted.
 class Mapper {
@@ -249,41 +216,11 @@ class Mapper {
     DepthFrame frame;
     std::chrono::steady_clock::time_point received;
   };
-  struct MaintenanceItem {
-    enum class Kind { kKeyframe, kBatch, kCovarianceReply };
-    Kind kind = Kind::kKeyframe;
-    KeyframeId keyframe_id = 0;
-    int64_t utime = 0;
-    Transformationd T_G_K;
-    std::vector<uint64_t> landmark_ids;
-    std::vector<std::pair<KeyframeId, Transformationd>> batch;
-    int64_t request_id = 0;
-    std::vector<FusionCovarianceAnswer> answers;
-  };
   class FrameIntegrator;  // one integrator bound to one submap's layer
 
   void integratorLoop();
-  void maintenanceLoop();
-  /// Appends to the maintenance queue (the oldest item is dropped, and counted, when full).
-  void enqueueMaintenance(MaintenanceItem item);
   // Integrator thread: one frame whose pose is known.
   void processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump);
-  // Keyframe path (maintenance thread; integrator thread in ground-truth mode).
-  // A synthesised keyframe whose id (frame id) was used before gets the next unused id.
-  void applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K,
-                     bool synthesised = false, std::span<const uint64_t> landmark_ids = {});
-  void applyBatch(const std::vector<std::pair<KeyframeId, Transformationd>>& batch);
-  // A keyframe, a batch or a covariance reply, errors counted (maintenance thread).
-  void applyMaintenanceItem(const MaintenanceItem& item);
-  // Map maintenance (maintenance thread): answers -> fusion queue; the next request.
-  void applyCovarianceReply(const MaintenanceItem& item);
-  void requestCovariances();
-  // Seconds on the maintenance clock (MapperConfig::maintenance_clock).
-  double secondsSinceStart() const;
-  // kInput clock: an accepted depth frame or pose at `utime` moves it forward.
-  void advanceInputClock(int64_t utime);
-  // Worker thread: one accepted pair.
-  // Worker thread.
   MapperReply statusReply(const MapperCommand& command) const;
 
   void count(InputProblem problem, const std::string& message, uint64_t n = 1);
@@ -299,26 +236,21 @@ class Mapper {
   InTray<PendingFrame> pending_;
   RateLimitedLog problem_log_;
 
-  std::mutex policy_mutex_;  // guards policy_, keyframes_seen_
+  // The creation policy, shared by the integrator (onFramePose) and map maintenance
+  // (onKeyframe + createSubmap).
+  std::mutex policy_mutex_;
   SubmapCreationPolicy policy_;
-  std::unordered_set<KeyframeId> keyframes_seen_;
-  KeyframeId max_keyframe_seen_ = -1;
 
   // Integrator thread only.
   std::unique_ptr<FrameIntegrator> frame_integrator_;
   int frames_since_keyframe_ = 0;
 
-  mutable std::mutex queue_mutex_;  // guards the maintenance queue and its busy flag
-  std::condition_variable queue_cv_;
-  std::deque<MaintenanceItem> maintenance_queue_;
-  bool maintenance_busy_ = false;
   std::atomic<bool> integrator_busy_{false};
 
   TimingWindow integration_ms_;
 
   std::atomic<uint64_t> frames_received_{0}, frames_integrated_{0}, frames_cut_by_budget_{0},
-      poses_received_{0}, keyframes_applied_{0}, keyframe_batches_{0}, submaps_moved_{0},
-      source_restarts_{0};
+      poses_received_{0}, source_restarts_{0};
   std::mutex pose_order_mutex_;  // serialises the restart decision of onFramePose
   std::array<std::atomic<uint64_t>, kNumInputProblems> problems_{};
   std::mutex depth_order_mutex_;
@@ -327,18 +259,14 @@ class Mapper {
   std::atomic<bool> stop_{false};
   bool started_ = false, stopped_ = false;
   std::mutex lifecycle_mutex_;
-  std::thread integrator_thread_, maintenance_thread_;
+  std::thread integrator_thread_;
 
-  CovarianceRequester covariance_requester_;
-  mutable std::mutex scheduler_mutex_;  // guards scheduler_ (a leaf)
-  FusionScheduler scheduler_;
-  std::chrono::steady_clock::time_point start_time_ = std::chrono::steady_clock::now();
-  std::mutex input_clock_mutex_;  // guards last_input_utime_ (a leaf)
-  int64_t last_input_utime_ = INT64_MIN;
-  std::atomic<int64_t> input_clock_us_{0};
-  // Exports and accepted fusions, on its own low-priority thread (declared last: it stops
-  // first, and its fusion callback uses scheduler_).
+  // Exports and accepted fusions, on its own low-priority thread; reports fusions to
+  // maintenance_.
   FusionExportWorker worker_;
+  // Keyframes, pose batches, covariance requests and replies, on its own thread; hands
+  // accepted pairs to worker_ (constructed after it, destroyed before it).
+  MapMaintenance maintenance_;
 };
 
 

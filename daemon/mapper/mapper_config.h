@@ -5,6 +5,7 @@
 // mapper_config_loader.h.
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include "core/integrator/integrator_config.h"
@@ -43,6 +44,14 @@ enum class MaintenanceClock {
   /// on the inputs alone (deterministic replay, cblox-replay).
   kInput,
 };
+
+/// True when `utime` is more than `restart_after_backwards_s` (> 0) older than `newest_utime`
+/// (INT64_MIN: nothing yet): the source restarted (MapperConfig::restart_after_backwards_s).
+/// Thread-safe (pure).
+inline bool isTimeRestart(int64_t newest_utime, int64_t utime, double restart_after_backwards_s) {
+  if (restart_after_backwards_s <= 0.0 || newest_utime == INT64_MIN) return false;
+  return static_cast<double>(newest_utime - utime) * 1e-6 > restart_after_backwards_s;
+}
 
 /// Settings of a Mapper (the `mapper` part of config/mapper.yaml). Plain value type.
 /// Defaults are sized for 752x480 depth at 10-20 Hz on a 2-core computer that also tracks.

@@ -30,26 +30,6 @@ std::string MapperReply::value(const std::string& key) const {
   return {};
 }
 
-// ---------------------------------------------------------------------------------------------
-// The integrator bound to one submap's layer (integrator thread only).
-
-class Mapper::FrameIntegrator {
- public:
-  FrameIntegrator(SubmapId submap_id, IntegratorType type, const IntegratorConfig& config,
-                  TsdfLayer* layer)
-      : submap_id_(submap_id), integrator_(makeIntegrator(type, config, layer)) {}
-
-  SubmapId submapId() const { return submap_id_; }
-
-  IntegrationStats integrate(const Transformation& T_M_D, const DepthImage& depth,
-                             const PinholeCamera& camera, const ColorImage* color) {
-    return integrator_->integrateDepthImage(T_M_D, depth, camera, color);
-  }
-
- private:
-  SubmapId submap_id_;
-  std::unique_ptr<DepthIntegrator> integrator_;
-};
 
 // ---------------------------------------------------------------------------------------------
 // Construction, life cycle
@@ -70,14 +50,11 @@ Mapper::Mapper(const MapperConfig& config, LogSink log)
       log_sink_(std::move(log)),
       output_dir_(std::filesystem::absolute(config_.output_dir).lexically_normal()),
       collection_(SubmapCollectionConfig{config_.layer}),
-      poses_(config_.pose_buffer),
-      pending_(config_.pending_capacity),
       problem_log_(kNumInputProblems,
                    std::chrono::duration_cast<Clock::duration>(
                        std::chrono::duration<double>(config_.log_interval_s)),
                    [this](const std::string& line) { this->log(line); }),
       policy_(config_.creation),
-      integration_ms_(config_.timing_window),
       worker_(&collection_,
               FusionExportWorkerConfig{MapExportConfig{config_.layer, config_.fusion, config_.mesh},
                                        output_dir_, config_.command_queue_capacity,
@@ -93,7 +70,16 @@ Mapper::Mapper(const MapperConfig& config, LogSink log)
           [this](InputProblem problem, const std::string& message, uint64_t n) {
             count(problem, message, n);
           },
-          [this](const std::string& line) { this->log(line); }) {}
+          [this](const std::string& line) { this->log(line); }),
+      integration_(
+          FrameIntegrationConfig{config_.pose_source, config_.keyframe_every_n_frames,
+                                 config_.integrator_type, config_.integrator,
+                                 config_.max_pose_wait_s, config_.pending_capacity,
+                                 config_.pose_buffer, config_.timing_window},
+          &collection_, &policy_, &policy_mutex_, &maintenance_,
+          [this](InputProblem problem, const std::string& message, uint64_t n) {
+            count(problem, message, n);
+          }) {}
 
 void Mapper::setCovarianceRequester(CovarianceRequester requester) {
   maintenance_.setCovarianceRequester(std::move(requester));
@@ -113,7 +99,7 @@ bool Mapper::start(std::string* error) {
     return false;
   }
   started_ = true;
-  integrator_thread_ = std::thread([this] { integratorLoop(); });
+  integration_.start();
   maintenance_.start();
   worker_.start();
   return true;
@@ -123,12 +109,10 @@ void Mapper::stop() {
   std::lock_guard<std::mutex> lock(lifecycle_mutex_);
   if (!started_ || stopped_) return;
   stopped_ = true;
-  stop_ = true;
   worker_.stop();  // the export in hand finishes; queued ones are answered "mapper stopping"
-  pending_.notify();
   // The integrator first: in ground-truth mode it may wait for maintenance to apply a
   // keyframe. Maintenance then applies what is still queued, so the map's frames are final.
-  integrator_thread_.join();
+  integration_.stop();
   maintenance_.stop();
 }
 
@@ -201,7 +185,7 @@ bool Mapper::onDepthFrame(DepthFrame frame) {
       last_depth_utime_ = INT64_MIN;
       // The old stream's poses must not serve the new stream's frames (same time stamps).
       std::lock_guard<std::mutex> pose_lock(pose_order_mutex_);
-      poses_.clear();
+      integration_.poses().clear();
     }
     if (frame.utime <= last_depth_utime_) {
       count(InputProblem::kDepthOutOfOrder, what + ": time stamp " + std::to_string(frame.utime) +
@@ -212,7 +196,7 @@ bool Mapper::onDepthFrame(DepthFrame frame) {
     last_depth_utime_ = frame.utime;
   }
   maintenance_.advanceInputClock(frame.utime);
-  pending_.push(PendingFrame{std::move(frame), Clock::now()});
+  integration_.push(std::move(frame));
   return true;
 }
 
@@ -226,28 +210,29 @@ bool Mapper::onFramePose(const TimedPose& pose) {
   PoseBuffer::AddResult result;
   {
     std::lock_guard<std::mutex> lock(pose_order_mutex_);
-    result = poses_.add(stored);
-    const int64_t newest = poses_.newestUtime();
+    PoseBuffer& poses = integration_.poses();
+    result = poses.add(stored);
+    const int64_t newest = poses.newestUtime();
     if (result == PoseBuffer::AddResult::kOutOfOrder && isRestart(newest, pose.utime)) {
       source_restarts_.fetch_add(1, std::memory_order_relaxed);
       log(what + ": pose time stamps went back by " +
           fixed(static_cast<double>(newest - pose.utime) * 1e-6, 3) +
           " s: source restarted, pose buffer cleared");
-      poses_.clear();
-      result = poses_.add(stored);
+      poses.clear();
+      result = poses.add(stored);
     }
   }
   switch (result) {
     case PoseBuffer::AddResult::kAdded:
       maintenance_.advanceInputClock(pose.utime);
-      pending_.notify();
+      integration_.poseAdded();
       return true;
     case PoseBuffer::AddResult::kDuplicate:
       count(InputProblem::kPoseDuplicate, what + ": duplicated time stamp");
       return false;
     case PoseBuffer::AddResult::kOutOfOrder:
       count(InputProblem::kPoseOutOfOrder, what + ": older than the newest pose (" +
-                                               std::to_string(poses_.newestUtime()) + " us)");
+                                               std::to_string(integration_.poses().newestUtime()) + " us)");
       return false;
     case PoseBuffer::AddResult::kInvalid:
       count(InputProblem::kPoseInvalid, what + ": non-finite or non-unit rotation");
@@ -308,128 +293,7 @@ void Mapper::onCommand(const MapperCommand& command, ReplyCallback reply) {
 // ---------------------------------------------------------------------------------------------
 // Integrator thread
 
-void Mapper::integratorLoop() {
-  const auto max_wait = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(config_.max_pose_wait_s));
-  while (!stop_) {
-    pending_.waitForWork(std::chrono::milliseconds(20));  // also ages frames without a pose
-    while (!stop_) {
-      integrator_busy_ = true;
-      Transformationd T_G_B;
-      bool jump = false;
-      const Clock::time_point now = Clock::now();
-      // One view of the poses for the whole scan (lock order: poses, then the in-tray),
-      // released before the frame is integrated.
-      std::optional<PendingFrame> frame;
-      {
-        const PoseBuffer::Reader poses(poses_);
-        frame = pending_.takeNewestReady([&](const PendingFrame& p) -> FrameReadiness {
-          Transformationd T;
-          bool j = false;
-          const PoseBuffer::Lookup result = poses.lookup(p.frame.utime, &T, &j);
-          auto what = [&p] {
-            return "depth frame " + std::to_string(p.frame.frame_id) + " at " +
-                   std::to_string(p.frame.utime) + " us: ";
-          };
-          switch (result) {
-            case PoseBuffer::Lookup::kFound:
-              T_G_B = T;
-              jump = j;
-              return FrameReadiness::kReady;
-            case PoseBuffer::Lookup::kNotYet:
-              if (now - p.received <= max_wait) return FrameReadiness::kWait;
-              count(InputProblem::kNoPose,
-                    what() + "no pose within " + fixed(config_.max_pose_wait_s, 2) + " s");
-              return FrameReadiness::kReject;
-            case PoseBuffer::Lookup::kTooOld:
-              count(InputProblem::kPoseTooOld, what() + PoseBuffer::name(result));
-              return FrameReadiness::kReject;
-            case PoseBuffer::Lookup::kGap:
-              count(InputProblem::kPoseGap, what() + PoseBuffer::name(result));
-              return FrameReadiness::kReject;
-            case PoseBuffer::Lookup::kAcrossJump:
-              count(InputProblem::kAcrossJump, what() + PoseBuffer::name(result));
-              return FrameReadiness::kReject;
-            case PoseBuffer::Lookup::kLost:
-              count(InputProblem::kTrackingLost, what() + PoseBuffer::name(result));
-              return FrameReadiness::kReject;
-          }
-          return FrameReadiness::kReject;
-        });
-      }
-      if (!frame) {
-        integrator_busy_ = false;
-        break;
-      }
-      try {
-        processFrame(std::move(*frame), T_G_B, jump);
-      } catch (const std::exception& e) {
-        count(InputProblem::kIntegrationFailed, e.what());
-      }
-      integrator_busy_ = false;
-    }
-  }
-}
 
-void Mapper::processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump) {
-  DepthFrame& frame = pending.frame;
-  const std::string what = "depth frame " + std::to_string(frame.frame_id) + ": ";
-
-  // Ground-truth mode: this frame becomes a keyframe when there is no submap to integrate
-  // into yet, or after keyframe_every_n_frames integrated frames.
-  if (config_.pose_source == PoseSource::kGroundTruth &&
-      (collection_.activeSubmap() == nullptr ||
-       frames_since_keyframe_ >= config_.keyframe_every_n_frames)) {
-    // Made by map maintenance (its thread applies keyframes); the frame waits for it.
-    if (!maintenance_.applySynthesisedKeyframe(frame.frame_id, frame.utime, T_G_B)) return;
-    frames_since_keyframe_ = 0;
-  }
-
-  // Sensor range: readings outside [min_depth_m, max_depth_m] are no measurement.
-  if (frame.min_depth_m > 0.0f || frame.max_depth_m < 1e9f) {
-    for (float& d : frame.depth.data) {
-      if (!(d >= frame.min_depth_m && d <= frame.max_depth_m)) d = 0.0f;
-    }
-  }
-  const PinholeCamera camera(frame.intrinsics);
-  const ColorImage* color = frame.color.empty() ? nullptr : &frame.color;
-  const Transformationd T_G_D = T_G_B * frame.T_B_D;
-
-  for (int attempt = 0; attempt < 3; ++attempt) {
-    std::shared_ptr<Submap> active;
-    SubmapCreationPolicy::FrameAction action;
-    {
-      std::lock_guard<std::mutex> lock(policy_mutex_);
-      active = collection_.activeSubmap();
-      // A jump at this frame is already answered when the active subvolume is anchored at a
-      // keyframe no older than the frame (the keyframe of the jump arrived first).
-      const bool answered = active && active->creationTimeNs() >= frame.utime * 1000;
-      action = policy_.onFramePose(active.get(), jump && !answered && attempt == 0);
-    }
-    if (action == SubmapCreationPolicy::FrameAction::kWaitForAnchor) {
-      count(InputProblem::kWaitingForAnchor,
-            what + (jump ? "tracking jump: waiting for the next keyframe to anchor a subvolume"
-                         : "no subvolume yet: waiting for the first keyframe"));
-      return;
-    }
-    const Clock::time_point start = Clock::now();
-    Submap::WriteLock lock = active->lockForIntegration();
-    if (!lock) continue;  // finished meanwhile by a new keyframe: integrate into the new one
-    if (!frame_integrator_ || frame_integrator_->submapId() != active->id()) {
-      frame_integrator_ = std::make_unique<FrameIntegrator>(active->id(), config_.integrator_type,
-                                                            config_.integrator, &lock.layer());
-    }
-    const IntegrationStats stats =
-        frame_integrator_->integrate(active->T_M_C(T_G_D), frame.depth, camera, color);
-    lock.unlock();
-    integration_ms_.add(secondsSince(start) * 1e3);
-    frames_integrated_.fetch_add(1, std::memory_order_relaxed);
-    if (stats.budget_exhausted) frames_cut_by_budget_.fetch_add(1, std::memory_order_relaxed);
-    ++frames_since_keyframe_;
-    return;
-  }
-  count(InputProblem::kIntegrationFailed, what + "the active subvolume kept changing");
-}
 
 
 // ---------------------------------------------------------------------------------------------
@@ -466,11 +330,11 @@ MapperStatus Mapper::status() const {
   s.num_blocks = collection_.numBlocks();
   s.memory_bytes = collection_.memoryBytes();
   s.frames_received = frames_received_.load();
-  s.frames_integrated = frames_integrated_.load();
-  s.frames_cut_by_budget = frames_cut_by_budget_.load();
-  const InTrayCounters pending = pending_.counters();
+  s.frames_integrated = integration_.framesIntegrated();
+  s.frames_cut_by_budget = integration_.framesCutByBudget();
+  const InTrayCounters pending = integration_.pendingCounters();
   s.frames_dropped = pending.dropped;
-  s.frames_pending = pending_.size();
+  s.frames_pending = integration_.pendingFrames();
   s.poses_received = poses_received_.load();
   s.keyframes_applied = maintenance_.keyframesApplied();
   s.keyframe_batches = maintenance_.keyframeBatches();
@@ -483,9 +347,10 @@ MapperStatus Mapper::status() const {
     s.problems[i] = problems_[i].load(std::memory_order_relaxed);
     if (isFrameProblem(static_cast<InputProblem>(i))) s.frames_rejected += s.problems[i];
   }
-  s.integration_ms_last = static_cast<float>(integration_ms_.last());
-  s.integration_ms_median = static_cast<float>(integration_ms_.quantile(0.5));
-  s.integration_ms_p99 = static_cast<float>(integration_ms_.quantile(0.99));
+  const TimingWindow& times = integration_.integrationMs();
+  s.integration_ms_last = static_cast<float>(times.last());
+  s.integration_ms_median = static_cast<float>(times.quantile(0.5));
+  s.integration_ms_p99 = static_cast<float>(times.quantile(0.99));
   return s;
 }
 
@@ -537,10 +402,9 @@ bool Mapper::waitUntilIdle(std::chrono::milliseconds timeout) const {
   const Clock::time_point deadline = Clock::now() + timeout;
   while (true) {
     // Maintenance before the worker: it hands fusions to the worker while busy.
-    const bool idle = pending_.size() == 0 && !integrator_busy_.load() && maintenance_.idle() &&
-                      worker_.idle();
+    const bool idle = integration_.idle() && maintenance_.idle() && worker_.idle();
     // Re-check the in-tray: a frame may have been taken between the two looks.
-    if (idle && pending_.size() == 0 && !integrator_busy_.load()) return true;
+    if (idle && integration_.idle()) return true;
     if (Clock::now() >= deadline) return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }

@@ -36,6 +36,8 @@
 #include "core/submap/submap_fusion.h"
 #include "core/tsdf/layer_config.h"
 #include "daemon/common/in_tray.h"
+#include "daemon/mapper/depth_frame.h"
+#include "daemon/mapper/frame_integration.h"
 #include "daemon/mapper/fusion_export_worker.h"
 #include "daemon/mapper/map_export.h"
 #include "daemon/mapper/mapper_command.h"
@@ -47,23 +49,6 @@
 #include "daemon/common/timing_window.h"
 
 namespace cblox {
-
-/// One depth frame as the mapper takes it (decoded from depth_frame_t). Plain value type.
-struct DepthFrame {
-  int64_t utime = 0;             ///< capture time, microseconds (matched with pose time stamps)
-  int64_t frame_id = 0;          ///< capture frame counter (ground-truth mode: keyframe ids)
-  DepthImage depth;              ///< metres along the depth camera's z; 0/NaN = no measurement
-  ColorImage color;              ///< registered to depth, same size; empty = no colour
-  PinholeIntrinsics intrinsics;  ///< of the depth camera (undistorted)
-  /// Depth camera D in the frame the poses refer to (the body/primary camera B): the camera
-  /// pose used for integration is T_G_D = T_G_B * T_B_D. Identity for a registered RGB-D
-  /// camera that is itself the tracked camera.
-  Transformationd T_B_D;
-  /// Valid depth range of the sensor, metres; readings outside are ignored.
-  float min_depth_m = 0.0f;
-  float max_depth_m = 1e9f;
-};
-
 
 /// A snapshot of the mapper's state and counters since start. Plain value type.
 struct MapperStatus {
@@ -103,11 +88,12 @@ struct MapperStatus {
 ///   validate, count, and hand the input over: depth frames to the bounded InTray
 ///   in-tray (newest wins), poses to the PoseBuffer, keyframes and pose batches to the
 ///   maintenance queue, export commands to the worker queue. They never block on the map.
-/// - Integrator thread: takes the newest pending frame whose pose the PoseBuffer can give (waiting
-///   up to max_pose_wait_s for a pose that is not there yet; frames it can never serve are rejected
-///   and counted by reason), applies the creation policy (ground-truth mode: synthesises keyframes,
-///   which map maintenance applies while the frame waits), and integrates into the active submap
-///   under Submap::lockForIntegration() with T_M_D = T_G_M^-1 * T_G_B * T_B_D.
+/// - Integrator thread (FrameIntegration, frame_integration.h): takes the newest pending
+///   frame whose pose the PoseBuffer can give (waiting up to max_pose_wait_s for a pose that
+///   is not there yet; frames it can never serve are rejected and counted by reason), applies
+///   the creation policy (ground-truth mode: synthesises keyframes, which map maintenance
+///   applies while the frame waits), and integrates into the active submap under
+///   Submap::lockForIntegration() with T_M_D = T_G_M^-1 * T_G_B * T_B_D.
 /// - Maintenance thread (MapMaintenance, map_maintenance.h): applies keyframes
 ///   (SubmapCreationPolicy::onKeyframe -> SubmapCollection::createSubmap, or Submap::addKeyframe)
 ///   and keyframe pose batches (SubmapCollection::updateKeyframePoses: frames move, no voxel is
@@ -212,15 +198,6 @@ class Mapper {
   const MapperConfig& config() const { return config_; }
 
  private:
-  struct PendingFrame {
-    DepthFrame frame;
-    std::chrono::steady_clock::time_point received;
-  };
-  class FrameIntegrator;  // one integrator bound to one submap's layer
-
-  void integratorLoop();
-  // Integrator thread: one frame whose pose is known.
-  void processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump);
   MapperReply statusReply(const MapperCommand& command) const;
 
   void count(InputProblem problem, const std::string& message, uint64_t n = 1);
@@ -232,8 +209,6 @@ class Mapper {
   const LogSink log_sink_;
   const std::filesystem::path output_dir_;
   SubmapCollection collection_;
-  PoseBuffer poses_;
-  InTray<PendingFrame> pending_;
   RateLimitedLog problem_log_;
 
   // The creation policy, shared by the integrator (onFramePose) and map maintenance
@@ -241,25 +216,14 @@ class Mapper {
   std::mutex policy_mutex_;
   SubmapCreationPolicy policy_;
 
-  // Integrator thread only.
-  std::unique_ptr<FrameIntegrator> frame_integrator_;
-  int frames_since_keyframe_ = 0;
-
-  std::atomic<bool> integrator_busy_{false};
-
-  TimingWindow integration_ms_;
-
-  std::atomic<uint64_t> frames_received_{0}, frames_integrated_{0}, frames_cut_by_budget_{0},
-      poses_received_{0}, source_restarts_{0};
+  std::atomic<uint64_t> frames_received_{0}, poses_received_{0}, source_restarts_{0};
   std::mutex pose_order_mutex_;  // serialises the restart decision of onFramePose
   std::array<std::atomic<uint64_t>, kNumInputProblems> problems_{};
   std::mutex depth_order_mutex_;
   int64_t last_depth_utime_ = INT64_MIN;
 
-  std::atomic<bool> stop_{false};
   bool started_ = false, stopped_ = false;
   std::mutex lifecycle_mutex_;
-  std::thread integrator_thread_;
 
   // Exports and accepted fusions, on its own low-priority thread; reports fusions to
   // maintenance_.
@@ -267,6 +231,9 @@ class Mapper {
   // Keyframes, pose batches, covariance requests and replies, on its own thread; hands
   // accepted pairs to worker_ (constructed after it, destroyed before it).
   MapMaintenance maintenance_;
+  // Depth frames, frame poses and the integrator thread; hands ground-truth keyframes to
+  // maintenance_ (constructed after it, destroyed before it).
+  FrameIntegration integration_;
 };
 
 

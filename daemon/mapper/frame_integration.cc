@@ -1,0 +1,196 @@
+#include "daemon/mapper/frame_integration.h"
+
+#include <exception>
+#include <optional>
+#include <utility>
+
+#include "core/geometry/pinhole_camera.h"
+#include "daemon/common/text_format.h"
+
+namespace cblox {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// The integrator bound to one submap's layer (integrator thread only).
+
+class FrameIntegration::FrameIntegrator {
+ public:
+  FrameIntegrator(SubmapId submap_id, IntegratorType type, const IntegratorConfig& config,
+                  TsdfLayer* layer)
+      : submap_id_(submap_id), integrator_(makeIntegrator(type, config, layer)) {}
+
+  SubmapId submapId() const { return submap_id_; }
+
+  IntegrationStats integrate(const Transformation& T_M_D, const DepthImage& depth,
+                             const PinholeCamera& camera, const ColorImage* color) {
+    return integrator_->integrateDepthImage(T_M_D, depth, camera, color);
+  }
+
+ private:
+  SubmapId submap_id_;
+  std::unique_ptr<DepthIntegrator> integrator_;
+};
+
+FrameIntegration::FrameIntegration(FrameIntegrationConfig config, SubmapCollection* collection,
+                                   SubmapCreationPolicy* policy, std::mutex* policy_mutex,
+                                   MapMaintenance* maintenance, ProblemSink problems)
+    : config_(std::move(config)),
+      collection_(collection),
+      policy_(policy),
+      policy_mutex_(policy_mutex),
+      maintenance_(maintenance),
+      problems_(std::move(problems)),
+      poses_(config_.pose_buffer),
+      pending_(config_.pending_capacity),
+      integration_ms_(config_.timing_window) {}
+
+FrameIntegration::~FrameIntegration() { stop(); }
+
+void FrameIntegration::start() {
+  std::lock_guard<std::mutex> lock(lifecycle_mutex_);
+  if (started_) return;
+  started_ = true;
+  thread_ = std::thread([this] { loop(); });
+}
+
+void FrameIntegration::stop() {
+  std::lock_guard<std::mutex> lock(lifecycle_mutex_);
+  stop_ = true;
+  pending_.notify();
+  if (thread_.joinable()) thread_.join();
+}
+
+void FrameIntegration::push(DepthFrame frame) {
+  pending_.push(PendingFrame{std::move(frame), Clock::now()});
+}
+
+bool FrameIntegration::idle() const { return pending_.size() == 0 && !busy_.load(); }
+
+void FrameIntegration::loop() {
+  const auto max_wait = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(config_.max_pose_wait_s));
+  while (!stop_) {
+    pending_.waitForWork(std::chrono::milliseconds(20));  // also ages frames without a pose
+    while (!stop_) {
+      busy_ = true;
+      Transformationd T_G_B;
+      bool jump = false;
+      const Clock::time_point now = Clock::now();
+      // One view of the poses for the whole scan (lock order: poses, then the in-tray),
+      // released before the frame is integrated.
+      std::optional<PendingFrame> frame;
+      {
+        const PoseBuffer::Reader poses(poses_);
+        frame = pending_.takeNewestReady([&](const PendingFrame& p) -> FrameReadiness {
+          Transformationd T;
+          bool j = false;
+          const PoseBuffer::Lookup result = poses.lookup(p.frame.utime, &T, &j);
+          auto what = [&p] {
+            return "depth frame " + std::to_string(p.frame.frame_id) + " at " +
+                   std::to_string(p.frame.utime) + " us: ";
+          };
+          switch (result) {
+            case PoseBuffer::Lookup::kFound:
+              T_G_B = T;
+              jump = j;
+              return FrameReadiness::kReady;
+            case PoseBuffer::Lookup::kNotYet:
+              if (now - p.received <= max_wait) return FrameReadiness::kWait;
+              problems_(InputProblem::kNoPose,
+                    what() + "no pose within " + fixed(config_.max_pose_wait_s, 2) + " s", 1);
+              return FrameReadiness::kReject;
+            case PoseBuffer::Lookup::kTooOld:
+              problems_(InputProblem::kPoseTooOld, what() + PoseBuffer::name(result), 1);
+              return FrameReadiness::kReject;
+            case PoseBuffer::Lookup::kGap:
+              problems_(InputProblem::kPoseGap, what() + PoseBuffer::name(result), 1);
+              return FrameReadiness::kReject;
+            case PoseBuffer::Lookup::kAcrossJump:
+              problems_(InputProblem::kAcrossJump, what() + PoseBuffer::name(result), 1);
+              return FrameReadiness::kReject;
+            case PoseBuffer::Lookup::kLost:
+              problems_(InputProblem::kTrackingLost, what() + PoseBuffer::name(result), 1);
+              return FrameReadiness::kReject;
+          }
+          return FrameReadiness::kReject;
+        });
+      }
+      if (!frame) {
+        busy_ = false;
+        break;
+      }
+      try {
+        processFrame(std::move(*frame), T_G_B, jump);
+      } catch (const std::exception& e) {
+        problems_(InputProblem::kIntegrationFailed, e.what(), 1);
+      }
+      busy_ = false;
+    }
+  }
+}
+
+void FrameIntegration::processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump) {
+  DepthFrame& frame = pending.frame;
+  const std::string what = "depth frame " + std::to_string(frame.frame_id) + ": ";
+
+  // Ground-truth mode: this frame becomes a keyframe when there is no submap to integrate
+  // into yet, or after keyframe_every_n_frames integrated frames.
+  if (config_.pose_source == PoseSource::kGroundTruth &&
+      (collection_->activeSubmap() == nullptr ||
+       frames_since_keyframe_ >= config_.keyframe_every_n_frames)) {
+    // Made by map maintenance (its thread applies keyframes); the frame waits for it.
+    if (!maintenance_->applySynthesisedKeyframe(frame.frame_id, frame.utime, T_G_B)) return;
+    frames_since_keyframe_ = 0;
+  }
+
+  // Sensor range: readings outside [min_depth_m, max_depth_m] are no measurement.
+  if (frame.min_depth_m > 0.0f || frame.max_depth_m < 1e9f) {
+    for (float& d : frame.depth.data) {
+      if (!(d >= frame.min_depth_m && d <= frame.max_depth_m)) d = 0.0f;
+    }
+  }
+  const PinholeCamera camera(frame.intrinsics);
+  const ColorImage* color = frame.color.empty() ? nullptr : &frame.color;
+  const Transformationd T_G_D = T_G_B * frame.T_B_D;
+
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    std::shared_ptr<Submap> active;
+    SubmapCreationPolicy::FrameAction action;
+    {
+      std::lock_guard<std::mutex> lock(*policy_mutex_);
+      active = collection_->activeSubmap();
+      // A jump at this frame is already answered when the active subvolume is anchored at a
+      // keyframe no older than the frame (the keyframe of the jump arrived first).
+      const bool answered = active && active->creationTimeNs() >= frame.utime * 1000;
+      action = policy_->onFramePose(active.get(), jump && !answered && attempt == 0);
+    }
+    if (action == SubmapCreationPolicy::FrameAction::kWaitForAnchor) {
+      problems_(InputProblem::kWaitingForAnchor,
+            what + (jump ? "tracking jump: waiting for the next keyframe to anchor a subvolume"
+                         : "no subvolume yet: waiting for the first keyframe"), 1);
+      return;
+    }
+    const Clock::time_point start = Clock::now();
+    Submap::WriteLock lock = active->lockForIntegration();
+    if (!lock) continue;  // finished meanwhile by a new keyframe: integrate into the new one
+    if (!frame_integrator_ || frame_integrator_->submapId() != active->id()) {
+      frame_integrator_ = std::make_unique<FrameIntegrator>(active->id(), config_.integrator_type,
+                                                            config_.integrator, &lock.layer());
+    }
+    const IntegrationStats stats =
+        frame_integrator_->integrate(active->T_M_C(T_G_D), frame.depth, camera, color);
+    lock.unlock();
+    integration_ms_.add(secondsSince(start) * 1e3);
+    frames_integrated_.fetch_add(1, std::memory_order_relaxed);
+    if (stats.budget_exhausted) frames_cut_by_budget_.fetch_add(1, std::memory_order_relaxed);
+    ++frames_since_keyframe_;
+    return;
+  }
+  problems_(InputProblem::kIntegrationFailed, what + "the active subvolume kept changing", 1);
+}
+
+}  // namespace cblox

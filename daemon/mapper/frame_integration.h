@@ -1,0 +1,116 @@
+#pragma once
+
+// Frame integration, the mapper's first thread: the newest depth frame whose pose is known
+// is integrated into the active subvolume.
+
+#include <atomic>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "core/geometry/se3.h"
+#include "core/integrator/integrator_config.h"
+#include "core/integrator/make_integrator.h"
+#include "core/submap/submap_collection.h"
+#include "core/submap/submap_creation_policy.h"
+#include "daemon/common/in_tray.h"
+#include "daemon/common/timing_window.h"
+#include "daemon/mapper/depth_frame.h"
+#include "daemon/mapper/map_maintenance.h"
+#include "daemon/mapper/mapper_config.h"
+#include "daemon/mapper/mapper_problems.h"
+#include "daemon/mapper/pose_buffer.h"
+
+namespace cblox {
+
+/// Settings of frame integration (from MapperConfig). Plain value type.
+struct FrameIntegrationConfig {
+  PoseSource pose_source = PoseSource::kGroundTruth;
+  int keyframe_every_n_frames = 10;  ///< ground-truth mode's synthesised keyframes
+  IntegratorType integrator_type = IntegratorType::kProjective;
+  IntegratorConfig integrator;
+  double max_pose_wait_s = 0.5;
+  size_t pending_capacity = 4;
+  PoseBuffer::Config pose_buffer;
+  size_t timing_window = 200;
+};
+
+/// The in-tray of depth frames (newest wins), the frame poses, and the integrator thread:
+/// it takes the newest pending frame whose pose the PoseBuffer can give (waiting up to
+/// max_pose_wait_s for a pose that is not there yet; frames it can never serve are rejected
+/// and counted by reason), applies the creation policy under the shared policy mutex
+/// (ground-truth mode: synthesises keyframes, which map maintenance applies while the frame
+/// waits) and integrates into the active subvolume under Submap::lockForIntegration() with
+/// T_M_D = T_G_M^-1 * T_G_B * T_B_D.
+/// Thread-safety: every public member function is thread-safe.
+class FrameIntegration {
+ public:
+  using ProblemSink = std::function<void(InputProblem, const std::string&, uint64_t n)>;
+
+  /// `collection`, `policy`, `policy_mutex` and `maintenance` must outlive it.
+  FrameIntegration(FrameIntegrationConfig config, SubmapCollection* collection,
+                   SubmapCreationPolicy* policy, std::mutex* policy_mutex,
+                   MapMaintenance* maintenance, ProblemSink problems);
+  /// Calls stop().
+  ~FrameIntegration();
+  FrameIntegration(const FrameIntegration&) = delete;
+  FrameIntegration& operator=(const FrameIntegration&) = delete;
+
+  /// Starts the thread. Call once.
+  void start();
+  /// Finishes the frame in hand, joins. Idempotent.
+  void stop();
+
+  /// A checked depth frame, into the in-tray (an older waiting one may be dropped, counted).
+  void push(DepthFrame frame);
+  /// The frame poses (the caller adds them, with its own order and restart rules); call
+  /// poseAdded() after each.
+  PoseBuffer& poses() { return poses_; }
+  const PoseBuffer& poses() const { return poses_; }
+  void poseAdded() { pending_.notify(); }
+
+  /// No frame waiting or in hand.
+  bool idle() const;
+  uint64_t framesIntegrated() const { return frames_integrated_.load(); }
+  uint64_t framesCutByBudget() const { return frames_cut_by_budget_.load(); }
+  InTrayCounters pendingCounters() const { return pending_.counters(); }
+  size_t pendingFrames() const { return pending_.size(); }
+  const TimingWindow& integrationMs() const { return integration_ms_; }
+
+ private:
+  struct PendingFrame {
+    DepthFrame frame;
+    std::chrono::steady_clock::time_point received;
+  };
+  class FrameIntegrator;  // one integrator bound to one submap's layer
+
+  void loop();
+  void processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump);
+
+  const FrameIntegrationConfig config_;
+  SubmapCollection* const collection_;
+  SubmapCreationPolicy* const policy_;
+  std::mutex* const policy_mutex_;
+  MapMaintenance* const maintenance_;
+  const ProblemSink problems_;
+
+  PoseBuffer poses_;
+  InTray<PendingFrame> pending_;
+  TimingWindow integration_ms_;
+  // Integrator thread only.
+  std::unique_ptr<FrameIntegrator> frame_integrator_;
+  int frames_since_keyframe_ = 0;
+
+  std::atomic<bool> busy_{false}, stop_{false};
+  std::atomic<uint64_t> frames_integrated_{0}, frames_cut_by_budget_{0};
+  std::mutex lifecycle_mutex_;
+  bool started_ = false;
+  std::thread thread_;
+};
+
+}  // namespace cblox

@@ -96,6 +96,9 @@ off_t findLogSync(FILE* file, off_t from, off_t file_size) {
 ReplayConfig deterministicReplayConfig(ReplayConfig config) {
   config.mapper.mapper.integrator.max_integration_time_s = 0.0;
   config.mapper.mapper.maintenance_clock = MaintenanceClock::kInput;
+  // A depth frame is handed over once its pose is there; one without a pose then never gets
+  // one, so it is refused at once instead of after a wall-clock wait.
+  config.mapper.mapper.max_pose_wait_s = 0.0;
   config.tracker.tracker.covariance.max_linearization_age_s = 0.0;
   // The mapper reads depth on a channel of its own, so that in RGB-D mode (one channel for
   // both) it gets each frame after the tracker's pose of it.
@@ -370,6 +373,16 @@ ReplaySummary LogReplayer::run(const std::function<void(const ReplayProgress&)>&
   summary.log_span_s = static_cast<double>(last_event_us - first_event_us) * 1e-6;
   report();
   for (const auto& [id, pose] : impl_->keyframes) summary.keyframes.push_back(pose);
+  for (const MessageGuardCounts& counts :
+       {impl_->mapper_node->messageCounts(),
+        impl_->tracker_lcm ? impl_->tracker_lcm->messageCounts() : MessageGuardCounts{}}) {
+    for (size_t kind = 0; kind < counts.refused.size(); ++kind) {
+      if (counts.refused[kind] > 0) {
+        summary.refused[wireErrorName(static_cast<WireError>(kind))] += counts.refused[kind];
+      }
+    }
+    summary.handler_errors += counts.handler_errors;
+  }
   if (impl_->tracker) summary.tracker = impl_->tracker->status();
   summary.mapper = impl_->mapper->status();
   return summary;

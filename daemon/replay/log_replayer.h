@@ -61,6 +61,11 @@ struct ReplaySummary {
   uint64_t damaged_regions = 0;
   uint64_t skipped_bytes = 0;
   bool stopped = false;  ///< the stop flag ended it before the end of the log
+  /// Messages the tracker's and the mapper's message guards refused, by WireError kind
+  /// (wireErrorName), e.g. fingerprint_mismatch for a log of another message version; and
+  /// handler errors.
+  std::map<std::string, uint64_t> refused;
+  uint64_t handler_errors = 0;
   double wall_s = 0.0;
   double log_span_s = 0.0;  ///< time stamps of the first to the last event
   /// Frame poses the tracker published with a pose, in order (tracker mode).
@@ -83,7 +88,8 @@ struct ReplaySummary {
 /// tracker with its local mapping, loop closing and covariance service; the mapper with its
 /// integrator, maintenance and fusion threads), so no decision depends on thread timing. The
 /// settings that read the wall clock are replaced: the mapper's integration time budget is
-/// off, its maintenance runs on the inputs' clock (MaintenanceClock::kInput), and the
+/// off, it does not wait for a pose that is not there when a frame is handed over, its
+/// maintenance runs on the inputs' clock (MaintenanceClock::kInput), and the
 /// tracker's covariance service linearises the map afresh for every request. Inputs are
 /// reordered only as a live system would see them in time: a tracker frame is handed over
 /// when the next one is read (so the ground truth published after it is there first), and a

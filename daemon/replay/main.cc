@@ -108,6 +108,8 @@ nlohmann::json summaryJson(const ReplaySummary& s, const ReplayConfig& config) {
   j["depth_frames"] = s.depth_frames;
   j["ground_truth_poses"] = s.ground_truth_poses;
   j["ignored_events"] = s.ignored;
+  j["messages_refused"] = s.refused;
+  j["handler_errors"] = s.handler_errors;
   j["damaged_regions"] = s.damaged_regions;
   j["skipped_bytes"] = s.skipped_bytes;
   j["stopped_by_signal"] = s.stopped;
@@ -226,6 +228,14 @@ int run(const Args& args) {
       std::printf("replay: %llu events of %s not used\n", static_cast<unsigned long long>(n),
                   channel.c_str());
     }
+  }
+  for (const auto& [kind, n] : s.refused) {
+    std::fprintf(stderr, "cblox-replay: %llu message(s) refused (%s)%s\n",
+                 static_cast<unsigned long long>(n), kind.c_str(),
+                 kind == "fingerprint_mismatch"
+                     ? ": the log holds another version of the cblox message types than this "
+                       "build (record it again, or replay it with the build that recorded it)"
+                     : "");
   }
   if (s.damaged_regions > 0) {
     std::fprintf(stderr,

@@ -115,6 +115,36 @@ print(f"replay of the {log} log: {s['skipped_bytes']} bytes skipped, "
 PY
 done
 
+# A log of another message version: every CBLOX_STEREO message's fingerprint differs. The
+# replay refuses them (counted by kind) and says why; nothing is tracked.
+python3 - << 'PY'
+import struct
+data = bytearray(open("run.lcmlog", "rb").read())
+at = 0
+while at + 28 <= len(data):
+    channel_len, data_len = struct.unpack(">ii", data[at + 20:at + 28])
+    channel = data[at + 28:at + 28 + channel_len].decode()
+    payload = at + 28 + channel_len
+    if channel == "CBLOX_STEREO":
+        data[payload] ^= 0xFF  # first fingerprint byte
+    at = payload + data_len
+open("other_version.lcmlog", "wb").write(data)
+PY
+"$bin/cblox-replay" other_version.lcmlog --out other_version --mapper-config "$repo/config/mapper.yaml" \
+  --tracker-config "$repo/config/tracker.yaml" --pose-source tracker --initial-pose-from-gt --no-mesh \
+  --quiet > other_version.log 2>&1 || fail "cblox-replay on a log of another version: $(tail -3 other_version.log)"
+grep -q "message(s) refused (fingerprint_mismatch): the log holds another version" other_version.log \
+  || fail "the version mismatch was not named: $(cat other_version.log)"
+python3 - "$frames" << 'PY'
+import json, sys
+frames = int(sys.argv[1])
+s = json.load(open("other_version/replay.json"))
+if s["messages_refused"].get("fingerprint_mismatch") != frames or s["tracker"]["frames_tracked"] != 0:
+    print(f"FAIL: other version: {s['messages_refused']}, {s['tracker']['frames_tracked']} tracked")
+    sys.exit(1)
+print(f"replay of a log of another version: {frames} stereo messages refused (fingerprint_mismatch)")
+PY
+
 # 4. Accuracy against the exact scene.
 voxel=$(awk '/^  voxel_size:/ {print $2; exit}' "$repo/config/mapper.yaml")
 for run in live logplayer replay1; do

@@ -24,9 +24,11 @@ bool SubmapCreationPolicy::needsNewSubmap(const Submap& active, bool tracking_ju
          active.numKeyframes() >= static_cast<size_t>(config_.max_keyframes_per_subvolume);
 }
 
-SubmapCreationPolicy::FrameAction SubmapCreationPolicy::onFramePose(const Submap* active,
-                                                                    bool tracking_jump) {
-  if (tracking_jump) {
+SubmapCreationPolicy::FrameAction SubmapCreationPolicy::onFramePose(
+    const Submap* active, bool tracking_jump, std::optional<int64_t> frame_time_ns) {
+  const bool answered =
+      frame_time_ns && active != nullptr && active->creationTimeNs() >= *frame_time_ns;
+  if (tracking_jump && !answered) {
     pending_ = Pending::kTrackingJump;
   } else if (active == nullptr || active->isFinished()) {
     if (pending_ != Pending::kTrackingJump) pending_ = Pending::kNoActiveSubmap;
@@ -37,8 +39,8 @@ SubmapCreationPolicy::FrameAction SubmapCreationPolicy::onFramePose(const Submap
   return integrate ? FrameAction::kIntegrate : FrameAction::kWaitForAnchor;
 }
 
-bool SubmapCreationPolicy::onKeyframe(const Submap* active) {
-  const bool create = pending_ != Pending::kNone || active == nullptr ||
+bool SubmapCreationPolicy::onKeyframe(const Submap* active, bool starts_new_map) {
+  const bool create = starts_new_map || pending_ != Pending::kNone || active == nullptr ||
                       needsNewSubmap(*active, /*tracking_jump=*/false);
   if (create) pending_ = Pending::kNone;
   return create;

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <cstdint>
+#include <optional>
 #include <string>
 
 #include "core/submap/submap.h"
@@ -66,14 +68,20 @@ class SubmapCreationPolicy {
   /// A tracking jump, or a missing/finished active submap, makes the next keyframe anchor a
   /// new submap and returns kWaitForAnchor until then; reaching the keyframe limit makes the
   /// next keyframe anchor a new submap but frames keep being integrated. A jump overrides a
-  /// pending keyframe-limit decision. Not thread-safe.
-  FrameAction onFramePose(const Submap* active, bool tracking_jump);
+  /// pending keyframe-limit decision. With the frame's time `frame_time_ns`, a jump is
+  /// already answered (it is not one) when `active` was created at or after that time: the
+  /// keyframe of the jump arrived, and anchored it, before the frame was processed.
+  /// Not thread-safe.
+  FrameAction onFramePose(const Submap* active, bool tracking_jump,
+                          std::optional<int64_t> frame_time_ns = std::nullopt);
 
   /// Applies the rule to a new keyframe: true when it must anchor a new submap (something
   /// was pending, there is no active submap, or the active one is full); the pending state
   /// is then cleared and the caller creates the submap with T_G_M = T_G_K. False: the
-  /// caller adds the keyframe to `active`. Not thread-safe.
-  bool onKeyframe(const Submap* active);
+  /// caller adds the keyframe to `active`. `starts_new_map`: the keyframe belongs to another
+  /// map than the active submap's (the tracker started a new map): always a new submap, as
+  /// after a jump. Not thread-safe.
+  bool onKeyframe(const Submap* active, bool starts_new_map = false);
 
   /// The pending decision. Not thread-safe.
   Pending pending() const { return pending_; }

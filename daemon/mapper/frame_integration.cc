@@ -163,10 +163,7 @@ void FrameIntegration::processFrame(PendingFrame pending, const Transformationd&
     {
       std::lock_guard<std::mutex> lock(*policy_mutex_);
       active = collection_->activeSubmap();
-      // A jump at this frame is already answered when the active subvolume is anchored at a
-      // keyframe no older than the frame (the keyframe of the jump arrived first).
-      const bool answered = active && active->creationTimeNs() >= frame.utime * 1000;
-      action = policy_->onFramePose(active.get(), jump && !answered && attempt == 0);
+      action = policy_->onFramePose(active.get(), jump && attempt == 0, frame.utime * 1000);
     }
     if (action == SubmapCreationPolicy::FrameAction::kWaitForAnchor) {
       problems_(InputProblem::kWaitingForAnchor,

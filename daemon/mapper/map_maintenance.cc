@@ -4,6 +4,7 @@
 #include <exception>
 #include <optional>
 
+#include "daemon/common/text_format.h"
 #include "daemon/mapper/map_epoch_key.h"
 
 namespace cblox {
@@ -187,11 +188,9 @@ void MapMaintenance::applyKeyframe(KeyframeId id, int64_t utime, const Transform
     }
     std::shared_ptr<Submap> active = collection_->activeSubmap();
     // A keyframe of another map epoch (map_epoch_key.h: the tracker started a new map) never
-    // joins a subvolume of the old map: the two maps' frames are unrelated, as after a jump.
-    if (active && epochOfKey(id) != epochOfKey(active->anchorKeyframe())) {
-      policy_->onFramePose(active.get(), /*tracking_jump=*/true);
-    }
-    if (policy_->onKeyframe(active.get())) {
+    // joins a subvolume of the old map: the two maps' frames are unrelated.
+    const bool new_map = active && epochOfKey(id) != epochOfKey(active->anchorKeyframe());
+    if (policy_->onKeyframe(active.get(), new_map)) {
       // Finishes the previous submap (waits for the frame being integrated into it).
       created = collection_->createSubmap(T_G_K, id, utime * 1000);
       joined = created->id();
@@ -231,7 +230,7 @@ double MapMaintenance::seconds() const {
   if (config_.clock == MaintenanceClock::kInput) {
     return static_cast<double>(input_clock_us_.load()) * 1e-6;
   }
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time_).count();
+  return secondsSince(start_time_);
 }
 
 void MapMaintenance::advanceInputClock(int64_t utime) {

@@ -100,5 +100,24 @@ TEST(SubmapCreationPolicy, DrivesTheMapperLoop) {
   EXPECT_EQ(policy.pending(), Pending::kNone);
 }
 
+// A jump whose keyframe was applied before its frame: the submap that keyframe anchored is no
+// older than the frame, so the jump is answered and the frame integrated; a keyframe of a new
+// map (the tracker reset) anchors a submap of its own even when the active one has room.
+TEST(SubmapCreationPolicy, AJumpAnsweredByANewerSubmapAndANewMapsKeyframe) {
+  SubmapCreationPolicy policy(SubmapCreationPolicyConfig{10});
+  Submap anchored(0, LayerConfig{}, Transformationd(), 100, /*creation_time_ns=*/5'000);
+  EXPECT_EQ(policy.onFramePose(&anchored, true, 5'000), Action::kIntegrate);  // same time
+  EXPECT_EQ(policy.pending(), Pending::kNone);
+  EXPECT_EQ(policy.onFramePose(&anchored, true, 4'000), Action::kIntegrate);  // older frame
+  EXPECT_EQ(policy.onFramePose(&anchored, true, 5'001), Action::kWaitForAnchor);  // newer
+  EXPECT_EQ(policy.pending(), Pending::kTrackingJump);
+  policy.reset();
+  EXPECT_EQ(policy.onFramePose(&anchored, true), Action::kWaitForAnchor);  // time unknown
+  policy.reset();
+  EXPECT_FALSE(policy.onKeyframe(&anchored));  // room for 9 more keyframes
+  EXPECT_TRUE(policy.onKeyframe(&anchored, /*starts_new_map=*/true));
+  EXPECT_EQ(policy.pending(), Pending::kNone);
+}
+
 }  // namespace
 }  // namespace cblox

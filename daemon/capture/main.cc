@@ -271,6 +271,7 @@ int run(const Args& args) {
   }
   notifier.stopping();
   stop_heartbeats();
+  input_watch.stopWatching();  // the last heartbeat says "stopped" / "finished" alone
   send_heartbeat(g_stop_requested ? "stopped" : "finished");
   if (writer && !writer->close(&error)) {
     std::fprintf(stderr, "cblox-capture: %s\n", error.c_str());

@@ -83,7 +83,7 @@ InputWatch::Report InputWatch::check() {
       input.name = e.name;
       input.age_s = std::max(0.0, seconds(now - e.last));
       input.heard = e.heard;
-      input.silent = silence_s_ > 0.0 && input.age_s >= silence_s_;
+      input.silent = !stopped_ && silence_s_ > 0.0 && input.age_s >= silence_s_;
       if (input.silent && !e.silent) {
         ++silences_;
         lines.push_back(process_ + ": input silent: nothing on " + e.name +
@@ -103,6 +103,11 @@ InputWatch::Report InputWatch::check() {
   }
   log(lines);
   return report;
+}
+
+void InputWatch::stopWatching() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  stopped_ = true;
 }
 
 void InputWatch::addTo(HeartbeatBuilder* heartbeat) {

@@ -80,6 +80,11 @@ class InputWatch {
   /// silent since the last check.
   Report check();
 
+  /// The process no longer waits for input (it is stopping): from now on no input is
+  /// silent (ages are still reported), so its last heartbeat says "stopped", not "input
+  /// silent". Irreversible.
+  void stopWatching();
+
   /// check(), then adds input_silent, input_age_ms and input_silences to `heartbeat` and, if
   /// an input is silent, prefixes its state with the description and "; " (or sets it to the
   /// description when the state is empty). Nothing is added without watched inputs.
@@ -98,6 +103,7 @@ class InputWatch {
   const double silence_s_;
   const LogSink log_;
   const NowFn now_;
+  bool stopped_ = false;  // guarded by mutex_
   mutable std::mutex mutex_;
   std::vector<Entry> entries_;
   uint64_t silences_ = 0;

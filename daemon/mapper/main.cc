@@ -128,6 +128,7 @@ int run(const Args& args) {
                      [&] { progress(mapper.status(), ""); }});
   }
   const int exit_code = serveUntilStopped(lcm, "cblox-mapper", tasks, &notifier);
+  input_watch.stopWatching();  // the last heartbeat says "stopped", not "input silent"
   mapper.stop();  // finishes the frame in hand and the export in hand
   const MapperStatus s = mapper.status();
   node.publishStatus(s);

@@ -22,6 +22,7 @@
 
 #include "daemon/common/lcm_messages.h"
 #include "daemon/common/message_guard.h"
+#include "daemon/common/text_format.h"
 #include "daemon/mapper/mapper_lcm_node.h"
 #include "daemon/tracker/tracker_lcm_node.h"
 #include "lcmtypes/wire_check.h"
@@ -325,7 +326,7 @@ ReplaySummary LogReplayer::run(const std::function<void(const ReplayProgress&)>&
     p.fraction = file_size > 0 && at >= 0
                      ? std::min(1.0, static_cast<double>(at) / static_cast<double>(file_size))
                      : 0.0;
-    p.elapsed_s = std::chrono::duration<double>(Clock::now() - start).count();
+    p.elapsed_s = secondsSince(start);
     p.log_elapsed_s = static_cast<double>(last_event_us - first_event_us) * 1e-6;
     progress(p);
   };
@@ -359,7 +360,7 @@ ReplaySummary LogReplayer::run(const std::function<void(const ReplayProgress&)>&
     last_event_us = event->timestamp;
     ++summary.events;
     impl_->onEvent(*event);
-    if (std::chrono::duration<double>(Clock::now() - last_progress).count() >= progress_period_s) {
+    if (secondsSince(last_progress) >= progress_period_s) {
       last_progress = Clock::now();
       report();
     }
@@ -369,7 +370,7 @@ ReplaySummary LogReplayer::run(const std::function<void(const ReplayProgress&)>&
   }
   summary.stopped = stop != nullptr && stop->load();
   impl_->finish();
-  summary.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+  summary.wall_s = secondsSince(start);
   summary.log_span_s = static_cast<double>(last_event_us - first_event_us) * 1e-6;
   report();
   for (const auto& [id, pose] : impl_->keyframes) summary.keyframes.push_back(pose);

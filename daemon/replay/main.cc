@@ -26,11 +26,13 @@
 #include <nlohmann/json.hpp>
 
 #include "core/io/tum_trajectory.h"
+#include "daemon/common/cli.h"
 #include "daemon/common/run_loop.h"
 #include "daemon/common/yaml_config.h"
 #include "daemon/mapper/mapper_config_loader.h"
 #include "daemon/replay/log_replayer.h"
 #include "daemon/tracker/tracker_config.h"
+#include "daemon/tracker/tracker_options.h"
 #include "daemon/tracker/tracker_vocabulary.h"
 
 namespace cblox {
@@ -38,8 +40,8 @@ namespace {
 
 struct Args {
   std::string log, out;
-  std::optional<std::string> mapper_config, tracker_config, pose_source, vocabulary, calibration;
-  bool initial_pose_from_gt = false;
+  std::optional<std::string> mapper_config, tracker_config, pose_source;
+  TrackerOptions tracker;
   bool no_mesh = false;
   bool quiet = false;
   double progress_period_s = 1.0;
@@ -55,13 +57,7 @@ ReplayConfig buildConfig(const Args& args) {
   if (args.tracker_config) {
     config.tracker = loadTrackerConfig(loadYamlFile(*args.tracker_config));
   }
-  if (args.initial_pose_from_gt) config.tracker.tracker.initial_pose = InitialPose::kGroundTruth;
-  if (args.calibration) {
-    config.tracker.calibration_source = CalibrationSource::kFile;
-    config.tracker.calibration_file = *args.calibration;
-  }
-  if (args.vocabulary) config.tracker.vocabulary = *args.vocabulary;
-  finishTrackerConfig(&config.tracker);
+  applyTrackerOptions(args.tracker, &config.tracker);
   return config;
 }
 
@@ -265,19 +261,11 @@ int main(int argc, char** argv) {
   app.add_option("--tracker-config", args.tracker_config, "config/tracker.yaml style file");
   app.add_option("--pose-source", args.pose_source,
                  "tracker | ground_truth (default: the mapper config's)");
-  app.add_flag("--initial-pose-from-gt", args.initial_pose_from_gt,
-               "the first keyframe takes its pose from CBLOX_GT_POSE (G = the simulator's frame)");
-  app.add_option("--vocabulary", args.vocabulary, "vocabulary file, or none");
-  app.add_option("--calibration", args.calibration, "Kalibr/EuRoC-style camera file");
+  cblox::addTrackerOptions(app, &args.tracker);
   app.add_flag("--no-mesh", args.no_mesh, "do not export the mesh");
   app.add_option("--progress-period", args.progress_period_s, "seconds between progress lines")
-      ->check(CLI::PositiveNumber);
+      ->check(cblox::finiteNumber(cblox::NumberBound::kPositive));
   app.add_flag("--quiet", args.quiet, "no progress or summary on stdout");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    return code == 0 ? 0 : 2;
-  }
+  if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
   return cblox::runProcess("cblox-replay", [&] { return cblox::run(args); });
 }

@@ -33,6 +33,7 @@
 #include "core/vocabulary/binary_vocabulary.h"
 #include "daemon/capture/capture_config.h"
 #include "daemon/common/cli.h"
+#include "daemon/common/text_format.h"
 #include "daemon/common/yaml_config.h"
 #include "drivers/open_frame_source.h"
 #include "drivers/sim/builtin_scenes.h"
@@ -134,10 +135,6 @@ void checkTrainArgs(const TrainArgs& args) {
                        "--allow-evaluation-scene for experiments)");
     }
   }
-}
-
-double secondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
 /// Extracts the descriptors of training images and reports progress.

@@ -36,6 +36,7 @@
 #include "daemon/tracker/tracker_config.h"
 #include "daemon/tracker/tracker_lcm_node.h"
 #include "daemon/tracker/tracker_node.h"
+#include "daemon/tracker/tracker_options.h"
 #include "daemon/tracker/tracker_vocabulary.h"
 
 namespace cblox {
@@ -45,21 +46,13 @@ using Clock = std::chrono::steady_clock;
 
 struct Args {
   DaemonOptions daemon;
-  std::optional<std::string> mode, calibration, vocabulary;
-  bool initial_pose_from_gt = false;
+  TrackerOptions tracker;
 };
 
 TrackerProcessConfig buildConfig(const Args& args) {
   TrackerProcessConfig config =
       loadDaemonConfig<TrackerProcessConfig>(args.daemon, loadTrackerConfig);
-  if (args.mode) config.tracker.mode = parseTrackerMode(*args.mode);
-  if (args.initial_pose_from_gt) config.tracker.initial_pose = InitialPose::kGroundTruth;
-  if (args.calibration) {
-    config.calibration_source = CalibrationSource::kFile;
-    config.calibration_file = *args.calibration;
-  }
-  if (args.vocabulary) config.vocabulary = *args.vocabulary;
-  finishTrackerConfig(&config);
+  applyTrackerOptions(args.tracker, &config);
   return config;
 }
 
@@ -135,6 +128,7 @@ int run(const Args& args) {
         {config.progress_period_s, config.progress_period_s, [&] { progress(node.status(), ""); }});
   }
   const int exit_code = serveUntilStopped(lcm, "cblox-tracker", tasks, &notifier);
+  input_watch.stopWatching();  // the last heartbeat says "stopped", not "input silent"
   node.stop();  // finishes the frame in hand, then stops local mapping and loop closing
   const TrackerStatus s = node.status();
   lcm_node.publishHeartbeat(s, "stopped");
@@ -154,15 +148,7 @@ int main(int argc, char** argv) {
       "Exit status: 0 stopped by signal, 1 runtime error, 2 usage/configuration error.",
       "cblox-tracker"};
   cblox::addDaemonOptions(app, &args.daemon, "config/tracker.yaml");
-  app.add_option("--mode", args.mode, "stereo | rgbd")->type_name("MODE");
-  app.add_flag("--initial-pose-from-gt", args.initial_pose_from_gt,
-               "the first keyframe takes its pose from CBLOX_GT_POSE (initial_pose:\n"
-               "ground_truth): G = the simulator's frame");
-  app.add_option("--calibration", args.calibration,
-                 "Kalibr/EuRoC-style camera file instead of the messages'")
-      ->type_name("FILE");
-  app.add_option("--vocabulary", args.vocabulary, "vocabulary file, or none")
-      ->type_name("FILE|none");
+  cblox::addTrackerOptions(app, &args.tracker);
   if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
   return cblox::runProcess("cblox-tracker", [&] { return cblox::run(args); });
 }

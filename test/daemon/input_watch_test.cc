@@ -223,6 +223,26 @@ TEST(InputWatchTest, HeartbeatCountersAndStatePrefix) {
   EXPECT_EQ(f.lines.size(), 1u);  // addTo checks; the silence was logged once
 }
 
+// A stopping process no longer waits for input: its last heartbeat says "stopped" alone.
+TEST(InputWatchTest, StopWatchingEndsTheSilenceReportButKeepsTheAges) {
+  Fixture f;
+  InputWatch watch("cblox-test", 2.0, f.sink(), f.clock());
+  watch.watch("CBLOX_DEPTH");
+  watch.arrived("CBLOX_DEPTH");
+  f.advance(3000);
+  EXPECT_TRUE(watch.check().silent);
+  watch.stopWatching();
+  f.advance(1000);
+  HeartbeatBuilder hb("cblox-test", "stopped");
+  watch.addTo(&hb);
+  const heartbeat_t msg = hb.build();
+  EXPECT_EQ(msg.state, "stopped");
+  EXPECT_EQ(counters(msg).at("input_silent"), 0);
+  EXPECT_EQ(counters(msg).at("input_age_ms"), 4000);
+  EXPECT_EQ(counters(msg).at("input_silences"), 1);
+  EXPECT_EQ(f.lines.size(), 1u);  // the silence, logged once; no "input back"
+}
+
 TEST(InputWatchTest, NothingAddedWithoutInputsAndBadLimitsRefused) {
   Fixture f;
   InputWatch watch("cblox-test", 2.0, f.sink(), f.clock());

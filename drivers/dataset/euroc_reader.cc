@@ -16,16 +16,12 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/io/tum_trajectory.h"
+#include "drivers/calibration/stereo_rectifier.h"
 #include "drivers/dataset/image_files.h"
 #include "drivers/dataset/reader_support.h"
-#include "drivers/dataset/text_matrix.h"
+#include "core/io/text_matrix.h"
 
 namespace cblox {
-
-struct EurocReader::RectificationMaps {
-  cv::Mat left1, left2;    // cv::initUndistortRectifyMap output for cam0 (CV_16SC2, CV_16UC1)
-  cv::Mat right1, right2;  // same for cam1
-};
 
 namespace {
 
@@ -357,19 +353,6 @@ bool readGroundTruth(const std::string& path, int64_t epoch_ns, StampedTrajector
   return true;
 }
 
-// ---------------------------------------------------------------------------------------------
-// Rectification
-
-cv::Mat cameraMatrix(const PinholeIntrinsics& in) {
-  return (cv::Mat_<double>(3, 3) << in.fx, 0, in.cx, 0, in.fy, in.cy, 0, 0, 1);
-}
-
-cv::Mat distortionVector(const EurocCameraCalibration& camera) {
-  cv::Mat d(1, static_cast<int>(camera.distortion_coefficients.size()), CV_64F);
-  for (int k = 0; k < d.cols; ++k) d.at<double>(0, k) = camera.distortion_coefficients[k];
-  return d;
-}
-
 }  // namespace
 
 std::string EurocReader::Options::validate() const {
@@ -475,79 +458,20 @@ std::optional<EurocReader> EurocReader::open(const std::string& folder, const Op
                             " image entries skipped (unpaired or missing on disk), see skipped()");
   }
 
-  // Rectification: stereoRectify wants the motion from cam0 to cam1 coordinates, T_C1_C0.
-  const Transformationd T_C0_C1 = reader.cam0_.T_B_S.inverse() * reader.cam1_.T_B_S;
-  const Transformationd T_C1_C0 = T_C0_C1.inverse();
-  cv::Mat R(3, 3, CV_64F);
-  cv::Mat t(3, 1, CV_64F);
-  const Eigen::Matrix3d R_C1_C0 = T_C1_C0.rotationMatrix();
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) R.at<double>(r, c) = R_C1_C0(r, c);
-    t.at<double>(r, 0) = T_C1_C0.translation()(r);
+  // Rectification, built once.
+  StereoCameraCalibration raw;
+  raw.source = cam1_yaml;
+  for (const auto& [in, out] : {std::pair{&reader.cam0_, &raw.left}, {&reader.cam1_, &raw.right}}) {
+    out->intrinsics = in->intrinsics;
+    out->distortion = in->distortion_model == kEquidistant ? DistortionModel::kEquidistant
+                                                           : DistortionModel::kRadTan;
+    out->distortion_coefficients = in->distortion_coefficients;
+    out->T_B_C = in->T_B_S;
   }
-  const cv::Size size(in0.width, in0.height);
-  const cv::Mat K0 = cameraMatrix(in0);
-  const cv::Mat K1 = cameraMatrix(in1);
-  const cv::Mat D0 = distortionVector(reader.cam0_);
-  const cv::Mat D1 = distortionVector(reader.cam1_);
-  cv::Mat R1, R2, P1, P2, Q;
-  auto maps = std::make_shared<RectificationMaps>();
-  try {
-    if (reader.cam0_.distortion_model == kEquidistant) {
-      cv::fisheye::stereoRectify(K0, D0, K1, D1, size, R, t, R1, R2, P1, P2, Q,
-                                 cv::fisheye::CALIB_ZERO_DISPARITY, size, /*balance=*/0.0);
-      cv::fisheye::initUndistortRectifyMap(K0, D0, R1, P1, size, CV_16SC2, maps->left1,
-                                           maps->left2);
-      cv::fisheye::initUndistortRectifyMap(K1, D1, R2, P2, size, CV_16SC2, maps->right1,
-                                           maps->right2);
-    } else {
-      cv::stereoRectify(K0, D0, K1, D1, size, R, t, R1, R2, P1, P2, Q, cv::CALIB_ZERO_DISPARITY,
-                        /*alpha=*/0.0, size);
-      cv::initUndistortRectifyMap(K0, D0, R1, P1, size, CV_16SC2, maps->left1, maps->left2);
-      cv::initUndistortRectifyMap(K1, D1, R2, P2, size, CV_16SC2, maps->right1, maps->right2);
-    }
-  } catch (const cv::Exception& e) {
-    setError(error, mav0 + ": stereo rectification failed: " + e.what());
-    return std::nullopt;
-  }
-  P1.convertTo(P1, CV_64F);
-  P2.convertTo(P2, CV_64F);
-  R1.convertTo(R1, CV_64F);
-  PinholeIntrinsics& rectified = reader.calibration_.intrinsics;
-  rectified.fx = P1.at<double>(0, 0);
-  rectified.fy = P1.at<double>(1, 1);
-  rectified.cx = P1.at<double>(0, 2);
-  rectified.cy = P1.at<double>(1, 2);
-  rectified.width = in0.width;
-  rectified.height = in0.height;
-  const std::string invalid = validate(rectified);
-  if (!invalid.empty()) {
-    setError(error, mav0 + ": stereo rectification gave invalid intrinsics: " + invalid);
-    return std::nullopt;
-  }
-  const double fx_tx = P2.at<double>(0, 3);  // = -fx * baseline for the right camera at +x
-  if (std::abs(P2.at<double>(1, 3)) > std::abs(fx_tx)) {
-    setError(error, cam1_yaml + ": cam1 is displaced vertically from cam0 (T_BS); only " +
-                        "horizontal stereo is supported");
-    return std::nullopt;
-  }
-  if (!(fx_tx < 0)) {
-    std::ostringstream os;
-    os << cam1_yaml << ": cam1 must be to the right (+x) of cam0 after rectification, but "
-       << "P2(0,3) = " << fx_tx << " (cameras swapped? T_C0_C1 translation "
-       << T_C0_C1.translation().transpose() << " m)";
-    setError(error, os.str());
-    return std::nullopt;
-  }
-  reader.calibration_.baseline_m = -fx_tx / P2.at<double>(0, 0);
-  Eigen::Matrix3d R_L_C0;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) R_L_C0(r, c) = R1.at<double>(r, c);
-  }
-  reader.calibration_.T_B_L =
-      reader.cam0_.T_B_S *
-      Transformationd(Eigen::Matrix3d(R_L_C0.transpose()), Eigen::Vector3d::Zero());
-  reader.maps_ = std::move(maps);
+  raw.T_R_L = reader.cam1_.T_B_S.inverse() * reader.cam0_.T_B_S;
+  reader.rectifier_ = StereoRectifier::create(raw, error);
+  if (reader.rectifier_ == nullptr) return std::nullopt;
+  reader.calibration_ = reader.rectifier_->rectified();
 
   // Ground truth.
   const std::string groundtruth_path = join(mav0, kGroundTruth);
@@ -593,8 +517,7 @@ bool EurocReader::read(size_t i, EurocStereoFrame* frame, std::string* error) co
   EurocStereoFrame out;
   out.timestamp_ns = files.timestamp_ns;
   out.T_G_L = files.T_G_L;
-  const auto load = [&](const std::string& path, const cv::Mat& map1, const cv::Mat& map2,
-                        GrayImage* image) {
+  const auto load = [&](const std::string& path, bool right, GrayImage* image) {
     if (!isFile(path)) return setError(error, path + ": image is missing");
     const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
     if (raw.empty()) return setError(error, path + ": cannot read image");
@@ -607,14 +530,11 @@ bool EurocReader::read(size_t i, EurocStereoFrame* frame, std::string* error) co
     }
     *image = GrayImage(width, height);
     cv::Mat rectified(height, width, CV_8UC1, image->data.data());
-    // With alpha = 0 every rectified pixel maps inside the raw image, except that OpenCV's
-    // approximate inner rectangle lets a few edge pixels land up to ~0.1 px outside; replicating
-    // the border keeps those from blending with black.
-    cv::remap(raw, rectified, map1, map2, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    rectifier_->rectifyImage(right, raw, &rectified);
     return true;
   };
-  if (!load(files.left_path, maps_->left1, maps_->left2, &out.left)) return false;
-  if (!load(files.right_path, maps_->right1, maps_->right2, &out.right)) return false;
+  if (!load(files.left_path, false, &out.left)) return false;
+  if (!load(files.right_path, true, &out.right)) return false;
   *frame = std::move(out);
   return true;
 }

@@ -11,6 +11,7 @@
 #include "core/geometry/pinhole_camera.h"
 #include "core/geometry/se3.h"
 #include "core/geometry/stereo_rig.h"
+#include "drivers/calibration/stereo_rectifier.h"
 
 namespace cblox {
 
@@ -121,7 +122,6 @@ class EurocReader {
     std::string right_path;
     std::optional<Transformationd> T_G_L;
   };
-  struct RectificationMaps;  // OpenCV maps, defined in the .cc
 
   EurocReader() = default;
 
@@ -129,7 +129,7 @@ class EurocReader {
   EurocCameraCalibration cam0_;
   EurocCameraCalibration cam1_;
   RectifiedStereoCalibration calibration_;
-  std::shared_ptr<const RectificationMaps> maps_;
+  std::shared_ptr<const StereoRectifier> rectifier_;
   std::vector<FrameFiles> frames_;
   bool has_groundtruth_ = false;
   std::vector<std::string> skipped_;

@@ -11,7 +11,7 @@
 
 #include "drivers/dataset/image_files.h"
 #include "drivers/dataset/reader_support.h"
-#include "drivers/dataset/text_matrix.h"
+#include "core/io/text_matrix.h"
 
 namespace cblox {
 namespace {

@@ -16,7 +16,7 @@
 #include "core/io/tum_trajectory.h"
 #include "drivers/dataset/image_files.h"
 #include "drivers/dataset/reader_support.h"
-#include "drivers/dataset/text_matrix.h"
+#include "core/io/text_matrix.h"
 
 namespace cblox {
 namespace {

@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "drivers/calibration/row_error.h"
 #include "test/test_support/contains.h"
 #include "test/test_support/temp_dir.h"
 
@@ -30,46 +31,14 @@ cv::Mat toMat(const GrayImage& image) {
       .clone();
 }
 
-// Finds corners of `left` again in `right` by normalised cross-correlation of a 15x15 patch
-// over disparities 0..120 px and vertical offsets within +-max_row_offset px, and returns the
-// median |v_left - v_right| (sub-pixel by a parabola through the correlation peak's column) over
-// confident matches; *matches receives their number.
+// Median |v_left - v_right| of corners of `left` found again in `right` (featureRowOffsets);
+// *matches receives their number.
 double medianRowOffset(const cv::Mat& left, const cv::Mat& right, int max_row_offset,
                        size_t* matches) {
-  constexpr int kHalf = 7;
-  constexpr int kMaxDisparity = 120;
-  constexpr double kMinScore = 0.95;
-  std::vector<cv::Point2f> corners;
-  cv::goodFeaturesToTrack(left, corners, 400, 0.01, 10);
   std::vector<double> offsets;
-  for (const cv::Point2f& corner : corners) {
-    const int x = static_cast<int>(std::lround(corner.x));
-    const int y = static_cast<int>(std::lround(corner.y));
-    const int x0 = x - kMaxDisparity - kHalf;
-    const int y0 = y - max_row_offset - kHalf;
-    const int x1 = x + 2 + kHalf;
-    const int y1 = y + max_row_offset + kHalf;
-    if (x - kHalf < 0 || x0 < 0 || y0 < 0 || x1 >= right.cols || y1 >= right.rows) continue;
-    const cv::Mat patch = left(cv::Rect(x - kHalf, y - kHalf, 2 * kHalf + 1, 2 * kHalf + 1));
-    const cv::Mat band = right(cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1));
-    cv::Mat score;
-    cv::matchTemplate(band, patch, score, cv::TM_CCOEFF_NORMED);
-    double best = 0.0;
-    cv::Point peak;
-    cv::minMaxLoc(score, nullptr, &best, nullptr, &peak);
-    if (best < kMinScore || peak.y == 0 || peak.y == score.rows - 1) continue;
-    const float above = score.at<float>(peak.y - 1, peak.x);
-    const float at = score.at<float>(peak.y, peak.x);
-    const float below = score.at<float>(peak.y + 1, peak.x);
-    const double curvature = above - 2.0 * at + below;
-    const double sub = curvature < 0 ? 0.5 * (above - below) / curvature : 0.0;
-    const double v_right = y0 + peak.y + kHalf + sub;
-    offsets.push_back(std::abs(v_right - y));
-  }
+  featureRowOffsets(left, right, max_row_offset, &offsets);
   *matches = offsets.size();
-  if (offsets.empty()) return 1e9;
-  std::nth_element(offsets.begin(), offsets.begin() + offsets.size() / 2, offsets.end());
-  return offsets[offsets.size() / 2];
+  return offsets.empty() ? 1e9 : summarizeRowErrors(std::move(offsets)).median_px;
 }
 
 TEST(EurocReaderTest, ParsesRealData) {
@@ -397,7 +366,7 @@ TEST_F(EurocSyntheticTest, RejectsMissingOrBadSensorYaml) {
   // Swapping the cameras puts "cam1" at -x of "cam0".
   writeSensor("cam0", cam1Fields());
   writeSensor("cam1", cam0Fields());
-  expectOpenFails({path("cam1/sensor.yaml"), "to the right (+x) of cam0"});
+  expectOpenFails({path("cam1/sensor.yaml"), "to the right (+x) of the left one"});
 }
 
 TEST_F(EurocSyntheticTest, RejectsMalformedCsv) {

@@ -1,4 +1,4 @@
-#include "drivers/dataset/text_matrix.h"
+#include "core/io/text_matrix.h"
 
 #include <cerrno>
 #include <cmath>

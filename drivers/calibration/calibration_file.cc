@@ -1,0 +1,350 @@
+#include "drivers/calibration/calibration_file.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <optional>
+#include <sstream>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/io/text_matrix.h"
+
+namespace cblox {
+namespace {
+
+[[noreturn]] void fail(const std::string& message) { throw CalibrationError(message); }
+
+bool absent(const YAML::Node& node) { return !node.IsDefined() || node.IsNull(); }
+
+void onlyKeys(const YAML::Node& node, const std::string& where,
+              std::initializer_list<const char*> known) {
+  for (const auto& entry : node) {
+    const std::string key = entry.first.as<std::string>();
+    bool found = false;
+    for (const char* k : known) found = found || key == k;
+    if (!found) fail(where + "." + key + ": unknown key");
+  }
+}
+
+std::vector<double> readNumberList(const YAML::Node& node, const std::string& key,
+                                   size_t expected) {
+  std::vector<double> values;
+  bool ok = node.IsSequence() && (expected == 0 || node.size() == expected);
+  for (size_t i = 0; ok && i < node.size(); ++i) {
+    try {
+      values.push_back(node[i].as<double>());
+    } catch (const YAML::Exception&) {
+      ok = false;
+    }
+    ok = ok && std::isfinite(values.back());
+  }
+  if (!ok) {
+    fail(key + ": expected a list of " +
+         (expected > 0 ? std::to_string(expected) + " " : std::string()) +
+         "finite numbers, got '" + YAML::Dump(node) + "'");
+  }
+  return values;
+}
+
+Transformationd toRigidTransform(const Eigen::Matrix4d& M, const std::string& key) {
+  if (const std::string e = validateRigidTransform(M); !e.empty()) fail(key + ": " + e);
+  return Transformationd::fromMatrix(M);
+}
+
+// EuRoC: {rows: 4, cols: 4, data: [16 numbers]}.
+Transformationd readEurocTransform(const YAML::Node& node, const std::string& key) {
+  if (!node.IsMap() || !node["data"]) fail(key + ": expected rows, cols and data");
+  onlyKeys(node, key, {"rows", "cols", "data"});
+  for (const char* dimension : {"rows", "cols"}) {
+    if (node[dimension] && node[dimension].as<std::string>() != "4") {
+      fail(key + "." + dimension + ": must be 4");
+    }
+  }
+  const std::vector<double> values = readNumberList(node["data"], key + ".data", 16);
+  Eigen::Matrix4d M;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) M(r, c) = values[static_cast<size_t>(4 * r + c)];
+  }
+  return toRigidTransform(M, key);
+}
+
+// Kalibr: four rows of four numbers.
+Transformationd readKalibrTransform(const YAML::Node& node, const std::string& key) {
+  if (!node.IsSequence() || node.size() != 4) fail(key + ": expected 4 rows of 4 numbers");
+  Eigen::Matrix4d M;
+  for (int r = 0; r < 4; ++r) {
+    const std::vector<double> row =
+        readNumberList(node[static_cast<size_t>(r)], key + "[" + std::to_string(r) + "]", 4);
+    for (int c = 0; c < 4; ++c) M(r, c) = row[static_cast<size_t>(c)];
+  }
+  return toRigidTransform(M, key);
+}
+
+DistortionModel parseDistortionModel(const std::string& name, const std::string& key) {
+  if (name == "radtan" || name == "radial-tangential" || name == "plumb_bob") {
+    return DistortionModel::kRadTan;
+  }
+  if (name == "equidistant" || name == "fisheye") return DistortionModel::kEquidistant;
+  if (name == "none") return DistortionModel::kNone;
+  fail(key + ": unsupported distortion model '" + name +
+       "' (radtan, radial-tangential, equidistant or none)");
+}
+
+struct CamchainEntry {
+  CameraCalibration camera;
+  std::optional<Transformationd> T_C1_C0;
+};
+
+CamchainEntry readCamchainCamera(const YAML::Node& node, const std::string& key) {
+  if (absent(node) || !node.IsMap()) fail(key + ": missing (a map of fields)");
+  onlyKeys(node, key,
+           {"camera_model", "intrinsics", "resolution", "distortion_model", "distortion_coeffs",
+            "distortion_coefficients", "T_BS", "T_cam_imu", "T_cn_cnm1", "rostopic",
+            "sensor_type", "comment", "rate_hz", "cam_overlaps", "timeshift_cam_imu"});
+  CamchainEntry entry;
+  CameraCalibration& camera = entry.camera;
+  if (node["camera_model"] && node["camera_model"].as<std::string>() != "pinhole") {
+    fail(key + ".camera_model: only 'pinhole' is supported, got '" +
+         node["camera_model"].as<std::string>() + "'");
+  }
+  if (!node["intrinsics"]) fail(key + ".intrinsics: missing ([fu, fv, pu, pv])");
+  if (!node["resolution"]) fail(key + ".resolution: missing ([width, height])");
+  const std::vector<double> k = readNumberList(node["intrinsics"], key + ".intrinsics", 4);
+  const std::vector<double> size = readNumberList(node["resolution"], key + ".resolution", 2);
+  for (const double v : size) {
+    if (!(v >= 1.0 && v <= 16384.0) || v != std::floor(v)) {
+      fail(key + ".resolution: expected [width, height] as positive integers");
+    }
+  }
+  camera.intrinsics = PinholeIntrinsics{k[0], k[1], k[2], k[3], static_cast<int>(size[0]),
+                                        static_cast<int>(size[1])};
+  if (const std::string e = validate(camera.intrinsics); !e.empty()) {
+    fail(key + ".intrinsics: " + e);
+  }
+  camera.distortion = DistortionModel::kRadTan;
+  if (node["distortion_model"]) {
+    camera.distortion = parseDistortionModel(node["distortion_model"].as<std::string>(),
+                                             key + ".distortion_model");
+  }
+  for (const char* field : {"distortion_coeffs", "distortion_coefficients"}) {
+    if (!node[field]) continue;
+    if (!camera.distortion_key.empty()) fail(key + ": give " + field + " only once");
+    camera.distortion_key = key + "." + field;
+    camera.distortion_coefficients = readNumberList(node[field], camera.distortion_key, 0);
+  }
+  if (camera.distortion_key.empty()) camera.distortion_key = key + ".distortion_coeffs";
+  if (camera.distortion_coefficients.empty()) camera.distortion = DistortionModel::kNone;
+  if (const std::string e = validate(camera); !e.empty()) fail(camera.distortion_key + ": " + e);
+  if (node["T_BS"]) camera.T_B_C = readEurocTransform(node["T_BS"], key + ".T_BS");
+  if (node["T_cam_imu"]) {
+    if (camera.T_B_C) fail(key + ": give T_BS or T_cam_imu, not both");
+    camera.T_B_C = readKalibrTransform(node["T_cam_imu"], key + ".T_cam_imu").inverse();
+  }
+  if (node["T_cn_cnm1"]) {
+    entry.T_C1_C0 = readKalibrTransform(node["T_cn_cnm1"], key + ".T_cn_cnm1");
+  }
+  return entry;
+}
+
+// ---------------------------------------------------------------------------------------------
+// OpenCV FileStorage
+
+cv::Mat readMat(const cv::FileStorage& fs, std::initializer_list<const char*> names,
+                std::string* found) {
+  for (const char* name : names) {
+    const cv::FileNode node = fs[name];
+    if (node.empty()) continue;
+    cv::Mat m;
+    node >> m;
+    *found = name;
+    if (m.empty()) return m;
+    m.convertTo(m, CV_64F);
+    return m;
+  }
+  found->clear();
+  return {};
+}
+
+cv::Mat requireMat(const cv::FileStorage& fs, const std::string& path,
+                   std::initializer_list<const char*> names, int rows, int cols) {
+  std::string found;
+  cv::Mat m = readMat(fs, names, &found);
+  std::string all;
+  for (const char* name : names) all += (all.empty() ? "" : " or ") + std::string(name);
+  if (found.empty()) fail(path + ": " + all + " is missing");
+  if (rows > 0 && (m.rows != rows || m.cols != cols)) {
+    fail(path + "." + found + ": expected a " + std::to_string(rows) + "x" +
+         std::to_string(cols) + " matrix, got " + std::to_string(m.rows) + "x" +
+         std::to_string(m.cols));
+  }
+  for (int r = 0; r < m.rows; ++r) {
+    for (int c = 0; c < m.cols; ++c) {
+      if (!std::isfinite(m.at<double>(r, c))) fail(path + "." + found + ": not finite");
+    }
+  }
+  return m;
+}
+
+std::optional<cv::Size> readImageSize(const cv::FileStorage& fs) {
+  const cv::FileNode w = fs["image_width"], h = fs["image_height"];
+  if (!w.empty() && !h.empty()) return cv::Size(static_cast<int>(w), static_cast<int>(h));
+  for (const char* name : {"imageSize", "image_size", "size"}) {
+    const cv::FileNode node = fs[name];
+    if (node.empty()) continue;
+    if (node.isSeq() && node.size() == 2) {
+      return cv::Size(static_cast<int>(node[0]), static_cast<int>(node[1]));
+    }
+    cv::Mat m;
+    node >> m;
+    if (m.total() == 2) {
+      m.convertTo(m, CV_64F);
+      return cv::Size(static_cast<int>(m.at<double>(0)), static_cast<int>(m.at<double>(1)));
+    }
+  }
+  return std::nullopt;
+}
+
+CameraCalibration openCvCamera(const cv::Mat& K, const cv::Mat& D, cv::Size size,
+                               DistortionModel model, const std::string& where) {
+  CameraCalibration camera;
+  try {
+    Eigen::Matrix3d k;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) k(r, c) = K.at<double>(r, c);
+    }
+    camera.intrinsics = PinholeCamera::fromK(k, size.width, size.height);
+  } catch (const std::invalid_argument& e) {
+    fail(where + ": " + e.what());
+  }
+  camera.distortion = model;
+  if (!D.empty()) {
+    const cv::Mat d = D.isContinuous() ? D : D.clone();
+    camera.distortion_coefficients.assign(d.ptr<double>(), d.ptr<double>() + d.total());
+  }
+  camera.distortion_key = where;
+  if (camera.distortion_coefficients.empty()) camera.distortion = DistortionModel::kNone;
+  if (const std::string e = validate(camera); !e.empty()) fail(where + ": " + e);
+  return camera;
+}
+
+cv::FileStorage openStorage(const std::string& path) {
+  try {
+    cv::FileStorage fs(path, cv::FileStorage::READ);
+    if (!fs.isOpened()) fail(path + ": cannot parse as OpenCV YAML/XML");
+    return fs;
+  } catch (const cv::Exception& e) {
+    fail(path + ": cannot parse as OpenCV YAML/XML: " + e.msg);
+  }
+}
+
+StereoCameraCalibration readOpenCv(const std::string& path, bool stereo) {
+  cv::FileStorage fs = openStorage(path);
+  const std::optional<cv::Size> size = readImageSize(fs);
+  if (!size || size->width < 1 || size->height < 1 || size->width > 16384 ||
+      size->height > 16384) {
+    fail(path + ": image_width and image_height (or imageSize: [w, h]) missing or invalid");
+  }
+  DistortionModel model = DistortionModel::kRadTan;
+  if (!fs["distortion_model"].empty()) {
+    model = parseDistortionModel(static_cast<std::string>(fs["distortion_model"]),
+                                 path + ".distortion_model");
+  }
+  StereoCameraCalibration calibration;
+  calibration.source = path;
+  std::string found;
+  const cv::Mat K1 = requireMat(fs, path, {"M1", "K1", "cameraMatrix1"}, 3, 3);
+  cv::Mat D1 = readMat(fs, {"D1", "distCoeffs1"}, &found);
+  calibration.left = openCvCamera(K1, D1, *size, model, path + ".D1");
+  if (!stereo) return calibration;
+  const cv::Mat K2 = requireMat(fs, path, {"M2", "K2", "cameraMatrix2"}, 3, 3);
+  cv::Mat D2 = readMat(fs, {"D2", "distCoeffs2"}, &found);
+  calibration.right = openCvCamera(K2, D2, *size, model, path + ".D2");
+
+  std::string extrinsics_path = path;
+  if (fs["R"].empty() && fs["T"].empty()) {
+    const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+    extrinsics_path.clear();
+    for (const char* name : {"extrinsics.yml", "extrinsics.yaml", "extrinsics.xml"}) {
+      if (std::filesystem::exists(folder / name)) {
+        extrinsics_path = (folder / name).string();
+        break;
+      }
+    }
+    if (extrinsics_path.empty()) {
+      fail(path + ": R and T (right camera from left) missing, and no extrinsics.yml beside it");
+    }
+    fs = openStorage(extrinsics_path);
+  }
+  const cv::Mat R = requireMat(fs, extrinsics_path, {"R"}, 3, 3);
+  const cv::Mat T = requireMat(fs, extrinsics_path, {"T"}, 0, 0);
+  if (T.total() != 3) fail(extrinsics_path + ".T: expected 3 numbers");
+  Eigen::Matrix4d M = Eigen::Matrix4d::Identity();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) M(r, c) = R.at<double>(r, c);
+    M(r, 3) = T.at<double>(r);
+  }
+  calibration.T_R_L = toRigidTransform(M, extrinsics_path + ".R");
+  return calibration;
+}
+
+}  // namespace
+
+StereoCameraCalibration parseCamchain(const YAML::Node& root, const std::string& where,
+                                      bool stereo) {
+  try {
+    if (absent(root) || !root.IsMap()) fail(where + ": expected cam0 (and cam1)");
+    onlyKeys(root, where, {"cam0", "cam1"});
+    StereoCameraCalibration calibration;
+    calibration.source = where;
+    const CamchainEntry left = readCamchainCamera(root["cam0"], where + ".cam0");
+    calibration.left = left.camera;
+    if (!stereo) return calibration;
+    const std::string key = where + ".cam1";
+    const CamchainEntry right = readCamchainCamera(root["cam1"], key);
+    calibration.right = right.camera;
+    if (right.T_C1_C0) {
+      calibration.T_R_L = *right.T_C1_C0;
+    } else if (left.camera.T_B_C && right.camera.T_B_C) {
+      calibration.T_R_L = right.camera.T_B_C->inverse() * *left.camera.T_B_C;
+    } else {
+      fail(key + ": needs T_cn_cnm1, or T_BS (or T_cam_imu) on both cameras");
+    }
+    return calibration;
+  } catch (const YAML::Exception& e) {
+    fail(where + ": " + e.what());
+  }
+}
+
+StereoCameraCalibration loadStereoCalibration(const std::string& path, bool stereo) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path + ": cannot open calibration file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  if (text.rfind("<?xml", 0) == 0) return readOpenCv(path, stereo);
+  if (text.rfind("%YAML:", 0) == 0) {
+    // OpenCV's FileStorage YAML, unless it is a camchain saved with OpenCV's header (EuRoC).
+    YAML::Node root;
+    try {
+      std::string rest = text;
+      rest.replace(0, std::min(rest.find('\n'), rest.size()), 1, '#');  // keeps line numbers
+      root = YAML::Load(rest);
+    } catch (const YAML::Exception&) {
+      return readOpenCv(path, stereo);  // !!opencv-matrix tags: OpenCV's own
+    }
+    if (root.IsMap() && root["cam0"]) return parseCamchain(root, path, stereo);
+    return readOpenCv(path, stereo);
+  }
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    fail(path + ": " + e.what());
+  }
+  return parseCamchain(root, path, stereo);
+}
+
+}  // namespace cblox

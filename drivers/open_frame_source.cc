@@ -37,12 +37,14 @@ StampedTrajectory orbitAroundMesh(const Mesh& mesh, const MotionProfile& motion,
 }
 
 std::unique_ptr<FrameSource> openSim(const std::string& what, const SourceConfig& options,
-                                     std::string* error) {
+                                     std::string* error, std::vector<std::string>* warnings) {
   // A built-in scene is generated once here, for its mesh and its paths.
   std::optional<BuiltinScene> builtin;
   if (isBuiltin(what)) builtin = makeBuiltinScene(what);
-  std::shared_ptr<const Mesh> mesh = builtin ? std::make_shared<const Mesh>(builtin->mesh)
-                                             : loadSimSceneMesh("sim:" + what, error);
+  std::vector<std::string> mesh_warnings;
+  std::shared_ptr<const Mesh> mesh = builtin
+                                         ? std::make_shared<const Mesh>(builtin->mesh)
+                                         : loadSimSceneMesh("sim:" + what, error, &mesh_warnings);
   if (mesh == nullptr) return nullptr;
   SimSourceConfig config = options.sim;
   config.max_frames = options.max_frames > 0 ? options.max_frames : config.max_frames;
@@ -84,8 +86,13 @@ std::unique_ptr<FrameSource> openSim(const std::string& what, const SourceConfig
     return nullptr;
   }
   try {
-    return std::make_unique<SimSource>("sim:" + what + "/" + trajectory_name, std::move(scene),
-                                       std::move(trajectory), config);
+    auto source = std::make_unique<SimSource>("sim:" + what + "/" + trajectory_name,
+                                              std::move(scene), std::move(trajectory), config);
+    for (const std::string& warning : mesh_warnings) source->addNote("warning: " + warning);
+    if (warnings != nullptr) {
+      warnings->insert(warnings->end(), mesh_warnings.begin(), mesh_warnings.end());
+    }
+    return source;
   } catch (const std::invalid_argument& e) {
     setError(error, e.what());
     return nullptr;
@@ -94,7 +101,8 @@ std::unique_ptr<FrameSource> openSim(const std::string& what, const SourceConfig
 
 }  // namespace
 
-std::shared_ptr<const Mesh> loadSimSceneMesh(const std::string& spec, std::string* error) {
+std::shared_ptr<const Mesh> loadSimSceneMesh(const std::string& spec, std::string* error,
+                                             std::vector<std::string>* warnings) {
   if (!spec.starts_with("sim:")) {
     setError(error, "'" + spec + "' is not a sim source");
     return nullptr;
@@ -105,13 +113,18 @@ std::shared_ptr<const Mesh> loadSimSceneMesh(const std::string& spec, std::strin
     setError(error, "sim: needs a scene: room, hall, town or a .ply/.obj mesh path");
     return nullptr;
   }
-  std::optional<Mesh> mesh = loadSceneMesh(what, SceneMeshCheck{}, error, nullptr);
+  SceneMeshReport report;
+  std::optional<Mesh> mesh = loadSceneMesh(what, SceneMeshCheck{}, error, &report);
   if (!mesh.has_value()) return nullptr;
+  if (warnings != nullptr) {
+    warnings->insert(warnings->end(), report.warnings.begin(), report.warnings.end());
+  }
   return std::make_shared<const Mesh>(std::move(*mesh));
 }
 
 std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const SourceConfig& options,
-                                             std::string* error) {
+                                             std::string* error,
+                                             std::vector<std::string>* warnings) {
   const size_t colon = spec.find(':');
   if (colon == std::string::npos) {
     setError(error, "source '" + spec +
@@ -120,7 +133,7 @@ std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const Sour
     return nullptr;
   }
   const std::string kind = spec.substr(0, colon), what = spec.substr(colon + 1);
-  if (kind == "sim") return openSim(what, options, error);
+  if (kind == "sim") return openSim(what, options, error, warnings);
   if (kind == "euroc") {
     auto reader = EurocReader::open(what, options.euroc, error);
     if (!reader.has_value()) return nullptr;

@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "drivers/dataset/euroc_reader.h"
 #include "drivers/dataset/tum_rgbd_reader.h"
@@ -36,12 +37,18 @@ struct SourceConfig {
 ///   tum:<folder>                     TUM RGB-D folder
 ///   7scenes:<folder>                 7-Scenes frame folder
 /// Returns nullptr and a message (naming the file and line where there is one) when the spec
-/// is unknown or the source cannot be opened. Thread-safe (no shared state).
+/// is unknown or the source cannot be opened. Problems that do not stop the source (today: a
+/// sim mesh with non-manifold edges, see loadSceneMesh) are appended to `*warnings` when it is
+/// not null, one sentence each, and also to the source's info().notes as "warning: ...";
+/// callers print them on stderr. Thread-safe (no shared state).
 std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const SourceConfig& options,
-                                             std::string* error);
+                                             std::string* error,
+                                             std::vector<std::string>* warnings = nullptr);
 
 /// For sim sources: the ground-truth mesh of the scene a spec names (built-in or loaded), or
-/// nullptr with a message. Thread-safe.
-std::shared_ptr<const Mesh> loadSimSceneMesh(const std::string& spec, std::string* error);
+/// nullptr with a message. A loaded mesh's warnings (loadSceneMesh's report, e.g. non-manifold
+/// edges, which are accepted) are appended to `*warnings` when it is not null. Thread-safe.
+std::shared_ptr<const Mesh> loadSimSceneMesh(const std::string& spec, std::string* error,
+                                             std::vector<std::string>* warnings = nullptr);
 
 }  // namespace cblox

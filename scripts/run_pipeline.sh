@@ -12,13 +12,15 @@
 #                                [--poses tracker|ground_truth]   (default tracker)
 #                                [--mapper-config FILE]   (default config/mapper.yaml)
 #                                [--tracker-config FILE]  (default config/tracker.yaml)
+#                                [--capture-config FILE]  (default config/capture.yaml; e.g.
+#                                 config/examples/sim_stereo_depth.yaml: depth from SGBM)
 # Writes DIR/NAME.ply (the mapper's mesh), DIR/NAME_gt.ply (exact scene), DIR/NAME_eval.json
 # and DIR/NAME_error.png. Needs a build (scripts/build.sh); BUILD_DIR selects it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 scene=room trajectory=orbit laps=1 rate=20 frames=0 out=out name="" mapper_config=config/mapper.yaml
-poses=tracker tracker_config=config/tracker.yaml
+poses=tracker tracker_config=config/tracker.yaml capture_config=config/capture.yaml
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --scene) scene=$2; shift 2 ;;
@@ -30,6 +32,7 @@ while [[ $# -gt 0 ]]; do
     --name) name=$2; shift 2 ;;
     --mapper-config) mapper_config=$2; shift 2 ;;
     --tracker-config) tracker_config=$2; shift 2 ;;
+    --capture-config) capture_config=$2; shift 2 ;;
     --poses) poses=$2; shift 2 ;;
     *) echo "run_pipeline: unknown argument '$1'" >&2; exit 2 ;;
   esac
@@ -46,7 +49,8 @@ bin=$(cd "$BUILD_DIR/daemon" && pwd)
 if [[ "${CBLOX_IN_NETNS:-}" != "1" ]]; then
   CBLOX_IN_NETNS=1 exec scripts/netns-run.sh "$0" --scene "$scene" --trajectory "$trajectory" --laps "$laps" \
     --rate "$rate" --frames "$frames" --out "$out" --name "$name" \
-    --mapper-config "$mapper_config" --tracker-config "$tracker_config" --poses "$poses"
+    --mapper-config "$mapper_config" --tracker-config "$tracker_config" --poses "$poses" \
+    --capture-config "$capture_config"
 fi
 
 url="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
@@ -64,7 +68,7 @@ start_ns=$(date +%s%N)
 sleep 1
 echo "pipeline: capture sim:$scene ($trajectory) at $rate Hz ->" \
   "$([[ -n $tracker ]] && echo "cblox-tracker -> ")cblox-mapper ($poses poses)"
-"$bin/cblox-capture" --source "sim:$scene" --trajectory "$trajectory" --laps "$laps" --rate "$rate" \
+"$bin/cblox-capture" --config "$capture_config" --source "sim:$scene" --trajectory "$trajectory" --laps "$laps" --rate "$rate" \
   --frames "$frames" --lcm-url "$url"
 sleep 2  # let the tracker and the mapper finish the last frames
 "$bin/cblox-ctl" --lcm-url "$url" --timeout 30 status
@@ -90,7 +94,7 @@ if [[ -n $tracker ]]; then
   grep -E "^cblox-tracker: (stopped|tracked|loop)" "$out/${name}_tracker.log" | tail -3 || true
 fi
 trap - EXIT
-"$bin/cblox-capture" --source "sim:$scene" --write-scene "$out/${name}_gt.ply" > /dev/null
+"$bin/cblox-capture" --config "$capture_config" --source "sim:$scene" --write-scene "$out/${name}_gt.ply" > /dev/null
 "$bin/cblox-eval" --gt-mesh "$out/${name}_gt.ply" --mesh "$out/$name.ply" --max-error 0.04 \
   --voxel-size "$(awk '/^  voxel_size:/ {print $2; exit}' "$mapper_config")" \
   --json "$out/${name}_eval.json" --error-png "$out/${name}_error.png"

@@ -12,6 +12,8 @@ packages=(
   libembree-dev libceres-dev libsuitesparse-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libsystemd-dev libcli11-dev nlohmann-json3-dev
+  libv4l-dev libturbojpeg0-dev v4l-utils
+  libcamera-dev
   iproute2 util-linux python3
 )
 if [[ "${1:-}" == "--bench" ]]; then

@@ -70,6 +70,40 @@ void loadNoise(const YAML::Node& node, SensorNoiseConfig* noise) {
   readOptional(node, path, "seed", &noise->seed);
 }
 
+void loadStereoDepth(const YAML::Node& node, CaptureConfig* config) {
+  const std::string path = "stereo_depth";
+  requireKnownKeys(node, path,
+                   {"matcher", "downscale", "num_disparities", "block_size", "uniqueness_ratio",
+                    "left_right_max_diff", "speckle_window", "speckle_range",
+                    "texture_threshold", "min_depth_m", "max_depth_m", "max_rate_hz"});
+  if (isAbsent(node)) return;
+  std::string matcher = "none";
+  readOptional(node, path, "matcher", &matcher);
+  StereoDepthConfig stereo;
+  if (matcher != "none" && !parseStereoMatcher(matcher, &stereo.matcher)) {
+    throw ConfigError(path + ".matcher must be none, sgbm, sgbm3way or bm, got '" + matcher +
+                      "'");
+  }
+  readOptional(node, path, "downscale", &stereo.downscale);
+  readOptional(node, path, "num_disparities", &stereo.num_disparities);
+  readOptional(node, path, "block_size", &stereo.block_size);
+  readOptional(node, path, "uniqueness_ratio", &stereo.uniqueness_ratio);
+  readOptional(node, path, "left_right_max_diff", &stereo.left_right_max_diff);
+  readOptional(node, path, "speckle_window", &stereo.speckle_window);
+  readOptional(node, path, "speckle_range", &stereo.speckle_range);
+  readOptional(node, path, "texture_threshold", &stereo.texture_threshold);
+  readOptional(node, path, "min_depth_m", &stereo.min_depth_m);
+  readOptional(node, path, "max_depth_m", &stereo.max_depth_m);
+  readOptional(node, path, "max_rate_hz", &config->stereo_depth_max_rate_hz);
+  if (!(config->stereo_depth_max_rate_hz >= 0.0) ||
+      !std::isfinite(config->stereo_depth_max_rate_hz)) {
+    throw ConfigError(path + ".max_rate_hz must be >= 0");
+  }
+  if (const std::string e = stereo.validate(); !e.empty()) throw ConfigError(path + "." + e);
+  config->stereo_depth.reset();
+  if (matcher != "none") config->stereo_depth = stereo;
+}
+
 }  // namespace
 
 SensorNoiseConfig sensorNoisePreset(const std::string& name) {
@@ -109,7 +143,7 @@ CaptureConfig loadCaptureConfig(const YAML::Node& root) {
   CaptureConfig config;
   requireKnownKeys(root, "capture",
                    {"source", "trajectory", "laps", "rate", "frames", "lcm_url", "channels",
-                    "publish", "depth_encoding", "input_silence_s", "sim"});
+                    "publish", "depth_encoding", "input_silence_s", "sim", "stereo_depth"});
   if (isAbsent(root)) return config;
   readOptional(root, "capture", "source", &config.source);
   readOptional(root, "capture", "trajectory", &config.source_config.trajectory);
@@ -160,6 +194,7 @@ CaptureConfig loadCaptureConfig(const YAML::Node& root) {
       throw ConfigError("sim: " + problem);
     }
   }
+  loadStereoDepth(root["stereo_depth"], &config);
   if (config.source_config.laps < 1) throw ConfigError("capture.laps must be >= 1");
   return config;
 }

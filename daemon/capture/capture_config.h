@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include <yaml-cpp/yaml.h>
@@ -7,6 +8,7 @@
 #include "daemon/common/input_silence.h"
 #include "daemon/common/lcm_messages.h"
 #include "drivers/open_frame_source.h"
+#include "drivers/stereo_depth/stereo_depth.h"
 
 namespace cblox {
 
@@ -37,6 +39,13 @@ struct CaptureConfig {
   /// source silent when it produced no frame for this long, seconds; 0 = off. Set it above
   /// the frame period when playing slower than 0.5 Hz.
   double input_silence_s = kDefaultInputSilenceS;
+  /// Dense stereo depth (`stereo_depth:`): when set, depth is computed from the rectified pair
+  /// on a thread of its own and published on depth_channel in place of the source's depth
+  /// camera (rigs without one; the simulator with its depth camera switched off).
+  std::optional<StereoDepthConfig> stereo_depth;
+  /// Depth frames per second of frame time at the most; 0 = as many as the matcher keeps up
+  /// with (newest pair wins).
+  double stereo_depth_max_rate_hz = 0.0;
 };
 
 /// The sensor-noise presets: "none" (exact images) and "realistic" (image noise 2 grey

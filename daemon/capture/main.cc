@@ -23,12 +23,14 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <cblox/heartbeat_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 
 #include "core/io/ply_io.h"
 #include "daemon/capture/capture_config.h"
+#include "daemon/capture/stereo_depth_worker.h"
 #include "daemon/common/daemon_options.h"
 #include "daemon/common/heartbeat.h"
 #include "daemon/common/input_watch.h"
@@ -126,7 +128,11 @@ int run(const Args& args) {
   const CaptureConfig config = buildConfig(args);
   std::string error;
   if (args.write_scene) {
-    std::shared_ptr<const Mesh> mesh = loadSimSceneMesh(config.source, &error);
+    std::vector<std::string> warnings;
+    std::shared_ptr<const Mesh> mesh = loadSimSceneMesh(config.source, &error, &warnings);
+    for (const std::string& warning : warnings) {
+      std::fprintf(stderr, "cblox-capture: warning: %s\n", warning.c_str());
+    }
     if (mesh == nullptr ||
         !writePly(*args.write_scene, *mesh, PlyFormat::kBinaryLittleEndian, &error)) {
       std::fprintf(stderr, "cblox-capture: --write-scene: %s\n", error.c_str());
@@ -136,14 +142,49 @@ int run(const Args& args) {
                 mesh->numTriangles());
     return 0;
   }
+  std::vector<std::string> warnings;
   std::unique_ptr<FrameSource> source =
-      openFrameSource(config.source, config.source_config, &error);
+      openFrameSource(config.source, config.source_config, &error, &warnings);
+  for (const std::string& warning : warnings) {
+    std::fprintf(stderr, "cblox-capture: warning: %s\n", warning.c_str());
+  }
   if (source == nullptr) {
     std::fprintf(stderr, "cblox-capture: %s\n", error.c_str());
     return 2;
   }
   const SourceInfo& info = source->info();
-  if (!args.daemon.quiet) printInfo(info);
+  // Dense stereo depth replaces the source's depth camera: the depth images are those of the
+  // rectified left camera at the matcher's working resolution.
+  std::unique_ptr<StereoDepthEstimator> estimator;
+  SourceInfo depth_info = info;
+  if (config.stereo_depth) {
+    if (!info.stereo) {
+      std::fprintf(stderr, "cblox-capture: stereo_depth needs a stereo source; %s has none\n",
+                   info.name.c_str());
+      return 2;
+    }
+    if (args.render_to) {
+      std::fprintf(stderr, "cblox-capture: stereo_depth publishes on LCM; --render-to writes "
+                           "the source's own images (set stereo_depth.matcher: none)\n");
+      return 2;
+    }
+    estimator = StereoDepthEstimator::create(*info.stereo, *config.stereo_depth, &error);
+    if (estimator == nullptr) {
+      std::fprintf(stderr, "cblox-capture: %s\n", error.c_str());
+      return 2;
+    }
+    depth_info.depth_intrinsics = estimator->depthIntrinsics();
+    depth_info.T_C_D = Transformationd::Identity();
+    depth_info.depth_min_m = config.stereo_depth->min_depth_m;
+    depth_info.depth_max_m = config.stereo_depth->max_depth_m;
+    depth_info.notes.push_back(
+        std::string("depth from the stereo pair (") +
+        stereoMatcherName(config.stereo_depth->matcher) + ", 1/" +
+        std::to_string(config.stereo_depth->downscale) + " size, " +
+        std::to_string(config.stereo_depth->num_disparities) + " disparities)" +
+        (info.depth_intrinsics ? "; the source's depth camera is not published" : ""));
+  }
+  if (!args.daemon.quiet) printInfo(depth_info);
 
   installStopHandlers();
 
@@ -177,6 +218,17 @@ int run(const Args& args) {
   InputWatch input_watch("cblox-capture", config.input_silence_s);
   const std::string input_name = "source " + config.source;
   input_watch.watch(input_name);
+  // The dense-stereo thread publishes depth frames as they are done.
+  std::unique_ptr<StereoDepthWorker> depth_worker;
+  if (estimator != nullptr) {
+    depth_worker = std::make_unique<StereoDepthWorker>(
+        std::move(estimator), config.stereo_depth_max_rate_hz, [&](const CaptureFrame& done) {
+          if (!config.publish_depth) return;
+          const depth_frame_t msg =
+              toDepthFrameMsg(done, depth_info, done.timestamp_ns / 1000, config.depth_encoding);
+          publish_failures += lcm->publish(config.depth_channel, &msg) != 0;
+        });
+  }
   auto send_heartbeat = [&](const char* state) {
     if (!lcm) return;
     HeartbeatBuilder hb("cblox-capture", state);
@@ -184,6 +236,14 @@ int run(const Args& args) {
         .add("source_gaps", static_cast<uint64_t>(gaps.load()))
         .add("source_errors", static_cast<uint64_t>(errors.load()))
         .add("publish_failures", static_cast<uint64_t>(publish_failures.load()));
+    if (depth_worker) {
+      const StereoDepthWorkerStats d = depth_worker->stats();
+      hb.add("stereo_depth_frames", d.computed)
+          .add("stereo_depth_superseded", d.superseded)
+          .add("stereo_depth_failed", d.failed)
+          .addMicroseconds("stereo_depth_mean_us", d.mean_ms)
+          .add("stereo_depth_valid_permille", static_cast<int64_t>(1000.0 * d.mean_valid));
+    }
     input_watch.addTo(&hb);
     const heartbeat_t msg = hb.build();
     lcm->publish(config.heartbeat_channel, &msg);  // LCM's publish is thread-safe
@@ -252,7 +312,9 @@ int run(const Args& args) {
         const stereo_pair_t msg = toStereoPairMsg(frame, info, utime);
         publish_failures += lcm->publish(config.stereo_channel, &msg) != 0;
       }
-      if (config.publish_depth && info.depth_intrinsics && !frame.depth.empty()) {
+      if (depth_worker && !frame.left.empty()) depth_worker->offer(frame);
+      if (config.publish_depth && !depth_worker && info.depth_intrinsics &&
+          !frame.depth.empty()) {
         const depth_frame_t msg = toDepthFrameMsg(frame, info, utime, config.depth_encoding);
         publish_failures += lcm->publish(config.depth_channel, &msg) != 0;
       }
@@ -269,6 +331,7 @@ int run(const Args& args) {
     progress.update(delivered);
     notifier.pingWatchdogIfDue();
   }
+  if (depth_worker) depth_worker->drain();  // the last pair's depth is published too
   notifier.stopping();
   stop_heartbeats();
   input_watch.stopWatching();  // the last heartbeat says "stopped" / "finished" alone
@@ -285,6 +348,15 @@ int run(const Args& args) {
       elapsed > 0 ? static_cast<double>(delivered.load()) / elapsed : 0.0, gaps.load(),
       errors.load(), publish_failures.load(), g_stop_requested ? " (stopped by signal)" : "");
   if (writer) std::printf("capture: folder %s\n", args.render_to->c_str());
+  if (depth_worker) {
+    const StereoDepthWorkerStats d = depth_worker->stats();
+    std::printf("capture: stereo depth %llu frames, %.1f ms mean, %.0f %% of pixels valid; "
+                "%llu superseded, %llu rate-limited, %llu failed\n",
+                static_cast<unsigned long long>(d.computed), d.mean_ms, 100.0 * d.mean_valid,
+                static_cast<unsigned long long>(d.superseded),
+                static_cast<unsigned long long>(d.rate_limited),
+                static_cast<unsigned long long>(d.failed));
+  }
   return 0;
 }
 

@@ -9,9 +9,9 @@
 
 #include <opencv2/core.hpp>
 
+#include "core/io/text_matrix.h"
 #include "drivers/dataset/image_files.h"
 #include "drivers/dataset/reader_support.h"
-#include "core/io/text_matrix.h"
 
 namespace cblox {
 namespace {
@@ -21,6 +21,7 @@ namespace fs = std::filesystem;
 constexpr const char* kIntrinsicsFile = "camera-intrinsics.txt";
 constexpr const char* kFramePrefix = "frame-";
 constexpr const char* kColorSuffix = ".color.png";
+constexpr const char* kColorJpegSuffix = ".color.jpg";
 constexpr const char* kDepthSuffix = ".depth.png";
 constexpr const char* kPoseSuffix = ".pose.txt";
 constexpr uint16_t kInvalidDepthMm = 65535;
@@ -34,15 +35,19 @@ bool endsWith(const std::string& s, const std::string& suffix) {
          s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-// Parses "frame-<digits><suffix>" into the digits and which of the three files it is
-// (0 colour, 1 depth, 2 pose). Returns false for any other name.
+// The files of a frame, by kind: colour (PNG), depth, pose, colour (JPEG).
+enum FileKind { kColorPng = 0, kDepth = 1, kPose = 2, kColorJpeg = 3, kKinds = 4 };
+constexpr const char* kSuffixes[kKinds] = {kColorSuffix, kDepthSuffix, kPoseSuffix,
+                                           kColorJpegSuffix};
+
+// Parses "frame-<digits><suffix>" into the digits and which file it is (a FileKind). Returns
+// false for any other name.
 bool parseFrameName(const std::string& name, std::string* digits, int* kind) {
   const std::string prefix = kFramePrefix;
   if (name.rfind(prefix, 0) != 0) return false;
-  const char* suffixes[] = {kColorSuffix, kDepthSuffix, kPoseSuffix};
-  for (int k = 0; k < 3; ++k) {
-    if (!endsWith(name, suffixes[k])) continue;
-    const size_t length = name.size() - prefix.size() - std::string(suffixes[k]).size();
+  for (int k = 0; k < kKinds; ++k) {
+    if (!endsWith(name, kSuffixes[k])) continue;
+    const size_t length = name.size() - prefix.size() - std::string(kSuffixes[k]).size();
     if (length == 0 || length > 18) return false;
     *digits = name.substr(prefix.size(), length);
     if (!std::all_of(digits->begin(), digits->end(),
@@ -94,7 +99,7 @@ std::optional<SevenScenesReader> SevenScenesReader::open(const std::string& fold
   // Frames: group the three files of each frame number.
   struct Found {
     std::string digits;
-    bool present[3] = {false, false, false};
+    bool present[kKinds] = {false, false, false, false};
   };
   std::map<int64_t, Found> found;
   fs::directory_iterator it(folder, ec);
@@ -122,23 +127,28 @@ std::optional<SevenScenesReader> SevenScenesReader::open(const std::string& fold
     return std::nullopt;
   }
   if (found.empty()) {
-    setError(error, folder + ": no frame-NNNNNN.{color.png,depth.png,pose.txt} files");
+    setError(error, folder + ": no frame-NNNNNN.{color.png|color.jpg,depth.png,pose.txt} files");
     return std::nullopt;
   }
 
   SevenScenesReader reader;
   reader.folder_ = folder;
-  const char* suffixes[] = {kColorSuffix, kDepthSuffix, kPoseSuffix};
   for (const auto& [number, f] : found) {
     const std::string stem = (fs::path(folder) / (kFramePrefix + f.digits)).string();
-    for (int k = 0; k < 3; ++k) {
+    const std::string incomplete =
+        " is missing (frame " + std::to_string(number) + " is incomplete)";
+    if (!f.present[kColorPng] && !f.present[kColorJpeg]) {
+      setError(error, stem + kColorSuffix + ": file (or " + kColorJpegSuffix + ")" + incomplete);
+      return std::nullopt;
+    }
+    for (const int k : {kDepth, kPose}) {
       if (!f.present[k]) {
-        setError(error, stem + suffixes[k] + ": file is missing (frame " + std::to_string(number) +
-                            " is incomplete)");
+        setError(error, stem + kSuffixes[k] + ": file" + incomplete);
         return std::nullopt;
       }
     }
-    reader.frames_.push_back({number, stem});
+    reader.frames_.push_back(
+        {number, stem, f.present[kColorPng] ? kColorSuffix : kColorJpegSuffix});
   }
 
   // Image size from the first depth image.
@@ -179,8 +189,8 @@ bool SevenScenesReader::read(size_t i, SevenScenesFrame* frame, std::string* err
   }
   out.depth = depthFromUnits(mm, kMetresPerMm, kInvalidDepthMm);
 
-  if (!readColorImage(files.stem + kColorSuffix, mm.cols, mm.rows, "the depth image's", &out.color,
-                      error)) {
+  if (!readColorImage(files.stem + files.color_suffix, mm.cols, mm.rows, "the depth image's",
+                      &out.color, error)) {
     return false;
   }
 

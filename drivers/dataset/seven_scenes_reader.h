@@ -23,10 +23,13 @@ struct SevenScenesFrame {
 
 /// Reads a folder in the 7-Scenes frame layout:
 ///   camera-intrinsics.txt      3x3 K of the depth camera
-///   frame-NNNNNN.color.png     8-bit RGB
+///   frame-NNNNNN.color.png     8-bit RGB, or instead
+///   frame-NNNNNN.color.jpg     the same as JPEG (as some public copies ship it)
 ///   frame-NNNNNN.depth.png     16-bit single-channel depth in millimetres, 0/65535 invalid
 ///   frame-NNNNNN.pose.txt      4x4 row-major T_W_C
-/// Frames are discovered by listing the folder and sorted by number (gaps are allowed).
+/// Frames are discovered by listing the folder and sorted by number (gaps are allowed). The
+/// colour format is detected per frame, so a folder may mix the two; a frame with both files
+/// uses the PNG (lossless). Depth and pose are read the same way whatever the colour format.
 /// Immutable after open(): all member functions are thread-safe.
 class SevenScenesReader {
  public:
@@ -43,8 +46,13 @@ class SevenScenesReader {
   /// Depth camera intrinsics (width and height from the first depth image). Thread-safe.
   const PinholeIntrinsics& depthIntrinsics() const { return intrinsics_; }
 
-  /// Frame number (NNNNNN) of the i-th frame in sorted order; i < size(). Thread-safe.
+  /// Frame number (NNNNNN) of the i-th frame in sorted order; i < size() (else throws
+  /// std::out_of_range). Thread-safe.
   int64_t frameIndex(size_t i) const { return frames_.at(i).number; }
+
+  /// Path of the i-th frame's colour image, "<folder>/frame-NNNNNN.color.png" or ".color.jpg"
+  /// (see the class comment); i < size() (else throws std::out_of_range). Thread-safe.
+  std::string colorPath(size_t i) const { return frames_.at(i).stem + frames_.at(i).color_suffix; }
 
   /// The folder this reader was opened on. Thread-safe.
   const std::string& folder() const { return folder_; }
@@ -60,7 +68,8 @@ class SevenScenesReader {
  private:
   struct FrameFiles {
     int64_t number = 0;
-    std::string stem;  // "<folder>/frame-NNNNNN"
+    std::string stem;                         // "<folder>/frame-NNNNNN"
+    const char* color_suffix = ".color.png";  // or ".color.jpg"; static storage
   };
 
   SevenScenesReader() = default;

@@ -3,6 +3,7 @@
 #include <cctype>
 #include <filesystem>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include "core/io/obj_io.h"
@@ -86,14 +87,19 @@ std::optional<Mesh> loadSceneMesh(const std::string& path, const SceneMeshCheck&
   mesh.triangles.resize(kept);
 
   const MeshTopology topology = analyzeTopology(mesh);
-  if (topology.non_manifold_edges > 0 && !options.allow_non_manifold) {
+  std::vector<std::string> warnings;
+  if (topology.non_manifold_edges > 0) {
     const size_t first = file_index[static_cast<size_t>(topology.first_non_manifold_triangle)];
-    return fail(error, path + ": " + std::to_string(topology.non_manifold_edges) +
-                           " non-manifold edge(s) (shared by more than two triangles); the first "
-                           "is on triangle " +
-                           std::to_string(first) +
-                           " (0-based, in file order after polygon triangulation); set "
-                           "allow_non_manifold to accept such a mesh");
+    const std::string facts =
+        path + ": " + std::to_string(topology.non_manifold_edges) +
+        " non-manifold edge(s) (shared by more than two triangles, e.g. double-sided faces); the "
+        "first is on triangle " +
+        std::to_string(first) + " (0-based, in file order after polygon triangulation)";
+    if (!options.allow_non_manifold) {
+      return fail(error, facts + "; set allow_non_manifold to accept such a mesh");
+    }
+    warnings.push_back(facts +
+                       "; accepted, but the ground-truth surface is ambiguous near those edges");
   }
 
   const bool had_colors = mesh.hasColors();
@@ -105,6 +111,7 @@ std::optional<Mesh> loadSceneMesh(const std::string& path, const SceneMeshCheck&
     report->boundary_edges = topology.boundary_edges;
     report->non_manifold_edges = topology.non_manifold_edges;
     report->had_colors = had_colors;
+    report->warnings = std::move(warnings);
   }
   return mesh;
 }

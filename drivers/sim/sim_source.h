@@ -2,6 +2,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "core/io/tum_trajectory.h"
 #include "core/raycast/triangle_mesh_raycaster.h"
@@ -36,6 +37,11 @@ class SimSource : public FrameSource {
 
   const SourceInfo& info() const override { return info_; }
   Status next(CaptureFrame* frame, std::string* error) override;
+
+  /// Appends a remark to info().notes, e.g. a warning about the scene file the mesh came from
+  /// (openFrameSource() adds the loader's warnings). Never fails. Not thread-safe; call before
+  /// handing the source to its reader.
+  void addNote(std::string note) { info_.notes.push_back(std::move(note)); }
 
   /// Frames this source plays (before drops).
   size_t frameCount() const { return frame_count_; }

@@ -35,6 +35,31 @@ TEST(CaptureConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.renderer.rig.depth_min_m, b.renderer.rig.depth_min_m);
   EXPECT_EQ(a.renderer.rig.depth_max_m, b.renderer.rig.depth_max_m);
   EXPECT_FALSE(a.noise.any());
+  // stereo_depth: matcher none, and the other keys as StereoDepthConfig's defaults.
+  EXPECT_FALSE(shipped.stereo_depth.has_value());
+  EXPECT_EQ(shipped.stereo_depth_max_rate_hz, defaults.stereo_depth_max_rate_hz);
+  YAML::Node file = loadYamlFile(std::string(CBLOX_CONFIG_DIR) + "/capture.yaml");
+  file["stereo_depth"]["matcher"] = "sgbm";
+  const StereoDepthConfig on = *loadCaptureConfig(file).stereo_depth;
+  const StereoDepthConfig d;
+  EXPECT_EQ(on.downscale, d.downscale);
+  EXPECT_EQ(on.num_disparities, d.num_disparities);
+  EXPECT_EQ(on.block_size, d.block_size);
+  EXPECT_EQ(on.uniqueness_ratio, d.uniqueness_ratio);
+  EXPECT_EQ(on.left_right_max_diff, d.left_right_max_diff);
+  EXPECT_EQ(on.speckle_window, d.speckle_window);
+  EXPECT_EQ(on.speckle_range, d.speckle_range);
+  EXPECT_EQ(on.texture_threshold, d.texture_threshold);
+  EXPECT_EQ(on.min_depth_m, d.min_depth_m);
+  EXPECT_EQ(on.max_depth_m, d.max_depth_m);
+}
+
+TEST(CaptureConfigTest, StereoDepthExampleLoads) {
+  const CaptureConfig example = loadCaptureConfig(
+      loadYamlFile(std::string(CBLOX_CONFIG_DIR) + "/examples/sim_stereo_depth.yaml"));
+  ASSERT_TRUE(example.stereo_depth.has_value());
+  EXPECT_EQ(example.stereo_depth->matcher, StereoMatcherType::kSgbm);
+  EXPECT_EQ(example.stereo_depth->min_depth_m, 0.4);
 }
 
 TEST(CaptureConfigTest, ReadsOverridesAndPresets) {
@@ -71,6 +96,10 @@ TEST(CaptureConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"sim: {noise: {depth_hole_probability: 2}}\n", "depth_hole_probability"},
       {"channels: {sterio: X}\n", "sterio"},
       {"laps: 0\n", "laps"},
+      {"stereo_depth: {matcher: census}\n", "stereo_depth.matcher"},
+      {"stereo_depth: {matcher: sgbm, num_disparities: 50}\n", "stereo_depth.num_disparities"},
+      {"stereo_depth: {max_rate_hz: -1}\n", "stereo_depth.max_rate_hz"},
+      {"stereo_depth: {blocksize: 5}\n", "blocksize"},
   };
   for (const Case& c : cases) {
     try {

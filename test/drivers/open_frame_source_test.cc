@@ -1,6 +1,8 @@
 #include "drivers/open_frame_source.h"
 
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -80,6 +82,41 @@ TEST_F(OpenFrameSourceTest, MeshFileWithOrbitOrTumTrajectory) {
   options.trajectory = "loop";  // a mesh file has no built-in loop
   EXPECT_EQ(openFrameSource("sim:" + ply, options, &error), nullptr);
   EXPECT_NE(error.find("needs --trajectory orbit or a TUM file"), std::string::npos) << error;
+}
+
+TEST_F(OpenFrameSourceTest, NonManifoldScanOpensWithAWarning) {
+  // A box plus a double-sided quad above it (as scanners export thin surfaces): the quad's
+  // diagonal is used by four triangles, one non-manifold edge.
+  Mesh mesh;
+  appendBox(&mesh, Eigen::AlignedBox3f(Eigen::Vector3f(-1, -1, 0), Eigen::Vector3f(1, 1, 1)),
+            Color{200, 100, 50});
+  const int a = static_cast<int>(mesh.numVertices());
+  mesh.vertices.insert(mesh.vertices.end(), {{-1, -1, 2}, {1, -1, 2}, {1, 1, 2}, {-1, 1, 2}});
+  mesh.colors.resize(mesh.numVertices(), Color{90, 90, 90});
+  mesh.triangles.insert(
+      mesh.triangles.end(),
+      {{a, a + 1, a + 2}, {a, a + 2, a + 3}, {a, a + 2, a + 1}, {a, a + 3, a + 2}});
+  const std::string ply = dir_.file("scan.ply");
+  std::string error;
+  ASSERT_TRUE(writePly(ply, mesh, PlyFormat::kBinaryLittleEndian, &error)) << error;
+  SourceConfig options = smallSim(2);
+  options.trajectory = "orbit";
+  std::vector<std::string> warnings;
+  auto source = openFrameSource("sim:" + ply, options, &error, &warnings);
+  ASSERT_NE(source, nullptr) << error;
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("1 non-manifold edge(s)"), std::string::npos) << warnings[0];
+  bool noted = false;
+  for (const std::string& note : source->info().notes) {
+    noted = noted || note == "warning: " + warnings[0];
+  }
+  EXPECT_TRUE(noted) << "the warning is not in info().notes";
+  CaptureFrame frame;
+  EXPECT_EQ(source->next(&frame, &error), FrameSource::Status::kFrame) << error;
+
+  std::vector<std::string> mesh_warnings;
+  EXPECT_NE(loadSimSceneMesh("sim:" + ply, &error, &mesh_warnings), nullptr) << error;
+  EXPECT_EQ(mesh_warnings, warnings);
 }
 
 TEST_F(OpenFrameSourceTest, RenderedFolderReadsBackAsTumRgbd) {

@@ -1,10 +1,12 @@
 #include "drivers/dataset/seven_scenes_reader.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -156,6 +158,86 @@ TEST_F(SevenScenesMalformedTest, ValidFolderReadsWithGapsSorted) {
   EXPECT_FLOAT_EQ(frame.depth(2, 1), 0.007f);
   EXPECT_FLOAT_EQ(frame.depth(5, 5), 1.5f);
   EXPECT_EQ(frame.color(3, 3), (Color{30, 20, 10}));
+}
+
+// A smooth BGR gradient, so that JPEG's error stays small and a channel swap would show.
+cv::Mat gradientBgr(int width, int height) {
+  cv::Mat bgr(height, width, CV_8UC3);
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      bgr.at<cv::Vec3b>(v, u) =
+          cv::Vec3b(static_cast<uint8_t>(40 + 10 * u), static_cast<uint8_t>(120 + 8 * v),
+                    static_cast<uint8_t>(220 - 5 * u - 5 * v));
+    }
+  }
+  return bgr;
+}
+
+TEST_F(SevenScenesMalformedTest, ReadsJpegColourLikePng) {
+  // Reference: every frame with a PNG gradient.
+  const cv::Mat bgr = gradientBgr(kWidth, kHeight);
+  for (const int n : {3, 7, 10})
+    ASSERT_TRUE(cv::imwrite(dir_.file(frameName(n, ".color.png")), bgr));
+  std::string error;
+  const auto png_reader = SevenScenesReader::open(dir_.path().string(), &error);
+  ASSERT_TRUE(png_reader.has_value()) << error;
+  std::vector<SevenScenesFrame> reference(png_reader->size());
+  for (size_t i = 0; i < reference.size(); ++i) {
+    ASSERT_TRUE(png_reader->read(i, &reference[i], &error)) << error;
+  }
+
+  // Frame 7 only as JPEG (a mixed folder); frame 10 as both (the PNG wins); then every frame
+  // as JPEG (a whole JPEG copy).
+  const std::vector<int> quality = {cv::IMWRITE_JPEG_QUALITY, 95};
+  ASSERT_TRUE(cv::imwrite(dir_.file(frameName(7, ".color.jpg")), bgr, quality));
+  ASSERT_TRUE(fs::remove(dir_.file(frameName(7, ".color.png"))));
+  ASSERT_TRUE(cv::imwrite(dir_.file(frameName(10, ".color.jpg")), bgr, quality));
+  for (const bool all_jpeg : {false, true}) {
+    if (all_jpeg) {
+      for (const int n : {3, 10}) {
+        ASSERT_TRUE(cv::imwrite(dir_.file(frameName(n, ".color.jpg")), bgr, quality));
+        ASSERT_TRUE(fs::remove(dir_.file(frameName(n, ".color.png"))));
+      }
+    }
+    const auto reader = SevenScenesReader::open(dir_.path().string(), &error);
+    ASSERT_TRUE(reader.has_value()) << error;
+    ASSERT_EQ(reader->size(), 3u);
+    const bool jpeg[] = {all_jpeg, true, all_jpeg};  // frames 3, 7, 10
+    for (size_t i = 0; i < 3; ++i) {
+      SCOPED_TRACE("frame " + std::to_string(reader->frameIndex(i)) +
+                   (all_jpeg ? ", all JPEG" : ", mixed"));
+      const std::string suffix = jpeg[i] ? ".color.jpg" : ".color.png";
+      EXPECT_EQ(reader->colorPath(i),
+                dir_.file(frameName(static_cast<int>(reader->frameIndex(i)), suffix)));
+      SevenScenesFrame frame;
+      ASSERT_TRUE(reader->read(i, &frame, &error)) << error;
+      const SevenScenesFrame& ref = reference[i];
+      EXPECT_EQ(frame.index, ref.index);
+      EXPECT_EQ(frame.T_G_C.matrix(), ref.T_G_C.matrix());  // identical, not just close
+      ASSERT_EQ(frame.depth.width, ref.depth.width);
+      ASSERT_EQ(frame.depth.height, ref.depth.height);
+      ASSERT_EQ(frame.color.width, kWidth);
+      ASSERT_EQ(frame.color.height, kHeight);
+      int worst = 0;
+      for (int v = 0; v < kHeight; ++v) {
+        for (int u = 0; u < kWidth; ++u) {
+          EXPECT_EQ(frame.depth(u, v), ref.depth(u, v));
+          const Color got = frame.color(u, v), want = ref.color(u, v);
+          worst = std::max({worst, std::abs(got.r - want.r), std::abs(got.g - want.g),
+                            std::abs(got.b - want.b)});
+        }
+      }
+      // PNG is exact (RGB order from BGR files); JPEG at quality 95 within a few levels.
+      EXPECT_EQ(ref.color(2, 1), (Color{220 - 15, 128, 60}));
+      EXPECT_LE(worst, jpeg[i] ? 12 : 0);
+    }
+  }
+
+  // A frame without any colour file names both spellings.
+  ASSERT_TRUE(fs::remove(dir_.file(frameName(7, ".color.jpg"))));
+  EXPECT_FALSE(SevenScenesReader::open(dir_.path().string(), &error).has_value());
+  EXPECT_TRUE(contains(error, dir_.file(frameName(7, ".color.png")))) << error;
+  EXPECT_TRUE(contains(error, ".color.jpg")) << error;
 }
 
 TEST_F(SevenScenesMalformedTest, RejectsBadPoseFiles) {

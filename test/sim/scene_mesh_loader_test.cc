@@ -149,30 +149,73 @@ TEST_F(SceneMeshLoader, DropsAndReportsDegenerateTriangles) {
   expectRejected(writeMeshObj("flat.obj", flat), {"all 2 triangles are degenerate"});
 }
 
-TEST_F(SceneMeshLoader, RejectsNonManifoldMeshNamingTheTriangle) {
+// Strict check (allow_non_manifold = false): non-manifold meshes are refused.
+SceneMeshCheck strictCheck() {
+  SceneMeshCheck options;
+  options.allow_non_manifold = false;
+  return options;
+}
+
+TEST_F(SceneMeshLoader, StrictCheckRejectsNonManifoldMeshNamingTheTriangle) {
   const Mesh fins = meshWithFins();
   expectRejected(writeMeshObj("fins.obj", fins),
-                 {"1 non-manifold edge(s)", "first is on triangle 12", "allow_non_manifold"});
+                 {"1 non-manifold edge(s)", "first is on triangle 12", "allow_non_manifold"},
+                 strictCheck());
   // With a dropped degenerate triangle before the fins, the index still counts file triangles.
   Mesh shifted = fins;
   shifted.triangles.insert(shifted.triangles.begin() + 5, Eigen::Vector3i(1, 1, 2));
-  expectRejected(writeMeshPly("fins.ply", shifted), {"first is on triangle 13"});
+  expectRejected(writeMeshPly("fins.ply", shifted), {"first is on triangle 13"}, strictCheck());
   // Polygons count after triangulation: a quad before the fins is two triangles.
   expectRejected(dir_.write("quad_fins.obj",
                             "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
                             "v 5 0 0\nv 5 0 1\nv 6 0 0.5\nv 5 1 0.5\nv 4 -1 0.5\n"
                             "f 1 2 3 4\nf 5 6 7\nf 5 6 8\nf 5 6 9\n"),
-                 {"first is on triangle 2"});
+                 {"first is on triangle 2"}, strictCheck());
+}
 
-  SceneMeshCheck options;
-  options.allow_non_manifold = true;
+TEST_F(SceneMeshLoader, AcceptsNonManifoldMeshByDefaultWithAWarning) {
+  EXPECT_TRUE(SceneMeshCheck{}.allow_non_manifold);
+  const std::string p = writeMeshObj("fins.obj", meshWithFins());
   std::string error;
   SceneMeshReport report;
-  const std::optional<Mesh> loaded = loadSceneMesh(dir_.file("fins.obj"), options, &error, &report);
+  const std::optional<Mesh> loaded = loadSceneMesh(p, {}, &error, &report);
   ASSERT_TRUE(loaded.has_value()) << error;
   EXPECT_EQ(report.non_manifold_edges, 1u);
   EXPECT_EQ(report.boundary_edges, 6u);  // two free edges per blade
   EXPECT_EQ(report.triangles, 15u);
+  ASSERT_EQ(report.warnings.size(), 1u);
+  const std::string& warning = report.warnings[0];
+  EXPECT_EQ(warning.rfind(p + ": ", 0), 0u) << warning;
+  EXPECT_NE(warning.find("1 non-manifold edge(s)"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("first is on triangle 12"), std::string::npos) << warning;
+  std::printf("  warning: %s\n", warning.c_str());
+}
+
+TEST_F(SceneMeshLoader, AcceptsDoubleSidedScanByDefault) {
+  // A double-sided quad, as scanners export thin surfaces: front faces (0 1 2), (0 2 3) and
+  // the same faces reversed. The diagonal 0-2 is used by four triangles: one non-manifold
+  // edge; the rim edges each by two (front and back).
+  const std::string p = dir_.write("double_sided.obj",
+                                   "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                   "f 1 2 3\nf 1 3 4\nf 1 3 2\nf 1 4 3\n");
+  std::string error;
+  SceneMeshReport report;
+  const std::optional<Mesh> loaded = loadSceneMesh(p, {}, &error, &report);
+  ASSERT_TRUE(loaded.has_value()) << error;
+  EXPECT_EQ(loaded->numTriangles(), 4u);
+  EXPECT_EQ(report.non_manifold_edges, 1u);
+  EXPECT_EQ(report.boundary_edges, 0u);
+  ASSERT_EQ(report.warnings.size(), 1u);
+  EXPECT_NE(report.warnings[0].find("1 non-manifold edge(s)"), std::string::npos)
+      << report.warnings[0];
+  EXPECT_NE(report.warnings[0].find("first is on triangle 0"), std::string::npos)
+      << report.warnings[0];
+  // The strict check refuses it.
+  expectRejected(p, {"1 non-manifold edge(s)"}, strictCheck());
+  // A manifold mesh has no warning.
+  SceneMeshReport clean;
+  ASSERT_TRUE(loadSceneMesh(writeMeshPly("scene.ply", sceneMesh()), {}, &error, &clean));
+  EXPECT_TRUE(clean.warnings.empty());
 }
 
 TEST_F(SceneMeshLoader, RejectsEmptyFilesAndPointClouds) {

@@ -16,7 +16,7 @@ set(CBLOX_CONFIG_DIR "/etc/cblox" CACHE PATH "Where the installed YAML configura
 set(CBLOX_BINDIR "${CMAKE_INSTALL_FULL_BINDIR}")
 set(CBLOX_DATADIR "${CMAKE_INSTALL_FULL_DATADIR}/cblox")
 
-install(TARGETS cblox-capture cblox-tracker cblox-mapper cblox-ctl cblox-eval cblox-integrate
+install(TARGETS cblox-capture cblox-tracker cblox-mapper cblox-calib cblox-ctl cblox-eval cblox-integrate
   cblox-vocabulary RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 # The launcher: its default config folder becomes CBLOX_CONFIG_DIR (it finds the binaries
 # next to itself).

@@ -61,6 +61,12 @@ class FrameSource {
   /// a message naming the file or cause when this frame cannot be delivered (the caller may
   /// call next() again to go on with the following frame).
   virtual Status next(CaptureFrame* frame, std::string* error) = 0;
+
+  /// One line on the state of a live device for the heartbeat and the log, e.g. "streaming
+  /// /dev/video0: 1234 frames" or "reopening /dev/video0 (attempt 3, next in 4 s)"; empty for
+  /// sources that are not devices (simulator, datasets).
+  /// Thread-safe: may be called from any thread while another calls next().
+  virtual std::string health() const { return {}; }
 };
 
 }  // namespace cblox

@@ -7,9 +7,13 @@
 #include <stdexcept>
 
 #include "core/io/ply_io.h"
+#include "drivers/calibration/calibration_file.h"
+#include "drivers/calibration/stereo_rectifier.h"
+#include "drivers/libcamera/libcamera_source.h"
 #include "drivers/dataset/dataset_sources.h"
 #include "drivers/sim/builtin_scenes.h"
 #include "drivers/sim/scene_mesh_loader.h"
+#include "drivers/v4l2/v4l2_source.h"
 
 namespace cblox {
 namespace {
@@ -99,6 +103,61 @@ std::unique_ptr<FrameSource> openSim(const std::string& what, const SourceConfig
   }
 }
 
+// The rectifier of options.calibration_file; nullptr without one. False with a message when
+// the file cannot be used.
+bool loadRectifier(const SourceConfig& options, std::shared_ptr<const StereoRectifier>* out,
+                   std::string* error) {
+  out->reset();
+  if (options.calibration_file.empty()) return true;
+  try {
+    const StereoCameraCalibration raw = loadStereoCalibration(options.calibration_file, true);
+    *out = StereoRectifier::create(raw, error);
+    return *out != nullptr;
+  } catch (const CalibrationError& e) {
+    setError(error, e.what());
+    return false;
+  }
+}
+
+std::vector<std::string> splitCommas(const std::string& text) {
+  std::vector<std::string> parts;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = text.find(',', start);
+    parts.push_back(text.substr(start, comma == std::string::npos ? comma : comma - start));
+    if (comma == std::string::npos) return parts;
+    start = comma + 1;
+  }
+}
+
+std::unique_ptr<FrameSource> openV4l2(const std::string& kind, const std::string& what,
+                                      const SourceConfig& options, std::string* error) {
+  V4l2SourceConfig config = options.v4l2;
+  config.devices = splitCommas(what);
+  if (kind == "v4l2-stereo") {
+    if (config.devices.size() != 2) {
+      setError(error, "v4l2-stereo: needs two devices, left and right: "
+                      "v4l2-stereo:/dev/videoL,/dev/videoR");
+      return nullptr;
+    }
+    config.mode = V4l2Mode::kStereoPair;
+  } else if (config.mode == V4l2Mode::kStereoPair) {
+    setError(error, "v4l2:" + what + ": v4l2.mode stereo_pair needs the v4l2-stereo:L,R source");
+    return nullptr;
+  }
+  std::shared_ptr<const StereoRectifier> rectifier;
+  if (!loadRectifier(options, &rectifier, error)) return nullptr;
+  return V4l2Source::open(config, std::move(rectifier), error);
+}
+
+std::unique_ptr<FrameSource> openLibcamera(const std::string& what, const SourceConfig& options,
+                                           std::string* error) {
+  LibcameraSourceConfig config = options.libcamera;
+  config.camera.camera_id = what;
+  if (!loadRectifier(options, &config.rectifier, error)) return nullptr;
+  return LibcameraSource::open(config, error);
+}
+
 }  // namespace
 
 std::shared_ptr<const Mesh> loadSimSceneMesh(const std::string& spec, std::string* error,
@@ -128,8 +187,9 @@ std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const Sour
   const size_t colon = spec.find(':');
   if (colon == std::string::npos) {
     setError(error, "source '" + spec +
-                        "' has no kind: use sim:room|hall|town|MESH, euroc:DIR, tum:DIR or "
-                        "7scenes:DIR");
+                        "' has no kind: use sim:room|hall|town|MESH, euroc:DIR, tum:DIR, "
+                        "7scenes:DIR, v4l2:/dev/videoN, v4l2-stereo:/dev/videoL,/dev/videoR or "
+                        "libcamera:CAMERA_ID");
     return nullptr;
   }
   const std::string kind = spec.substr(0, colon), what = spec.substr(colon + 1);
@@ -149,7 +209,10 @@ std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const Sour
     if (!reader.has_value()) return nullptr;
     return std::make_unique<SevenScenesSource>(std::move(*reader), options.max_frames);
   }
-  setError(error, "unknown source kind '" + kind + "' (known: sim, euroc, tum, 7scenes)");
+  if (kind == "v4l2" || kind == "v4l2-stereo") return openV4l2(kind, what, options, error);
+  if (kind == "libcamera") return openLibcamera(what, options, error);
+  setError(error, "unknown source kind '" + kind +
+                      "' (known: sim, euroc, tum, 7scenes, v4l2, v4l2-stereo, libcamera)");
   return nullptr;
 }
 

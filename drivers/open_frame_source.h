@@ -8,7 +8,9 @@
 #include "drivers/dataset/euroc_reader.h"
 #include "drivers/dataset/tum_rgbd_reader.h"
 #include "drivers/frame_source.h"
+#include "drivers/libcamera/libcamera_source_config.h"
 #include "drivers/sim/sim_source.h"
+#include "drivers/v4l2/v4l2_source_config.h"
 
 namespace cblox {
 
@@ -27,6 +29,14 @@ struct SourceConfig {
   TumRgbdReader::Options tum;
   /// Stop after this many frames (0 = all).
   size_t max_frames = 0;
+  /// Cameras: the stream settings (devices / camera id come from the spec).
+  V4l2SourceConfig v4l2;
+  LibcameraSourceConfig libcamera;
+  /// Cameras with two views (v4l2-stereo, side-by-side): the raw rig's calibration (Kalibr
+  /// camchain or OpenCV YAML/XML, drivers/calibration/calibration_file.h). When set, frames
+  /// are rectified at capture and SourceInfo::stereo is the rectified calibration; empty =
+  /// deliver the raw views (no stereo calibration, so no tracking or stereo depth).
+  std::string calibration_file;
 };
 
 /// Opens a capture source from a spec:
@@ -36,6 +46,13 @@ struct SourceConfig {
 ///   euroc:<folder>                   EuRoC/ASL stereo folder (with or without mav0/)
 ///   tum:<folder>                     TUM RGB-D folder
 ///   7scenes:<folder>                 7-Scenes frame folder
+///   v4l2:/dev/videoN                 one V4L2 device; options.v4l2.mode says mono, depth
+///                                    (Z16) or side_by_side
+///   v4l2-stereo:/dev/videoL,/dev/videoR  two V4L2 cameras paired by timestamp
+///   libcamera:CAMERA_ID              a libcamera camera (id as `cam --list` prints it, or an
+///                                    index); options.libcamera.mode mono or side_by_side
+/// A camera that cannot be opened (missing, busy, not a capture device, a format or size it
+/// does not offer: the message names the device and the formats it offers) gives nullptr.
 /// Returns nullptr and a message (naming the file and line where there is one) when the spec
 /// is unknown or the source cannot be opened. Problems that do not stop the source (today: a
 /// sim mesh with non-manifold edges, see loadSceneMesh) are appended to `*warnings` when it is

@@ -70,6 +70,94 @@ void loadNoise(const YAML::Node& node, SensorNoiseConfig* noise) {
   readOptional(node, path, "seed", &noise->seed);
 }
 
+void loadIntrinsics(const YAML::Node& node, const std::string& path,
+                    std::optional<PinholeIntrinsics>* out) {
+  requireKnownKeys(node, path, {"width", "height", "fx", "fy", "cx", "cy"});
+  if (isAbsent(node)) return;
+  PinholeIntrinsics in;
+  for (const char* key : {"width", "height", "fx", "fy", "cx", "cy"}) {
+    if (!node[key]) throw ConfigError(path + "." + key + ": missing");
+  }
+  readOptional(node, path, "width", &in.width);
+  readOptional(node, path, "height", &in.height);
+  readOptional(node, path, "fx", &in.fx);
+  readOptional(node, path, "fy", &in.fy);
+  readOptional(node, path, "cx", &in.cx);
+  readOptional(node, path, "cy", &in.cy);
+  if (const std::string e = validate(in); !e.empty()) throw ConfigError(path + ": " + e);
+  *out = in;
+}
+
+void loadV4l2(const YAML::Node& node, V4l2SourceConfig* v) {
+  const std::string path = "v4l2";
+  requireKnownKeys(node, path,
+                   {"mode", "pixel_format", "width", "height", "rate_hz", "buffer_count",
+                    "pair_tolerance_ms", "exposure", "gain", "depth_scale_m",
+                    "depth_intrinsics", "depth_min_m", "depth_max_m", "color", "reopen_min_s",
+                    "reopen_max_s", "frame_timeout_s", "stalls_before_reopen"});
+  if (isAbsent(node)) return;
+  if (node["mode"]) {
+    std::string mode;
+    readOptional(node, path, "mode", &mode);
+    const std::optional<V4l2Mode> parsed = v4l2ModeFromName(mode);
+    if (!parsed) {
+      throw ConfigError(path + ".mode must be mono, depth, stereo_pair or side_by_side, got '" +
+                        mode + "'");
+    }
+    v->mode = *parsed;
+  }
+  readOptional(node, path, "pixel_format", &v->pixel_format);
+  readOptional(node, path, "width", &v->width);
+  readOptional(node, path, "height", &v->height);
+  readOptional(node, path, "rate_hz", &v->rate_hz);
+  readOptional(node, path, "buffer_count", &v->buffer_count);
+  readOptional(node, path, "pair_tolerance_ms", &v->pair_tolerance_ms);
+  if (node["exposure"]) v->exposure = node["exposure"].as<int>();
+  if (node["gain"]) v->gain = node["gain"].as<int>();
+  readOptional(node, path, "depth_scale_m", &v->depth_scale_m);
+  loadIntrinsics(node["depth_intrinsics"], path + ".depth_intrinsics", &v->depth_intrinsics);
+  readOptional(node, path, "depth_min_m", &v->depth_min_m);
+  readOptional(node, path, "depth_max_m", &v->depth_max_m);
+  readOptional(node, path, "color", &v->color);
+  readOptional(node, path, "reopen_min_s", &v->reopen_min_s);
+  readOptional(node, path, "reopen_max_s", &v->reopen_max_s);
+  readOptional(node, path, "frame_timeout_s", &v->frame_timeout_s);
+  readOptional(node, path, "stalls_before_reopen", &v->stalls_before_reopen);
+  // The device count is the source spec's; check the rest with one device (two for pairs).
+  V4l2SourceConfig check = *v;
+  check.devices = check.mode == V4l2Mode::kStereoPair
+                      ? std::vector<std::string>{"/dev/videoL", "/dev/videoR"}
+                      : std::vector<std::string>{"/dev/video0"};
+  if (const std::string e = check.validate(); !e.empty()) throw ConfigError(path + ": " + e);
+}
+
+void loadLibcamera(const YAML::Node& node, LibcameraSourceConfig* l) {
+  const std::string path = "libcamera";
+  requireKnownKeys(node, path,
+                   {"mode", "pixel_format", "width", "height", "rate_hz", "buffer_count",
+                    "exposure_us", "analogue_gain", "stall_timeout_s", "restart_backoff_s",
+                    "restart_backoff_max_s"});
+  if (isAbsent(node)) return;
+  if (node["mode"]) {
+    std::string mode;
+    readOptional(node, path, "mode", &mode);
+    const std::optional<LibcameraStereoMode> parsed = parseLibcameraStereoMode(mode);
+    if (!parsed) throw ConfigError(path + ".mode must be mono or side_by_side, got '" + mode + "'");
+    l->mode = *parsed;
+  }
+  readOptional(node, path, "pixel_format", &l->camera.pixel_format);
+  readOptional(node, path, "width", &l->camera.width);
+  readOptional(node, path, "height", &l->camera.height);
+  readOptional(node, path, "rate_hz", &l->camera.rate_hz);
+  readOptional(node, path, "buffer_count", &l->camera.buffer_count);
+  if (node["exposure_us"]) l->camera.exposure_us = node["exposure_us"].as<int>();
+  if (node["analogue_gain"]) l->camera.analogue_gain = node["analogue_gain"].as<double>();
+  readOptional(node, path, "stall_timeout_s", &l->stall_timeout_s);
+  readOptional(node, path, "restart_backoff_s", &l->restart_backoff_s);
+  readOptional(node, path, "restart_backoff_max_s", &l->restart_backoff_max_s);
+  if (const std::string e = l->validate(); !e.empty()) throw ConfigError(path + ": " + e);
+}
+
 void loadStereoDepth(const YAML::Node& node, CaptureConfig* config) {
   const std::string path = "stereo_depth";
   requireKnownKeys(node, path,
@@ -143,7 +231,8 @@ CaptureConfig loadCaptureConfig(const YAML::Node& root) {
   CaptureConfig config;
   requireKnownKeys(root, "capture",
                    {"source", "trajectory", "laps", "rate", "frames", "lcm_url", "channels",
-                    "publish", "depth_encoding", "input_silence_s", "sim", "stereo_depth"});
+                    "publish", "depth_encoding", "input_silence_s", "sim", "stereo_depth",
+                    "calibration", "v4l2", "libcamera"});
   if (isAbsent(root)) return config;
   readOptional(root, "capture", "source", &config.source);
   readOptional(root, "capture", "trajectory", &config.source_config.trajectory);
@@ -195,6 +284,13 @@ CaptureConfig loadCaptureConfig(const YAML::Node& root) {
     }
   }
   loadStereoDepth(root["stereo_depth"], &config);
+  readOptional(root, "capture", "calibration", &config.source_config.calibration_file);
+  try {
+    loadV4l2(root["v4l2"], &config.source_config.v4l2);
+    loadLibcamera(root["libcamera"], &config.source_config.libcamera);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(std::string("capture: ") + e.what());
+  }
   if (config.source_config.laps < 1) throw ConfigError("capture.laps must be >= 1");
   return config;
 }

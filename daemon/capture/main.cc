@@ -1,6 +1,9 @@
-// cblox-capture: plays a capture source (simulator, EuRoC, TUM RGB-D or 7-Scenes folder) on
-// the LCM channels of the design, or renders it to a folder for inspection.
+// cblox-capture: plays a capture source (camera through V4L2 or libcamera, simulator, EuRoC,
+// TUM RGB-D or 7-Scenes folder) on the LCM channels of the design, or renders it to a folder
+// for inspection.
 //
+//   cblox-capture --list-devices                                 # cameras and their formats
+//   cblox-capture --config config/examples/uvc_stereo_pair.yaml  # a real stereo pair
 //   cblox-capture --source sim:room --trajectory loop            # publish at 20 Hz
 //   cblox-capture --source euroc:../shared/data/euroc-v101-micro --rate max
 //   cblox-capture --source sim:town --frames 100 --render-to out/town_frames
@@ -13,10 +16,12 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <csignal>
+#include <filesystem>
 #include <cstdio>
 #include <functional>
 #include <mutex>
@@ -38,6 +43,8 @@
 #include "daemon/common/run_loop.h"
 #include "daemon/common/yaml_config.h"
 #include "drivers/frame_folder_writer.h"
+#include "drivers/libcamera/camera_manager_handle.h"
+#include "drivers/v4l2/v4l2_device.h"
 #include "drivers/open_frame_source.h"
 
 namespace cblox {
@@ -48,7 +55,8 @@ using Clock = std::chrono::steady_clock;
 struct Args {
   DaemonOptions daemon;
   std::optional<std::string> source, trajectory, rate, noise, depth_encoding, render_to,
-      write_scene;
+      write_scene, calibration;
+  bool list_devices = false;
   std::optional<int> laps, frames;
 };
 
@@ -66,6 +74,7 @@ CaptureConfig buildConfig(const Args& args) {
     config.source_config.max_frames = static_cast<size_t>(*args.frames);
   }
   if (args.noise) config.source_config.sim.noise = sensorNoisePreset(*args.noise);
+  if (args.calibration) config.source_config.calibration_file = *args.calibration;
   if (args.depth_encoding) {
     if (*args.depth_encoding == "u16_mm") {
       config.depth_encoding = DepthEncoding::kUint16Millimetres;
@@ -124,7 +133,36 @@ class Progress {
   Clock::time_point last_ = Clock::now();
 };
 
+// --list-devices: every V4L2 capture node with the formats, sizes and rates it offers, and
+// the cameras libcamera sees.
+int listDevices() {
+  std::vector<std::string> nodes;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator("/dev", ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("video", 0) == 0) nodes.push_back(entry.path().string());
+  }
+  std::sort(nodes.begin(), nodes.end());
+  std::printf("V4L2 devices (source v4l2:DEVICE or v4l2-stereo:LEFT,RIGHT):\n");
+  if (nodes.empty()) std::printf("  none (no /dev/video*)\n");
+  for (const std::string& node : nodes) {
+    std::string error;
+    const std::unique_ptr<V4l2Device> device = V4l2Device::open(node, &error);
+    if (device == nullptr) {
+      std::printf("  %s: %s\n", node.c_str(), error.c_str());
+      continue;
+    }
+    std::printf("  %s:\n%s\n", node.c_str(), device->describeFormats().c_str());
+  }
+  std::string error;
+  const std::shared_ptr<libcamera::CameraManager> manager = sharedCameraManager(&error);
+  std::printf("libcamera cameras (source libcamera:ID):\n  %s\n",
+              manager ? describeLibcameraCameras(*manager).c_str() : error.c_str());
+  return 0;
+}
+
 int run(const Args& args) {
+  if (args.list_devices) return listDevices();
   const CaptureConfig config = buildConfig(args);
   std::string error;
   if (args.write_scene) {
@@ -211,6 +249,7 @@ int run(const Args& args) {
   // Counters are read by the heartbeat thread.
   std::atomic<size_t> delivered{0}, errors{0}, publish_failures{0}, gaps{0};
   int64_t last_id = -1;
+  std::string last_error;
   std::optional<int64_t> first_stamp_ns;
   const auto start = Clock::now();
   auto last_status = Clock::now() - std::chrono::seconds(2);
@@ -245,6 +284,9 @@ int run(const Args& args) {
           .add("stereo_depth_valid_permille", static_cast<int64_t>(1000.0 * d.mean_valid));
     }
     input_watch.addTo(&hb);
+    if (const std::string health = source->health(); !health.empty()) {
+      hb.setState(hb.state() + "; " + health);
+    }
     const heartbeat_t msg = hb.build();
     lcm->publish(config.heartbeat_channel, &msg);  // LCM's publish is thread-safe
   };
@@ -283,10 +325,14 @@ int run(const Args& args) {
     const FrameSource::Status status = source->next(&frame, &error);
     if (status == FrameSource::Status::kEnd) break;
     if (status == FrameSource::Status::kError) {
+      // A camera being reopened reports the same error every second: said once until it
+      // changes or frames return.
       ++errors;
-      std::fprintf(stderr, "cblox-capture: frame skipped: %s\n", error.c_str());
+      if (error != last_error) std::fprintf(stderr, "cblox-capture: frame skipped: %s\n", error.c_str());
+      last_error = error;
       continue;
     }
+    last_error.clear();
     input_watch.arrived(input_name);
     if (last_id >= 0 && frame.frame_id > last_id + 1) gaps += frame.frame_id - last_id - 1;
     last_id = frame.frame_id;
@@ -374,7 +420,8 @@ int main(int argc, char** argv) {
   cblox::addDaemonOptions(app, &args.daemon, "config/capture.yaml");
   app.add_option("--source", args.source,
                  "sim:room | sim:hall | sim:town | sim:MESH.ply|.obj | euroc:DIR | tum:DIR |\n"
-                 "7scenes:DIR")
+                 "7scenes:DIR | v4l2:/dev/videoN | v4l2-stereo:/dev/videoL,/dev/videoR |\n"
+                 "libcamera:CAMERA_ID")
       ->type_name("SPEC");
   app.add_option("--trajectory", args.trajectory,
                  "sim sources: loop | orbit | lawnmower | figure-eight, or a TUM trajectory file")
@@ -385,6 +432,12 @@ int main(int argc, char** argv) {
   app.add_option("--noise", args.noise, "sensor noise preset: none | realistic")
       ->type_name("PRESET");
   app.add_option("--depth-encoding", args.depth_encoding, "u16_mm | f32")->type_name("ENCODING");
+  app.add_option("--calibration", args.calibration,
+                 "raw stereo calibration (Kalibr camchain or OpenCV YAML/XML) of a camera\n"
+                 "source: frames are rectified at capture")
+      ->type_name("FILE");
+  app.add_flag("--list-devices", args.list_devices,
+               "list V4L2 devices with their formats, and libcamera cameras, then exit");
   app.add_option("--render-to", args.render_to,
                  "writes images + lists + groundtruth.txt instead of publishing")
       ->type_name("DIR");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 namespace cblox {
 
@@ -46,6 +47,30 @@ std::string validate(const CameraCalibration& camera) {
 bool isUndistorted(const CameraCalibration& camera) {
   return std::all_of(camera.distortion_coefficients.begin(), camera.distortion_coefficients.end(),
                      [](double c) { return c == 0.0; });
+}
+
+bool sameIntrinsics(const PinholeIntrinsics& a, const PinholeIntrinsics& b, double tolerance) {
+  return a.width == b.width && a.height == b.height && std::abs(a.fx - b.fx) <= tolerance &&
+         std::abs(a.fy - b.fy) <= tolerance && std::abs(a.cx - b.cx) <= tolerance &&
+         std::abs(a.cy - b.cy) <= tolerance;
+}
+
+std::string rectifiedPairProblem(const StereoCameraCalibration& pair, double tolerance) {
+  if (!sameIntrinsics(pair.left.intrinsics, pair.right.intrinsics, tolerance)) {
+    return "intrinsics and resolution must equal the left camera's (a rectified pair)";
+  }
+  const Transformationd T_L_R = pair.T_R_L.inverse();
+  const Eigen::Vector3d& t = T_L_R.translation();
+  const double angle = T_L_R.rotation().angularDistance(Eigen::Quaterniond::Identity());
+  if (angle <= tolerance && std::abs(t.y()) <= tolerance && std::abs(t.z()) <= tolerance &&
+      t.x() > 0.0) {
+    return {};
+  }
+  std::ostringstream os;
+  os << "the right camera must sit at (+baseline, 0, 0) in the left one without rotation (a "
+     << "rectified pair); it is at (" << t.x() << ", " << t.y() << ", " << t.z()
+     << ") m, rotated by " << angle << " rad";
+  return os.str();
 }
 
 }  // namespace cblox

@@ -48,4 +48,15 @@ std::string validate(const CameraCalibration& camera);
 /// True when every distortion coefficient is 0 (or there is none). Thread-safe (pure).
 bool isUndistorted(const CameraCalibration& camera);
 
+/// True when a and b have the same size and fx, fy, cx, cy within `tolerance` pixels.
+/// Thread-safe (pure).
+bool sameIntrinsics(const PinholeIntrinsics& a, const PinholeIntrinsics& b, double tolerance);
+
+/// "" when the pair's geometry is already that of a rectified pair (equal intrinsics within
+/// `tolerance` px, the right camera at (+b, 0, 0) in the left one without rotation within
+/// `tolerance` m and rad), else why not, e.g. "the right camera must sit at (+baseline, 0, 0)
+/// in the left one without rotation (a rectified pair); it is at (0.1, 0.01, 0) m, rotated by
+/// 0 rad". Distortion is not looked at (isUndistorted()). Thread-safe (pure).
+std::string rectifiedPairProblem(const StereoCameraCalibration& pair, double tolerance);
+
 }  // namespace cblox

@@ -20,21 +20,11 @@ cv::Mat distortionVector(const CameraCalibration& camera) {
   return d;
 }
 
-bool sameIntrinsics(const PinholeIntrinsics& a, const PinholeIntrinsics& b, double tolerance) {
-  return a.width == b.width && a.height == b.height && std::abs(a.fx - b.fx) <= tolerance &&
-         std::abs(a.fy - b.fy) <= tolerance && std::abs(a.cx - b.cx) <= tolerance &&
-         std::abs(a.cy - b.cy) <= tolerance;
-}
-
 // Already rectified: undistorted, equal intrinsics, right camera at (+b, 0, 0) unrotated.
 bool isRectifiedPair(const StereoCameraCalibration& raw) {
   constexpr double kTolerance = 1e-9;
-  const Transformationd T_L_R = raw.T_R_L.inverse();
-  const Eigen::Vector3d& t = T_L_R.translation();
   return isUndistorted(raw.left) && isUndistorted(raw.right) &&
-         sameIntrinsics(raw.left.intrinsics, raw.right.intrinsics, kTolerance) &&
-         T_L_R.rotation().angularDistance(Eigen::Quaterniond::Identity()) <= kTolerance &&
-         std::abs(t.y()) <= kTolerance && std::abs(t.z()) <= kTolerance && t.x() > 0.0;
+         rectifiedPairProblem(raw, kTolerance).empty();
 }
 
 void checkSize(const cv::Mat& raw, const PinholeIntrinsics& in, const char* camera) {

@@ -54,12 +54,32 @@ TEST(CaptureConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(on.max_depth_m, d.max_depth_m);
 }
 
-TEST(CaptureConfigTest, StereoDepthExampleLoads) {
-  const CaptureConfig example = loadCaptureConfig(
-      loadYamlFile(std::string(CBLOX_CONFIG_DIR) + "/examples/sim_stereo_depth.yaml"));
-  ASSERT_TRUE(example.stereo_depth.has_value());
-  EXPECT_EQ(example.stereo_depth->matcher, StereoMatcherType::kSgbm);
-  EXPECT_EQ(example.stereo_depth->min_depth_m, 0.4);
+// The example configs of the README load, and say what they claim.
+TEST(CaptureConfigTest, ExampleConfigsLoad) {
+  const std::string dir = std::string(CBLOX_CONFIG_DIR) + "/examples/";
+  const auto load = [&](const char* name) { return loadCaptureConfig(loadYamlFile(dir + name)); };
+  const CaptureConfig sim = load("sim_stereo_depth.yaml");
+  ASSERT_TRUE(sim.stereo_depth.has_value());
+  EXPECT_EQ(sim.stereo_depth->matcher, StereoMatcherType::kSgbm);
+  EXPECT_EQ(sim.stereo_depth->min_depth_m, 0.4);
+  const CaptureConfig pair = load("uvc_stereo_pair.yaml");
+  EXPECT_EQ(pair.source, "v4l2-stereo:/dev/video0,/dev/video2");
+  EXPECT_EQ(pair.source_config.v4l2.pixel_format, "GREY");
+  EXPECT_EQ(pair.source_config.v4l2.exposure, 100);
+  EXPECT_FALSE(pair.source_config.calibration_file.empty());
+  const CaptureConfig sbs = load("side_by_side_usb.yaml");
+  EXPECT_EQ(sbs.source_config.v4l2.mode, V4l2Mode::kSideBySide);
+  EXPECT_EQ(sbs.source_config.v4l2.width, 2560);
+  EXPECT_TRUE(sbs.stereo_depth.has_value());
+  const CaptureConfig d415 = load("realsense_d415_uvc.yaml");
+  EXPECT_EQ(d415.source_config.v4l2.mode, V4l2Mode::kDepth);
+  EXPECT_EQ(d415.source_config.v4l2.depth_scale_m, 0.001);
+  ASSERT_TRUE(d415.source_config.v4l2.depth_intrinsics.has_value());
+  EXPECT_EQ(d415.source_config.v4l2.depth_intrinsics->fx, 423.0);
+  const CaptureConfig csi = load("csi_libcamera.yaml");
+  EXPECT_EQ(csi.source, "libcamera:0");
+  EXPECT_EQ(csi.source_config.libcamera.mode, LibcameraStereoMode::kSideBySide);
+  EXPECT_EQ(csi.source_config.libcamera.camera.height, 800);
 }
 
 TEST(CaptureConfigTest, ReadsOverridesAndPresets) {
@@ -100,6 +120,14 @@ TEST(CaptureConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"stereo_depth: {matcher: sgbm, num_disparities: 50}\n", "stereo_depth.num_disparities"},
       {"stereo_depth: {max_rate_hz: -1}\n", "stereo_depth.max_rate_hz"},
       {"stereo_depth: {blocksize: 5}\n", "blocksize"},
+      {"v4l2: {mode: quad}\n", "v4l2.mode"},
+      {"v4l2: {pixel_format: H264}\n", "v4l2"},
+      {"v4l2: {buffer_count: 1}\n", "buffer_count"},
+      {"v4l2: {depth_intrinsics: {width: 640}}\n", "v4l2.depth_intrinsics.height"},
+      {"v4l2: {exposure: fast}\n", "capture"},
+      {"libcamera: {mode: triple}\n", "libcamera.mode"},
+      {"libcamera: {width: 0}\n", "libcamera"},
+      {"libcamera: {isp: on}\n", "isp"},
   };
   for (const Case& c : cases) {
     try {

@@ -383,7 +383,7 @@ TEST(TrackerConfigTest, CalibrationFileErrorsNameFileAndKey) {
       {"cam0:\n" + cam + "cam2:\n" + cam, false, "cam2"},
       {"cam0:\n" + cam + "cam1:\n  intrinsics: [401, 400, 320, 240]\n  resolution: [640, 480]\n" +
            "  T_cn_cnm1: [[1, 0, 0, -0.1], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]\n",
-       true, "must equal cam0"},
+       true, "must equal the left camera's"},
       // Right camera rotated by 0.01 rad about y: not a rectified pair.
       {"cam0:\n" + cam + "cam1:\n" + cam +
            "  T_cn_cnm1: [[0.99995, 0, 0.0099998, -0.1], [0, 1, 0, 0], "

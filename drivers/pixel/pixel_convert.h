@@ -1,0 +1,43 @@
+#pragma once
+
+// Conversions from camera pixel formats (pixel_format.h) to the images of core/geometry:
+// grey for stereo, colour and depth for RGB-D, and the split of side-by-side stereo frames.
+// Every conversion checks the frame's size, stride and byte count (checkRawImage) before it
+// reads a pixel, and leaves its output untouched when it fails.
+
+#include "core/geometry/image.h"
+#include "drivers/pixel/pixel_format.h"
+#include "drivers/pixel/raw_image.h"
+
+namespace cblox {
+
+/// Converts `raw` to 8-bit grey in *out (non-null):
+///   kGrey copied; kY16 its high byte (value >> 8); kYuyv, kUyvy, kNv12, kYuv420 the Y
+///   samples as they are (limited range, not expanded); kRgb24, kBgr24, kXrgb8888 the BT.601
+///   luma (77 R + 150 G + 29 B + 128) >> 8; kMjpeg decoded to grey by libjpeg-turbo.
+/// Errors: checkRawImage()'s; kDecodeFailed for a JPEG stream that is corrupt, truncated
+/// (warnings count as failures) or of another size than raw.width x raw.height, with
+/// libjpeg-turbo's message; kUnsupported for kZ16. Thread-safe (no shared state).
+ConvertResult toGray(const RawImage& raw, GrayImage* out);
+
+/// Converts `raw` to RGB in *out (non-null): the YUV formats by the BT.601 limited-range
+/// equations (R = (298 (Y-16) + 409 (V-128) + 128) >> 8, G = (298 (Y-16) - 100 (U-128)
+/// - 208 (V-128) + 128) >> 8, B = (298 (Y-16) + 516 (U-128) + 128) >> 8, clamped to
+/// [0, 255]; each chroma sample shared by its 2 (4:2:2) or 2x2 (4:2:0) pixels); the RGB
+/// formats reordered; kGrey and kY16 (high byte) as equal R, G, B; kMjpeg decoded.
+/// Errors as toGray(); kUnsupported for kZ16. Thread-safe (no shared state).
+ConvertResult toColor(const RawImage& raw, ColorImage* out);
+
+/// Converts 16-bit depth units (kZ16, or kY16 from cameras that label depth so) to metres in
+/// *out (non-null): value * metres_per_unit, computed in double and rounded to float; 0 (no
+/// measurement) stays 0. Errors: checkRawImage()'s; kUnsupported for any other format or a
+/// metres_per_unit that is not finite and > 0. Thread-safe (no shared state).
+ConvertResult toDepth(const RawImage& raw, double metres_per_unit, DepthImage* out);
+
+/// Splits a side-by-side stereo frame `both` (width 2W) into *left (columns [0, W)) and
+/// *right (columns [W, 2W)), both non-null and distinct from `both`. Errors: kBadSize when
+/// the width is odd or the image is empty; kShortBuffer when both.data holds fewer than
+/// width * height pixels. Thread-safe (no shared state).
+ConvertResult splitSideBySide(const GrayImage& both, GrayImage* left, GrayImage* right);
+
+}  // namespace cblox

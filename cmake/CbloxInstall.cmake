@@ -1,13 +1,14 @@
 # Installation in FHS places (`cmake --install build` to CMAKE_INSTALL_PREFIX, /usr/local by
 # default; scripts/package.sh configures /usr and builds the DEB with cpack). The systemd units
 # get the configured prefix's paths in ExecStart, so install to the prefix you configured:
-#   <prefix>/bin/                       cblox-capture, -tracker, -mapper, -ctl, -eval,
+#   <prefix>/bin/                       cblox-capture, -tracker, -mapper, -calib, -ctl, -eval,
 #                                       -integrate, -vocabulary; cblox-launch (scripts/,
 #                                       with CBLOX_CONFIG_DIR as its default config folder)
 #   /etc/cblox/                         capture.yaml, tracker.yaml, mapper.yaml, integrate.yaml,
 #                                       calibration/ (CBLOX_CONFIG_DIR; /etc even for /usr/local,
 #                                       where operators look for it)
-#   <prefix>/share/cblox/               cblox_orb.vocab (the place-recognition vocabulary)
+#   <prefix>/share/cblox/               cblox_orb.vocab (the place-recognition vocabulary),
+#                                       examples/ (capture configs for real cameras)
 #   <prefix>/share/java/                cblox_lcmtypes.jar (for lcm-spy)
 #   <prefix>/lib/systemd/system/        cblox-{capture,tracker,mapper}.service, cblox.target
 #   <prefix>/lib/sysctl.d/              60-cblox-lcm.conf (socket buffers for LCM images)
@@ -30,6 +31,7 @@ install(PROGRAMS ${CMAKE_BINARY_DIR}/scripts/cblox-launch DESTINATION ${CMAKE_IN
 install(FILES config/capture.yaml config/tracker.yaml config/mapper.yaml config/integrate.yaml
   DESTINATION ${CBLOX_CONFIG_DIR})
 install(DIRECTORY config/calibration/ DESTINATION ${CBLOX_CONFIG_DIR}/calibration)
+install(DIRECTORY config/examples/ DESTINATION ${CMAKE_INSTALL_DATADIR}/cblox/examples)
 if(CBLOX_BUILD_VOCABULARY)
   install(FILES ${CBLOX_VOCABULARY_FILE} DESTINATION ${CMAKE_INSTALL_DATADIR}/cblox)
 endif()

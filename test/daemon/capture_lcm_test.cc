@@ -24,6 +24,7 @@
 #include "daemon/common/lcm_messages.h"
 #include "drivers/sim/builtin_scenes.h"
 #include "drivers/open_frame_source.h"
+#include "drivers/stereo_depth/stereo_depth.h"
 #include "test/test_support/spawn.h"
 
 namespace cblox {
@@ -53,20 +54,19 @@ struct Received {
 
 pid_t spawn(const std::vector<std::string>& args) { return test::spawnProcess(args); }
 
-TEST(CaptureLcmTest, PublishesSimulatorFramesThatMatchTheSourceExactly) {
-  constexpr int kFrames = 12;
+// Runs cblox-capture with `args` (and the test's LCM URL), receiving what it publishes until
+// it exits; returns its exit status, or -1 (after killing it) when it runs past 60 s.
+int runCapture(std::vector<std::string> args, Received* received) {
   lcm::LCM lcm(kUrl);
-  ASSERT_TRUE(lcm.good());
-  Received received;
-  lcm.subscribe("CBLOX_STEREO", &Received::onStereo, &received);
-  lcm.subscribe("CBLOX_DEPTH", &Received::onDepth, &received);
-  lcm.subscribe("CBLOX_GT_POSE", &Received::onGt, &received);
-  lcm.subscribe("CBLOX_HEARTBEAT", &Received::onHeartbeat, &received);
-
-  const pid_t pid = spawn({CBLOX_CAPTURE_EXE, "--source", "sim:room", "--trajectory", "orbit",
-                           "--frames", std::to_string(kFrames), "--rate", "20",
-                           "--depth-encoding", "f32", "--lcm-url", kUrl, "--quiet"});
-  ASSERT_GT(pid, 0);
+  if (!lcm.good()) return -2;
+  lcm.subscribe("CBLOX_STEREO", &Received::onStereo, received);
+  lcm.subscribe("CBLOX_DEPTH", &Received::onDepth, received);
+  lcm.subscribe("CBLOX_GT_POSE", &Received::onGt, received);
+  lcm.subscribe("CBLOX_HEARTBEAT", &Received::onHeartbeat, received);
+  args.insert(args.begin(), CBLOX_CAPTURE_EXE);
+  for (const char* extra : {"--lcm-url", kUrl, "--quiet"}) args.emplace_back(extra);
+  const pid_t pid = spawn(args);
+  if (pid <= 0) return -2;
   int status = 0;
   bool exited = false;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
@@ -81,11 +81,18 @@ TEST(CaptureLcmTest, PublishesSimulatorFramesThatMatchTheSourceExactly) {
   if (!exited) {
     kill(pid, SIGKILL);
     waitpid(pid, &status, 0);
-    FAIL() << "cblox-capture did not finish within 60 s";
+    return -1;
   }
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -3;
+}
 
+TEST(CaptureLcmTest, PublishesSimulatorFramesThatMatchTheSourceExactly) {
+  constexpr int kFrames = 12;
+  Received received;
+  ASSERT_EQ(runCapture({"--source", "sim:room", "--trajectory", "orbit", "--frames",
+                        std::to_string(kFrames), "--rate", "20", "--depth-encoding", "f32"},
+                       &received),
+            0);
   ASSERT_EQ(received.stereo.size(), static_cast<size_t>(kFrames));
   ASSERT_EQ(received.depth.size(), static_cast<size_t>(kFrames));
   ASSERT_EQ(received.gt.size(), static_cast<size_t>(kFrames));
@@ -117,6 +124,51 @@ TEST(CaptureLcmTest, PublishesSimulatorFramesThatMatchTheSourceExactly) {
     const auto pose = fromPoseMsg(received.gt.at(frame.frame_id).T_G_C, &error);
     ASSERT_TRUE(pose.has_value()) << error;
     EXPECT_TRUE(pose->isApprox(*frame.T_G_C, 1e-12));
+  }
+}
+
+// With stereo_depth on, CBLOX_DEPTH carries SGBM depth of the rectified left camera at half
+// size instead of the simulator's depth camera: exactly what StereoDepthEstimator computes here
+// from the same pairs.
+TEST(CaptureLcmTest, PublishesStereoDepthInPlaceOfTheDepthCamera) {
+  constexpr int kFrames = 6;
+  const std::string config = std::string(CBLOX_CONFIG_DIR) + "/examples/sim_stereo_depth.yaml";
+  Received received;
+  ASSERT_EQ(runCapture({"--config", config, "--source", "sim:room", "--trajectory", "orbit",
+                        "--frames", std::to_string(kFrames), "--rate", "5", "--depth-encoding",
+                        "f32"},
+                       &received),
+            0);
+  ASSERT_EQ(received.stereo.size(), static_cast<size_t>(kFrames));
+  ASSERT_EQ(received.depth.size(), static_cast<size_t>(kFrames));  // 5 Hz: none superseded
+  const heartbeat_t& last = received.heartbeats.back();
+  int64_t depth_frames = -1;
+  for (int i = 0; i < last.num_counters; ++i) {
+    if (last.counter_names[i] == "stereo_depth_frames") depth_frames = last.counter_values[i];
+  }
+  EXPECT_EQ(depth_frames, kFrames);
+
+  SourceConfig options;
+  options.trajectory = "orbit";
+  options.max_frames = kFrames;
+  std::string error;
+  auto source = openFrameSource("sim:room", options, &error);
+  ASSERT_NE(source, nullptr) << error;
+  StereoDepthConfig stereo;
+  stereo.min_depth_m = 0.4;  // as the example
+  auto estimator = StereoDepthEstimator::create(*source->info().stereo, stereo, &error);
+  ASSERT_NE(estimator, nullptr) << error;
+  CaptureFrame frame;
+  while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+    const depth_frame_t& msg = received.depth.at(frame.frame_id);
+    EXPECT_EQ(msg.utime, frame.timestamp_ns / 1000);
+    EXPECT_EQ(msg.calibration.width, 376);
+    EXPECT_EQ(msg.calibration.fx, 229.0);
+    EXPECT_FLOAT_EQ(msg.min_depth_m, 0.4f);
+    DepthImage depth, expected;
+    ASSERT_TRUE(fromDepthImageMsg(msg.depth, &depth, &error)) << error;
+    estimator->compute(frame.left, frame.right, &expected);
+    EXPECT_EQ(depth.data, expected.data) << frame.frame_id;
   }
 }
 

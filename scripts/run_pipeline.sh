@@ -14,13 +14,15 @@
 #                                [--tracker-config FILE]  (default config/tracker.yaml)
 #                                [--capture-config FILE]  (default config/capture.yaml; e.g.
 #                                 config/examples/sim_stereo_depth.yaml: depth from SGBM)
+#                                [--source SPEC]  a dataset instead of a scene, e.g.
+#                                 euroc:DIR (no exact scene: the mesh is written, not evaluated)
 # Writes DIR/NAME.ply (the mapper's mesh), DIR/NAME_gt.ply (exact scene), DIR/NAME_eval.json
 # and DIR/NAME_error.png. Needs a build (scripts/build.sh); BUILD_DIR selects it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 scene=room trajectory=orbit laps=1 rate=20 frames=0 out=out name="" mapper_config=config/mapper.yaml
-poses=tracker tracker_config=config/tracker.yaml capture_config=config/capture.yaml
+poses=tracker tracker_config=config/tracker.yaml capture_config=config/capture.yaml source=""
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --scene) scene=$2; shift 2 ;;
@@ -33,6 +35,7 @@ while [[ $# -gt 0 ]]; do
     --mapper-config) mapper_config=$2; shift 2 ;;
     --tracker-config) tracker_config=$2; shift 2 ;;
     --capture-config) capture_config=$2; shift 2 ;;
+    --source) source=$2; shift 2 ;;
     --poses) poses=$2; shift 2 ;;
     *) echo "run_pipeline: unknown argument '$1'" >&2; exit 2 ;;
   esac
@@ -50,8 +53,16 @@ if [[ "${CBLOX_IN_NETNS:-}" != "1" ]]; then
   CBLOX_IN_NETNS=1 exec scripts/netns-run.sh "$0" --scene "$scene" --trajectory "$trajectory" --laps "$laps" \
     --rate "$rate" --frames "$frames" --out "$out" --name "$name" \
     --mapper-config "$mapper_config" --tracker-config "$tracker_config" --poses "$poses" \
-    --capture-config "$capture_config"
+    --capture-config "$capture_config" ${source:+--source "$source"}
 fi
+# A scene of the simulator (exact ground truth), or a dataset given with --source.
+sim=true
+if [[ -n $source && $source != sim:* ]]; then sim=false; fi
+source=${source:-sim:$scene}
+capture_args=(--config "$capture_config" --source "$source" --rate "$rate" --frames "$frames")
+if $sim; then capture_args+=(--trajectory "$trajectory" --laps "$laps"); fi
+initial_pose=()
+if $sim; then initial_pose=(--initial-pose-from-gt); fi
 
 url="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
 "$bin/cblox-mapper" --config "$mapper_config" --pose-source "$poses" --output-dir "$out" \
@@ -59,17 +70,16 @@ url="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
 mapper=$!
 tracker=""
 if [[ "$poses" == tracker ]]; then
-  "$bin/cblox-tracker" --config "$tracker_config" --initial-pose-from-gt --lcm-url "$url" \
+  "$bin/cblox-tracker" --config "$tracker_config" "${initial_pose[@]}" --lcm-url "$url" \
     > "$out/${name}_tracker.log" 2>&1 &
   tracker=$!
 fi
 trap 'kill -TERM $mapper $tracker 2>/dev/null || true' EXIT
 start_ns=$(date +%s%N)
 sleep 1
-echo "pipeline: capture sim:$scene ($trajectory) at $rate Hz ->" \
+echo "pipeline: capture $source at $rate Hz ->" \
   "$([[ -n $tracker ]] && echo "cblox-tracker -> ")cblox-mapper ($poses poses)"
-"$bin/cblox-capture" --config "$capture_config" --source "sim:$scene" --trajectory "$trajectory" --laps "$laps" --rate "$rate" \
-  --frames "$frames" --lcm-url "$url"
+"$bin/cblox-capture" "${capture_args[@]}" --lcm-url "$url"
 sleep 2  # let the tracker and the mapper finish the last frames
 "$bin/cblox-ctl" --lcm-url "$url" --timeout 30 status
 "$bin/cblox-ctl" --lcm-url "$url" --timeout 120 export-mesh "$name.ply"
@@ -94,7 +104,11 @@ if [[ -n $tracker ]]; then
   grep -E "^cblox-tracker: (stopped|tracked|loop)" "$out/${name}_tracker.log" | tail -3 || true
 fi
 trap - EXIT
-"$bin/cblox-capture" --config "$capture_config" --source "sim:$scene" --write-scene "$out/${name}_gt.ply" > /dev/null
+if ! $sim; then
+  echo "pipeline: mesh $out/$name.ply (no exact scene for $source; mapper log $out/${name}_mapper.log)"
+  exit 0
+fi
+"$bin/cblox-capture" --config "$capture_config" --source "$source" --write-scene "$out/${name}_gt.ply" > /dev/null
 "$bin/cblox-eval" --gt-mesh "$out/${name}_gt.ply" --mesh "$out/$name.ply" --max-error 0.04 \
   --voxel-size "$(awk '/^  voxel_size:/ {print $2; exit}' "$mapper_config")" \
   --json "$out/${name}_eval.json" --error-png "$out/${name}_error.png"

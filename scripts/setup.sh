@@ -13,7 +13,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libsystemd-dev libcli11-dev nlohmann-json3-dev
   libv4l-dev libturbojpeg0-dev v4l-utils
-  libcamera-dev
+  libcamera-dev opencv-doc
   iproute2 util-linux python3
 )
 if [[ "${1:-}" == "--bench" ]]; then

@@ -99,8 +99,8 @@ nlohmann::json benchScene(const std::string& scene, int frames,
   }
   std::printf("\n%s: %zu pairs (every %zu of the loop's frames), 752x480, baseline %.3f m\n",
               scene.c_str(), pairs.size(), step, source->info().stereo->baseline_m);
-  std::printf("  %-14s %8s %8s %9s %9s %8s %8s %7s\n", "matcher", "ms", "valid", "med |e|",
-              "p90 |e|", "med rel", "outl.", "compl.");
+  std::printf("  %-14s %8s %9s %9s %8s %8s %7s\n", "matcher", "ms", "med |e|", "p90 |e|",
+              "med rel", "outl.", "compl.");
   nlohmann::json rows = nlohmann::json::array();
   for (const Variant& v : all) {
     auto estimator = StereoDepthEstimator::create(*source->info().stereo, v.config, &error);
@@ -124,8 +124,8 @@ nlohmann::json benchScene(const std::string& scene, int frames,
         }
       }
     }
-    std::printf("  %-14s %8.1f %7.0f%% %7.1f mm %7.1f mm %7.2f%% %7.1f%% %6.0f%%\n",
-                v.name.c_str(), median(ms), 100 * median(completeness), 1000 * median(med),
+    std::printf("  %-14s %8.1f %6.1f mm %6.1f mm %7.2f%% %7.1f%% %6.0f%%\n",
+                v.name.c_str(), median(ms), 1000 * median(med),
                 1000 * median(p90), 100 * median(rel), 100 * median(outliers),
                 100 * median(completeness));
     nlohmann::json by_z = nlohmann::json::array();

@@ -18,6 +18,9 @@ namespace cblox {
 struct SourceInfo {
   std::string name;      ///< e.g. "sim:room/loop", "euroc:/data/V1_01/mav0"
   double rate_hz = 0.0;  ///< nominal frame rate; 0 when unknown
+  /// A live camera: frames come at their own pace, and a player never waits for their time
+  /// stamps (cblox-capture's `rate` applies to recorded and simulated sources only).
+  bool live = false;
   /// Present when frames carry a rectified stereo pair.
   std::optional<RectifiedStereoCalibration> stereo;
   /// Present when frames carry a depth image (and, if colour is delivered, a colour image

@@ -321,7 +321,8 @@ int run(const Args& args) {
     ~StopOnExit() { stop(); }
   } stop_on_exit{stop_heartbeats};
 
-  while (!g_stop_requested) {
+  const size_t max_frames = config.source_config.max_frames;  // cameras never end by themselves
+  while (!g_stop_requested && !(info.live && max_frames > 0 && delivered >= max_frames)) {
     const FrameSource::Status status = source->next(&frame, &error);
     if (status == FrameSource::Status::kEnd) break;
     if (status == FrameSource::Status::kError) {
@@ -338,8 +339,9 @@ int run(const Args& args) {
     last_id = frame.frame_id;
     if (!first_stamp_ns) first_stamp_ns = frame.timestamp_ns;
 
-    // Pacing: wait until this frame's time relative to the first one.
-    if (!writer && config.pacing != CapturePacing::kMax) {
+    // Pacing: wait until this frame's time relative to the first one (cameras come at their
+    // own pace).
+    if (!writer && !info.live && config.pacing != CapturePacing::kMax) {
       const double offset_s = config.pacing == CapturePacing::kSource
                                   ? static_cast<double>(frame.timestamp_ns - *first_stamp_ns) * 1e-9
                                   : static_cast<double>(delivered) / config.fixed_rate_hz;

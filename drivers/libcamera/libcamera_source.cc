@@ -44,6 +44,7 @@ LibcameraSource::LibcameraSource(const LibcameraSourceConfig& config,
       restart_(config.restart_backoff_s, config.restart_backoff_max_s),
       drops_(name_) {
   info_.name = name_;
+  info_.live = true;
   info_.rate_hz = config_.camera.rate_hz;
   if (config_.rectifier != nullptr) info_.stereo = config_.rectifier->rectified();
   format_text_ = camera_->format().describe();

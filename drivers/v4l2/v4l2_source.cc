@@ -93,6 +93,7 @@ std::unique_ptr<V4l2Source> V4l2Source::open(const V4l2SourceConfig& config,
 
   SourceInfo& info = source->info_;
   info.name = "v4l2:" + joinDevices(config.devices);
+  info.live = true;
   const double device_rate = source->devices_.front()->rateHz();
   info.rate_hz = device_rate > 0.0 ? device_rate : config.rate_hz;
   for (const auto& device : source->devices_) {

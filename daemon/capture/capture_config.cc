@@ -232,7 +232,7 @@ CaptureConfig loadCaptureConfig(const YAML::Node& root) {
   requireKnownKeys(root, "capture",
                    {"source", "trajectory", "laps", "rate", "frames", "lcm_url", "channels",
                     "publish", "depth_encoding", "input_silence_s", "sim", "stereo_depth",
-                    "calibration", "v4l2", "libcamera"});
+                    "calibration", "v4l2", "libcamera", "device_wait_s"});
   if (isAbsent(root)) return config;
   readOptional(root, "capture", "source", &config.source);
   readOptional(root, "capture", "trajectory", &config.source_config.trajectory);
@@ -285,6 +285,10 @@ CaptureConfig loadCaptureConfig(const YAML::Node& root) {
   }
   loadStereoDepth(root["stereo_depth"], &config);
   readOptional(root, "capture", "calibration", &config.source_config.calibration_file);
+  readOptional(root, "capture", "device_wait_s", &config.device_wait_s);
+  if (!(config.device_wait_s >= 0.0) || !std::isfinite(config.device_wait_s)) {
+    throw ConfigError("capture.device_wait_s must be >= 0 seconds");
+  }
   try {
     loadV4l2(root["v4l2"], &config.source_config.v4l2);
     loadLibcamera(root["libcamera"], &config.source_config.libcamera);

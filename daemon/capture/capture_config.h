@@ -39,6 +39,10 @@ struct CaptureConfig {
   /// source silent when it produced no frame for this long, seconds; 0 = off. Set it above
   /// the frame period when playing slower than 0.5 Hz.
   double input_silence_s = kDefaultInputSilenceS;
+  /// Camera sources: how long a camera that cannot be opened yet (missing, busy) is waited
+  /// for at start, retried once a second, before its error ends the process (exit 2);
+  /// 0 = fail at once. The systemd unit waits 45 s (cameras enumerating at boot).
+  double device_wait_s = 0.0;
   /// Dense stereo depth (`stereo_depth:`): when set, depth is computed from the rectified pair
   /// on a thread of its own and published on depth_channel in place of the source's depth
   /// camera (rigs without one; the simulator with its depth camera switched off).

@@ -57,6 +57,7 @@ struct Args {
   std::optional<std::string> source, trajectory, rate, noise, depth_encoding, render_to,
       write_scene, calibration;
   bool list_devices = false;
+  std::optional<double> device_wait_s;
   std::optional<int> laps, frames;
 };
 
@@ -75,6 +76,12 @@ CaptureConfig buildConfig(const Args& args) {
   }
   if (args.noise) config.source_config.sim.noise = sensorNoisePreset(*args.noise);
   if (args.calibration) config.source_config.calibration_file = *args.calibration;
+  if (args.device_wait_s) {
+    if (!(*args.device_wait_s >= 0.0) || !std::isfinite(*args.device_wait_s)) {
+      throw ConfigError("--device-wait must be >= 0 seconds");
+    }
+    config.device_wait_s = *args.device_wait_s;
+  }
   if (args.depth_encoding) {
     if (*args.depth_encoding == "u16_mm") {
       config.depth_encoding = DepthEncoding::kUint16Millimetres;
@@ -180,9 +187,27 @@ int run(const Args& args) {
                 mesh->numTriangles());
     return 0;
   }
+  installStopHandlers();
+  SystemdNotifier notifier;
   std::vector<std::string> warnings;
   std::unique_ptr<FrameSource> source =
       openFrameSource(config.source, config.source_config, &error, &warnings);
+  // A camera that is not there yet (USB enumerating at boot, a cable being plugged) is waited
+  // for up to device_wait_s, once a second; then its error stands (exit 2).
+  const bool camera = config.source.rfind("v4l2", 0) == 0 || config.source.rfind("libcamera:", 0) == 0;
+  if (source == nullptr && camera && config.device_wait_s > 0) {
+    std::fprintf(stderr, "cblox-capture: waiting up to %.0f s for the camera: %s\n",
+                 config.device_wait_s, error.c_str());
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                             std::chrono::duration<double>(config.device_wait_s));
+    while (source == nullptr && !g_stop_requested && Clock::now() < deadline) {
+      notifier.status("waiting for the camera: " + error);
+      notifier.pingWatchdogIfDue();
+      std::this_thread::sleep_for(std::chrono::seconds(1));
+      warnings.clear();
+      source = openFrameSource(config.source, config.source_config, &error, &warnings);
+    }
+  }
   for (const std::string& warning : warnings) {
     std::fprintf(stderr, "cblox-capture: warning: %s\n", warning.c_str());
   }
@@ -190,6 +215,7 @@ int run(const Args& args) {
     std::fprintf(stderr, "cblox-capture: %s\n", error.c_str());
     return 2;
   }
+  if (camera && !args.daemon.quiet) std::printf("capture: camera %s open\n", config.source.c_str());
   const SourceInfo& info = source->info();
   // Dense stereo depth replaces the source's depth camera: the depth images are those of the
   // rectified left camera at the matcher's working resolution.
@@ -224,8 +250,6 @@ int run(const Args& args) {
   }
   if (!args.daemon.quiet) printInfo(depth_info);
 
-  installStopHandlers();
-
   std::optional<FrameFolderWriter> writer;
   std::optional<lcm::LCM> lcm;
   if (args.render_to) {
@@ -243,7 +267,6 @@ int run(const Args& args) {
   }
 
   Progress progress(info.frame_count, args.daemon.quiet);
-  SystemdNotifier notifier;
   notifier.ready("cblox-capture: " + info.name);
   CaptureFrame frame;
   // Counters are read by the heartbeat thread.
@@ -438,6 +461,9 @@ int main(int argc, char** argv) {
                  "raw stereo calibration (Kalibr camchain or OpenCV YAML/XML) of a camera\n"
                  "source: frames are rectified at capture")
       ->type_name("FILE");
+  app.add_option("--device-wait", args.device_wait_s,
+                 "camera sources: wait this long for a camera that is not there yet (s)")
+      ->type_name("SECONDS");
   app.add_flag("--list-devices", args.list_devices,
                "list V4L2 devices with their formats, and libcamera cameras, then exit");
   app.add_option("--render-to", args.render_to,

@@ -17,6 +17,8 @@ TEST(CaptureConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(shipped.pacing, defaults.pacing);
   EXPECT_EQ(shipped.source_config.max_frames, defaults.source_config.max_frames);
   EXPECT_EQ(shipped.lcm_url, defaults.lcm_url);
+  EXPECT_EQ(shipped.device_wait_s, defaults.device_wait_s);
+  EXPECT_EQ(shipped.source_config.calibration_file, defaults.source_config.calibration_file);
   EXPECT_EQ(shipped.depth_encoding, defaults.depth_encoding);
   EXPECT_EQ(shipped.stereo_channel, defaults.stereo_channel);
   EXPECT_EQ(shipped.depth_channel, defaults.depth_channel);
@@ -128,6 +130,7 @@ TEST(CaptureConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"libcamera: {mode: triple}\n", "libcamera.mode"},
       {"libcamera: {width: 0}\n", "libcamera"},
       {"libcamera: {isp: on}\n", "isp"},
+      {"device_wait_s: -1\n", "device_wait_s"},
   };
   for (const Case& c : cases) {
     try {

@@ -197,5 +197,25 @@ TEST(CaptureLcmTest, BadSourceExitsWithStatusTwo) {
   EXPECT_EQ(WEXITSTATUS(status), 2);
 }
 
+// A camera that is not there: exit 2 at once, or after --device-wait of retrying (the
+// systemd unit waits for cameras still enumerating at boot). No device is faked: the node
+// does not exist.
+TEST(CaptureLcmTest, MissingCameraExitsWithStatusTwoAfterTheWait) {
+  for (const double wait_s : {0.0, 1.5}) {
+    const auto start = std::chrono::steady_clock::now();
+    const pid_t pid = spawn({CBLOX_CAPTURE_EXE, "--source", "v4l2:/dev/video-cblox-absent",
+                             "--device-wait", std::to_string(wait_s), "--lcm-url", kUrl,
+                             "--quiet"});
+    int status = 0;
+    ASSERT_EQ(waitpid(pid, &status, 0), pid);
+    const double took =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 2) << wait_s;
+    EXPECT_GE(took, wait_s) << wait_s;
+    EXPECT_LT(took, wait_s + 10.0) << wait_s;
+  }
+}
+
 }  // namespace
 }  // namespace cblox

@@ -193,6 +193,12 @@ std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const Sour
     return nullptr;
   }
   const std::string kind = spec.substr(0, colon), what = spec.substr(colon + 1);
+  const bool camera = kind == "v4l2" || kind == "v4l2-stereo" || kind == "libcamera";
+  if (!camera && !options.calibration_file.empty() && warnings != nullptr) {
+    warnings->push_back("calibration " + options.calibration_file +
+                        " is for camera sources and is not used: " + kind +
+                        " sources carry their own calibration");
+  }
   if (kind == "sim") return openSim(what, options, error, warnings);
   if (kind == "euroc") {
     auto reader = EurocReader::open(what, options.euroc, error);

@@ -54,10 +54,11 @@ struct SourceConfig {
 /// A camera that cannot be opened (missing, busy, not a capture device, a format or size it
 /// does not offer: the message names the device and the formats it offers) gives nullptr.
 /// Returns nullptr and a message (naming the file and line where there is one) when the spec
-/// is unknown or the source cannot be opened. Problems that do not stop the source (today: a
-/// sim mesh with non-manifold edges, see loadSceneMesh) are appended to `*warnings` when it is
-/// not null, one sentence each, and also to the source's info().notes as "warning: ...";
-/// callers print them on stderr. Thread-safe (no shared state).
+/// is unknown or the source cannot be opened. Problems that do not stop the source are
+/// appended to `*warnings` when it is not null, one sentence each, for the caller to print on
+/// stderr: a sim mesh with non-manifold edges (see loadSceneMesh; also in the source's
+/// info().notes as "warning: ..."), a calibration_file given to a source that carries its own
+/// calibration. Thread-safe (no shared state).
 std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const SourceConfig& options,
                                              std::string* error,
                                              std::vector<std::string>* warnings = nullptr);

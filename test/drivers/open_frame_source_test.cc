@@ -184,6 +184,35 @@ TEST_F(OpenFrameSourceTest, DatasetFoldersFromSharedData) {
   EXPECT_TRUE(frame.T_G_C.has_value());
 }
 
+// Camera specs without a camera attached: every refusal names what is wrong. No device is
+// faked; the nodes named do not exist.
+TEST_F(OpenFrameSourceTest, CameraSpecsRefusedWithReasons) {
+  std::string error;
+  EXPECT_EQ(openFrameSource("v4l2:/dev/video-cblox-absent", SourceConfig{}, &error), nullptr);
+  EXPECT_NE(error.find("/dev/video-cblox-absent: no such device"), std::string::npos) << error;
+  EXPECT_EQ(openFrameSource("v4l2-stereo:/dev/video0", SourceConfig{}, &error), nullptr);
+  EXPECT_NE(error.find("needs two devices"), std::string::npos) << error;
+  SourceConfig pair;
+  pair.v4l2.mode = V4l2Mode::kStereoPair;
+  EXPECT_EQ(openFrameSource("v4l2:/dev/video0", pair, &error), nullptr);
+  EXPECT_NE(error.find("v4l2-stereo:L,R"), std::string::npos) << error;
+  SourceConfig calibrated;
+  calibrated.calibration_file = dir_.file("absent_camchain.yaml");
+  EXPECT_EQ(openFrameSource("v4l2-stereo:/dev/video-a,/dev/video-b", calibrated, &error),
+            nullptr);
+  EXPECT_NE(error.find("absent_camchain.yaml: cannot open"), std::string::npos) << error;
+  EXPECT_EQ(openFrameSource("libcamera:imx219", SourceConfig{}, &error), nullptr);
+  EXPECT_NE(error.find("'imx219' not found; cameras present: "), std::string::npos) << error;
+  // A calibration given to a source that carries its own is said, not used.
+  SourceConfig sim = smallSim(1);
+  sim.calibration_file = "rig.yaml";
+  std::vector<std::string> warnings;
+  EXPECT_NE(openFrameSource("sim:room", sim, &error, &warnings), nullptr) << error;
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("calibration rig.yaml is for camera sources"), std::string::npos)
+      << warnings[0];
+}
+
 TEST_F(OpenFrameSourceTest, RejectsUnknownSpecsAndMissingFolders) {
   std::string error;
   EXPECT_EQ(openFrameSource("room", SourceConfig{}, &error), nullptr);

@@ -8,6 +8,27 @@
 namespace cblox {
 namespace {
 
+// `<name>_position: [x, y, z]` and `<name>_quaternion_wxyz: [w, x, y, z]` into *pose when
+// either is given (the other defaults to zero / identity).
+void readPose(const YAML::Node& node, const std::string& path, const std::string& name,
+              Transformationd* pose) {
+  std::vector<double> position, quaternion;
+  const std::string position_key = name + "_position", quaternion_key = name + "_quaternion_wxyz";
+  readOptional(node, path, position_key.c_str(), &position);
+  readOptional(node, path, quaternion_key.c_str(), &quaternion);
+  if (position.empty() && quaternion.empty()) return;
+  if (position.empty()) position = {0.0, 0.0, 0.0};
+  if (quaternion.empty()) quaternion = {1.0, 0.0, 0.0, 0.0};
+  if (position.size() != 3 || quaternion.size() != 4) {
+    throw ConfigError(path + ": " + position_key + " needs 3 numbers, " + quaternion_key + " 4");
+  }
+  const Eigen::Quaterniond q(quaternion[0], quaternion[1], quaternion[2], quaternion[3]);
+  if (std::abs(q.norm() - 1.0) > 1e-3) {
+    throw ConfigError(path + "." + quaternion_key + ": norm must be 1");
+  }
+  *pose = Transformationd(q.normalized(), Eigen::Vector3d(position[0], position[1], position[2]));
+}
+
 void loadRig(const YAML::Node& node, SimRigConfig* rig) {
   const std::string path = "sim.rig";
   requireKnownKeys(node, path,
@@ -30,21 +51,7 @@ void loadRig(const YAML::Node& node, SimRigConfig* rig) {
   readOptional(node, path, "depth_fy", &rig->depth.fy);
   readOptional(node, path, "depth_cx", &rig->depth.cx);
   readOptional(node, path, "depth_cy", &rig->depth.cy);
-  std::vector<double> position, quaternion;
-  readOptional(node, path, "T_L_D_position", &position);
-  readOptional(node, path, "T_L_D_quaternion_wxyz", &quaternion);
-  if (!position.empty() || !quaternion.empty()) {
-    if (position.empty()) position = {0.0, 0.0, 0.0};
-    if (quaternion.empty()) quaternion = {1.0, 0.0, 0.0, 0.0};
-    if (position.size() != 3 || quaternion.size() != 4) {
-      throw ConfigError(path + ": T_L_D_position needs 3 numbers, T_L_D_quaternion_wxyz 4");
-    }
-    const Eigen::Quaterniond q(quaternion[0], quaternion[1], quaternion[2], quaternion[3]);
-    if (std::abs(q.norm() - 1.0) > 1e-3) {
-      throw ConfigError(path + ".T_L_D_quaternion_wxyz: norm must be 1");
-    }
-    rig->T_L_D = Transformationd(q, Eigen::Vector3d(position[0], position[1], position[2]));
-  }
+  readPose(node, path, "T_L_D", &rig->T_L_D);
 }
 
 void loadNoise(const YAML::Node& node, SensorNoiseConfig* noise) {
@@ -93,7 +100,8 @@ void loadV4l2(const YAML::Node& node, V4l2SourceConfig* v) {
   requireKnownKeys(node, path,
                    {"mode", "pixel_format", "width", "height", "rate_hz", "buffer_count",
                     "pair_tolerance_ms", "exposure", "gain", "depth_scale_m",
-                    "depth_intrinsics", "depth_min_m", "depth_max_m", "color", "reopen_min_s",
+                    "depth_intrinsics", "T_B_D_position", "T_B_D_quaternion_wxyz",
+                    "depth_min_m", "depth_max_m", "color", "reopen_min_s",
                     "reopen_max_s", "frame_timeout_s", "stalls_before_reopen"});
   if (isAbsent(node)) return;
   if (node["mode"]) {
@@ -116,6 +124,7 @@ void loadV4l2(const YAML::Node& node, V4l2SourceConfig* v) {
   if (node["gain"]) v->gain = node["gain"].as<int>();
   readOptional(node, path, "depth_scale_m", &v->depth_scale_m);
   loadIntrinsics(node["depth_intrinsics"], path + ".depth_intrinsics", &v->depth_intrinsics);
+  readPose(node, path, "T_B_D", &v->T_B_D);
   readOptional(node, path, "depth_min_m", &v->depth_min_m);
   readOptional(node, path, "depth_max_m", &v->depth_max_m);
   readOptional(node, path, "color", &v->color);

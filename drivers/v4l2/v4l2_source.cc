@@ -112,6 +112,7 @@ std::unique_ptr<V4l2Source> V4l2Source::open(const V4l2SourceConfig& config,
   }
   if (config.mode == V4l2Mode::kDepth) {
     info.depth_intrinsics = config.depth_intrinsics;
+    info.T_C_D = config.T_B_D;  // no stereo in this source: C is the rig's body frame
     info.depth_min_m = config.depth_min_m;
     info.depth_max_m = config.depth_max_m;
     if (!config.depth_intrinsics) {

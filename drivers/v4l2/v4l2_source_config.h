@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/geometry/pinhole_camera.h"
+#include "core/geometry/se3.h"
 
 namespace cblox {
 
@@ -46,6 +47,10 @@ struct V4l2SourceConfig {
   double depth_scale_m = 0.001;
   /// kDepth: the depth camera's intrinsics (V4L2 does not tell); SourceInfo::depth_intrinsics.
   std::optional<PinholeIntrinsics> depth_intrinsics;
+  /// kDepth: the depth camera D in the rig's body frame B, the frame the tracker's poses are
+  /// of (with a Kalibr camchain without T_cam_imu: the stereo pair's raw left camera), for a
+  /// depth camera beside a stereo pair run by another cblox-capture; SourceInfo::T_C_D.
+  Transformationd T_B_D;
   double depth_min_m = 0.1;  ///< kDepth: valid range, SourceInfo::depth_min_m / max_m
   double depth_max_m = 10.0;
   bool color = false;  ///< kMono: also convert to CaptureFrame::color

@@ -78,6 +78,8 @@ TEST(CaptureConfigTest, ExampleConfigsLoad) {
   EXPECT_EQ(d415.source_config.v4l2.depth_scale_m, 0.001);
   ASSERT_TRUE(d415.source_config.v4l2.depth_intrinsics.has_value());
   EXPECT_EQ(d415.source_config.v4l2.depth_intrinsics->fx, 423.0);
+  EXPECT_EQ(d415.source_config.v4l2.T_B_D.translation().y(), 0.06);
+  EXPECT_FALSE(d415.publish_stereo);
   const CaptureConfig csi = load("csi_libcamera.yaml");
   EXPECT_EQ(csi.source, "libcamera:0");
   EXPECT_EQ(csi.source_config.libcamera.mode, LibcameraStereoMode::kSideBySide);
@@ -131,6 +133,8 @@ TEST(CaptureConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"libcamera: {width: 0}\n", "libcamera"},
       {"libcamera: {isp: on}\n", "isp"},
       {"device_wait_s: -1\n", "device_wait_s"},
+      {"v4l2: {T_B_D_position: [1, 2]}\n", "T_B_D_position needs 3 numbers"},
+      {"v4l2: {T_B_D_quaternion_wxyz: [2, 0, 0, 0]}\n", "v4l2.T_B_D_quaternion_wxyz: norm"},
   };
   for (const Case& c : cases) {
     try {

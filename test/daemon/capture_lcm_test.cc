@@ -54,6 +54,18 @@ struct Received {
 
 pid_t spawn(const std::vector<std::string>& args) { return test::spawnProcess(args); }
 
+// The source the capture process played (`--source sim:room --trajectory orbit --frames N`),
+// rendered again in this process.
+std::unique_ptr<FrameSource> roomOrbit(int frames) {
+  SourceConfig options;
+  options.trajectory = "orbit";
+  options.max_frames = static_cast<size_t>(frames);
+  std::string error;
+  std::unique_ptr<FrameSource> source = openFrameSource("sim:room", options, &error);
+  EXPECT_NE(source, nullptr) << error;
+  return source;
+}
+
 // Runs cblox-capture with `args` (and the test's LCM URL), receiving what it publishes until
 // it exits; returns its exit status, or -1 (after killing it) when it runs past 60 s.
 int runCapture(std::vector<std::string> args, Received* received) {
@@ -101,12 +113,9 @@ TEST(CaptureLcmTest, PublishesSimulatorFramesThatMatchTheSourceExactly) {
   EXPECT_EQ(received.heartbeats.back().state, "finished");
 
   // The same source in this process renders the same frames.
-  SourceConfig options;
-  options.trajectory = "orbit";
-  options.max_frames = kFrames;
   std::string error;
-  auto source = openFrameSource("sim:room", options, &error);
-  ASSERT_NE(source, nullptr) << error;
+  const std::unique_ptr<FrameSource> source = roomOrbit(kFrames);
+  ASSERT_NE(source, nullptr);
   CaptureFrame frame;
   while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
     const stereo_pair_t& stereo = received.stereo.at(frame.frame_id);
@@ -148,12 +157,9 @@ TEST(CaptureLcmTest, PublishesStereoDepthInPlaceOfTheDepthCamera) {
   }
   EXPECT_EQ(depth_frames, kFrames);
 
-  SourceConfig options;
-  options.trajectory = "orbit";
-  options.max_frames = kFrames;
   std::string error;
-  auto source = openFrameSource("sim:room", options, &error);
-  ASSERT_NE(source, nullptr) << error;
+  const std::unique_ptr<FrameSource> source = roomOrbit(kFrames);
+  ASSERT_NE(source, nullptr);
   StereoDepthConfig stereo;
   stereo.min_depth_m = 0.4;  // as the example
   auto estimator = StereoDepthEstimator::create(*source->info().stereo, stereo, &error);

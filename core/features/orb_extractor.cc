@@ -6,6 +6,7 @@
 
 #include "core/features/fast_grid_detector.h"
 #include "core/features/quadtree_distribution.h"
+#include "core/geometry/opencv_view.h"
 
 namespace cblox {
 
@@ -65,8 +66,7 @@ ExtractedFeatures OrbExtractor::extract(const GrayImage& image) {
                                 std::to_string(image.data.size()) + " pixels, not " +
                                 std::to_string(image.width) + "x" + std::to_string(image.height));
   }
-  const cv::Mat view(image.height, image.width, CV_8UC1, const_cast<uint8_t*>(image.data.data()));
-  return extract(view);
+  return extract(cvView(image));
 }
 
 ExtractedFeatures OrbExtractor::extract(const cv::Mat& image) {

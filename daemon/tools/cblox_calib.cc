@@ -30,6 +30,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/geometry/opencv_view.h"
 #include "daemon/common/cli.h"
 #include "drivers/calibration/calibration_file.h"
 #include "drivers/calibration/row_error.h"
@@ -104,10 +105,7 @@ GrayImage toImage(const cv::Mat& mat) {
   return image;
 }
 
-cv::Mat toMat(const GrayImage& image) {
-  return cv::Mat(image.height, image.width, CV_8UC1, const_cast<uint8_t*>(image.data.data()))
-      .clone();
-}
+cv::Mat toMat(const GrayImage& image) { return cvView(image).clone(); }
 
 // Row offsets of one rectified pair: the board's corners if found, else matched corners.
 void pairOffsets(const cv::Mat& left, const cv::Mat& right, cv::Size pattern,

@@ -7,6 +7,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/geometry/opencv_view.h"
+
 namespace cblox {
 namespace {
 
@@ -147,11 +149,9 @@ void StereoRectifier::rectify(const GrayImage& left_raw, const GrayImage& right_
   const int w = rectified_.intrinsics.width, h = rectified_.intrinsics.height;
   for (const auto& [is_right, raw, out] :
        {std::tuple{false, &left_raw, left}, std::tuple{true, &right_raw, right}}) {
-    const cv::Mat in(raw->height, raw->width, CV_8UC1,
-                     const_cast<uint8_t*>(raw->data.data()));  // read only
     GrayImage result(w, h);
-    cv::Mat mat(h, w, CV_8UC1, result.data.data());
-    rectifyImage(is_right, in, &mat);
+    cv::Mat mat = cvView(&result);
+    rectifyImage(is_right, cvView(*raw), &mat);
     if (mat.data != result.data.data()) throw std::logic_error("rectify: reallocated output");
     *out = std::move(result);
   }

@@ -6,6 +6,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/geometry/opencv_view.h"
+
 namespace cblox {
 
 struct StereoDepthEstimator::Impl {
@@ -128,8 +130,7 @@ StereoDepthStats StereoDepthEstimator::compute(const GrayImage& left, const Gray
     }
   }
   Impl& impl = *impl_;
-  const cv::Mat l(in.height, in.width, CV_8UC1, const_cast<uint8_t*>(left.data.data()));
-  const cv::Mat r(in.height, in.width, CV_8UC1, const_cast<uint8_t*>(right.data.data()));
+  const cv::Mat l = cvView(left), r = cvView(right);
   const PinholeIntrinsics& out = depth_intrinsics_;
   if (config_.downscale > 1) {
     // Crop to a multiple of the factor first, so that INTER_AREA averages whole blocks.

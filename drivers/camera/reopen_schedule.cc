@@ -1,6 +1,7 @@
 #include "drivers/camera/reopen_schedule.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -15,6 +16,12 @@ int64_t secondsToNs(double seconds) { return static_cast<int64_t>(std::llround(s
 double reopenDelaySeconds(int attempt, double min_s, double max_s) {
   const int doublings = std::clamp(attempt, 1, 64) - 1;
   return std::min(std::ldexp(min_s, doublings), max_s);
+}
+
+int64_t steadyNowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
 }
 
 std::string formatSeconds(double seconds) {

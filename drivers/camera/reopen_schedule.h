@@ -12,6 +12,10 @@ namespace cblox {
 /// max_s; attempt < 1 counts as 1. Requires 0 < min_s <= max_s. Thread-safe (pure).
 double reopenDelaySeconds(int attempt, double min_s, double max_s);
 
+/// Now on std::chrono::steady_clock in nanoseconds: the clock the drivers give ReopenSchedule
+/// and their frame deadlines. Thread-safe.
+int64_t steadyNowNs();
+
 /// "4" for 4.0, "0.5" for 0.5: seconds rounded up to a tenth, trailing zeros removed.
 /// Thread-safe (pure).
 std::string formatSeconds(double seconds);

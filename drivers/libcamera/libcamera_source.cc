@@ -9,21 +9,6 @@
 #include "drivers/pixel/pixel_convert.h"
 
 namespace cblox {
-namespace {
-
-int64_t steadyNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-std::string seconds(double s) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%.1f s", s);
-  return text;
-}
-
-}  // namespace
 
 std::unique_ptr<LibcameraSource> LibcameraSource::open(const LibcameraSourceConfig& config,
                                                        std::string* error) {
@@ -83,7 +68,7 @@ FrameSource::Status LibcameraSource::fail(const std::string& kind, const std::st
                                           std::string* error) {
   countDrop(kind, message);
   camera_.reset();  // stop, free, release
-  const int64_t now = steadyNs();
+  const int64_t now = steadyNowNs();
   if (restart_.reopening()) {
     restart_.failed(now);  // a restart that delivered no frame: the next waits twice as long
   } else {
@@ -101,7 +86,7 @@ FrameSource::Status LibcameraSource::fail(const std::string& kind, const std::st
 
 bool LibcameraSource::reopen(std::string* error) {
   std::this_thread::sleep_for(std::chrono::nanoseconds(
-      std::max<int64_t>(0, restart_.nextAttemptNs() - steadyNs())));
+      std::max<int64_t>(0, restart_.nextAttemptNs() - steadyNowNs())));
   std::string open_error;
   std::unique_ptr<LibcameraCamera> camera = LibcameraCamera::open(config_.camera, &open_error);
   if (camera == nullptr || !camera->start(&open_error)) {
@@ -174,7 +159,7 @@ FrameSource::Status LibcameraSource::next(CaptureFrame* frame, std::string* erro
       // Requests complete, but none with a usable frame. The camera keeps running.
       const std::lock_guard<std::mutex> lock(stats_mutex_);
       const std::string message = name_ + ": no usable frame for " +
-                                  seconds(config_.stall_timeout_s) +
+                                  formatSeconds(config_.stall_timeout_s) + " s" +
                                   " (dropped so far: " + drops_.summary() + ")";
       last_error_ = message;
       if (error != nullptr) *error = message;
@@ -210,7 +195,7 @@ FrameSource::Status LibcameraSource::next(CaptureFrame* frame, std::string* erro
       case LibcameraCamera::WaitStatus::kTimeout:
         return fail(
             "stall",
-            "no request completed for " + seconds(config_.stall_timeout_s) + " (camera stalled)",
+            "no request completed for " + formatSeconds(config_.stall_timeout_s) + " s" + " (camera stalled)",
             error);
       case LibcameraCamera::WaitStatus::kDisconnected:
         return fail("disconnected", result.message, error);

@@ -60,12 +60,6 @@ V4l2Source::V4l2Source(V4l2SourceConfig config, std::shared_ptr<const StereoRect
 
 V4l2Source::~V4l2Source() = default;
 
-int64_t V4l2Source::steadyNowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 std::unique_ptr<V4l2Source> V4l2Source::open(const V4l2SourceConfig& config,
                                              std::shared_ptr<const StereoRectifier> rectifier,
                                              std::string* error) {

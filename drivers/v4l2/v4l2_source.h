@@ -88,7 +88,6 @@ class V4l2Source : public FrameSource {
 
   V4l2Source(V4l2SourceConfig config, std::shared_ptr<const StereoRectifier> rectifier);
 
-  static int64_t steadyNowNs();
   bool openDevices(std::string* error);
   void closeDevices();
   Status deviceLost(const std::string& why, std::string* error);

@@ -23,7 +23,8 @@ namespace cblox {
 std::optional<PixelFormat> pixelFormatFromLibcamera(const libcamera::PixelFormat& format);
 
 /// The inverse of pixelFormatFromLibcamera(): the libcamera format whose memory layout is
-/// `format`; std::nullopt for kY16 and kZ16 (libcamera 0.0.3 has no such stream format).
+/// `format`; std::nullopt for kY16, kZ16 and kY8i (libcamera 0.0.3 has no such stream
+/// format: 16-bit grey, depth, interleaved stereo).
 /// Thread-safe (pure).
 std::optional<libcamera::PixelFormat> libcameraFormatOf(PixelFormat format);
 
@@ -33,8 +34,8 @@ std::optional<libcamera::PixelFormat> libcameraFormatOf(PixelFormat format);
 /// "MJPEG", ...), then libcamera's own names as libcamera::PixelFormat::fromString() reads
 /// them ("R8", "RGB888" = B G R in memory, "BGR888", "YUV420", ...; case-sensitive).
 /// Returns std::nullopt and a message listing the accepted names in *error (if non-null)
-/// when the name is neither, or names a format that cannot be converted (e.g. "Y16", or
-/// libcamera's "SRGGB10"). Thread-safe (pure).
+/// when the name is neither, or names a format that cannot be converted (e.g. "Y16", "Y8I",
+/// or libcamera's "SRGGB10"). Thread-safe (pure).
 std::optional<libcamera::PixelFormat> parseLibcameraPixelFormat(std::string_view name,
                                                                 std::string* error);
 

@@ -21,6 +21,15 @@ ConvertResult unsupported(const RawImage& raw, const std::string& target) {
                                                        " to " + target};
 }
 
+/// kY8i carries two views: neither toGray() nor toColor() can make one image of it.
+ConvertResult interleavedStereo(const RawImage& raw, const std::string& target) {
+  return ConvertResult{ConvertError::kUnsupported,
+                       describe(raw) + ": cannot convert " +
+                           std::string(pixelFormatName(raw.format)) + " to " + target +
+                           ": it is interleaved stereo (left and right in one frame); use mode "
+                           "side_by_side"};
+}
+
 /// First byte of row v of the first plane.
 const uint8_t* row(const RawImage& raw, int v) {
   return raw.data + static_cast<size_t>(v) * effectiveStride(raw);
@@ -180,6 +189,7 @@ void colorFromGray(const RawImage& raw, ColorImage* out) {
 ConvertResult toGray(const RawImage& raw, GrayImage* out) {
   if (ConvertResult check = checkRawImage(raw); !check) return check;
   if (raw.format == PixelFormat::kZ16) return unsupported(raw, "grey");
+  if (raw.format == PixelFormat::kY8i) return interleavedStereo(raw, "grey");
   if (raw.format == PixelFormat::kMjpeg) {
     std::vector<uint8_t> pixels;
     if (ConvertResult decoded = decodeMjpeg(raw, JpegOutput::kGray, &pixels); !decoded) {
@@ -204,9 +214,15 @@ ConvertResult toGray(const RawImage& raw, GrayImage* out) {
     case PixelFormat::kUyvy:
       grayFromYuv422(raw, &gray);
       break;
-    default:  // isRgb
+    case PixelFormat::kRgb24:
+    case PixelFormat::kBgr24:
+    case PixelFormat::kXrgb8888:
       grayFromRgb(raw, &gray);
       break;
+    case PixelFormat::kMjpeg:
+    case PixelFormat::kZ16:
+    case PixelFormat::kY8i:
+      break;  // handled above
   }
   *out = std::move(gray);
   return {};
@@ -215,6 +231,7 @@ ConvertResult toGray(const RawImage& raw, GrayImage* out) {
 ConvertResult toColor(const RawImage& raw, ColorImage* out) {
   if (ConvertResult check = checkRawImage(raw); !check) return check;
   if (raw.format == PixelFormat::kZ16) return unsupported(raw, "colour");
+  if (raw.format == PixelFormat::kY8i) return interleavedStereo(raw, "colour");
   if (raw.format == PixelFormat::kMjpeg) {
     std::vector<uint8_t> pixels;
     if (ConvertResult decoded = decodeMjpeg(raw, JpegOutput::kRgb, &pixels); !decoded) {
@@ -287,6 +304,28 @@ ConvertResult splitSideBySide(const GrayImage& both, GrayImage* left, GrayImage*
     const auto offset = static_cast<std::ptrdiff_t>(v) * half;
     std::copy_n(in, half, l.data.begin() + offset);
     std::copy_n(in + half, half, r.data.begin() + offset);
+  }
+  *left = std::move(l);
+  *right = std::move(r);
+  return {};
+}
+
+ConvertResult splitInterleaved(const RawImage& raw, GrayImage* left, GrayImage* right) {
+  if (raw.format != PixelFormat::kY8i) {
+    return ConvertResult{ConvertError::kUnsupported,
+                         describe(raw) + ": cannot split " +
+                             std::string(pixelFormatName(raw.format)) +
+                             " into a stereo pair: only Y8I is interleaved stereo"};
+  }
+  if (ConvertResult check = checkRawImage(raw); !check) return check;
+  GrayImage l(raw.width, raw.height);
+  GrayImage r(raw.width, raw.height);
+  for (int v = 0; v < raw.height; ++v) {
+    const uint8_t* in = row(raw, v);
+    for (int u = 0; u < raw.width; ++u) {
+      l(u, v) = in[2 * u];  // the left imager: the first byte of the 16-bit pixel
+      r(u, v) = in[2 * u + 1];
+    }
   }
   *left = std::move(l);
   *right = std::move(r);

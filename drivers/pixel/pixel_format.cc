@@ -21,7 +21,7 @@ struct FormatEntry {
   uint32_t v4l2;
 };
 
-constexpr std::array<FormatEntry, 11> kFormats = {{
+constexpr std::array<FormatEntry, 12> kFormats = {{
     {PixelFormat::kGrey, "GREY", V4L2_PIX_FMT_GREY},
     {PixelFormat::kY16, "Y16", V4L2_PIX_FMT_Y16},
     {PixelFormat::kYuyv, "YUYV", V4L2_PIX_FMT_YUYV},
@@ -33,6 +33,7 @@ constexpr std::array<FormatEntry, 11> kFormats = {{
     {PixelFormat::kXrgb8888, "XRGB8888", V4L2_PIX_FMT_XBGR32},
     {PixelFormat::kMjpeg, "MJPEG", V4L2_PIX_FMT_MJPEG},
     {PixelFormat::kZ16, "Z16", V4L2_PIX_FMT_Z16},
+    {PixelFormat::kY8i, "Y8I", V4L2_PIX_FMT_Y8I},
 }};
 
 bool equalsIgnoreCase(std::string_view a, std::string_view b) {
@@ -130,6 +131,7 @@ size_t minRowBytes(PixelFormat format, int width) {
     case PixelFormat::kZ16:
     case PixelFormat::kYuyv:
     case PixelFormat::kUyvy:
+    case PixelFormat::kY8i:
       return 2 * w;
     case PixelFormat::kRgb24:
     case PixelFormat::kBgr24:

@@ -26,6 +26,10 @@ namespace cblox {
 ///                                 V4L2 XR24 = V4L2_PIX_FMT_XBGR32, also the deprecated BGR4)
 ///   kMjpeg     one JPEG image per frame, possibly without Huffman tables (V4L2 MJPG / JPEG)
 ///   kZ16       16-bit little-endian depth units (V4L2 "Z16 ", e.g. Intel RealSense)
+///   kY8i       L R                interleaved stereo grey (V4L2 "Y8I ", Intel RealSense IR
+///                                 pair): 16 bits a pixel, the left imager's 8-bit value
+///                                 first, the right's second; a W x H frame carries two
+///                                 W x H views (splitInterleaved)
 /// YUV formats are BT.601 limited range ("video range"); planes are contiguous.
 enum class PixelFormat {
   kGrey,
@@ -38,15 +42,17 @@ enum class PixelFormat {
   kBgr24,
   kXrgb8888,
   kMjpeg,
-  kZ16
+  kZ16,
+  kY8i
 };
 
 /// Short upper-case name: "GREY", "Y16", "YUYV", "UYVY", "NV12", "YUV420", "RGB24", "BGR24",
-/// "XRGB8888", "MJPEG", "Z16". Thread-safe (pure).
+/// "XRGB8888", "MJPEG", "Z16", "Y8I". Thread-safe (pure).
 std::string_view pixelFormatName(PixelFormat format);
 
 /// Parses a name as pixelFormatName() writes it, case-insensitively; also accepts the V4L2
-/// fourcc spellings "Y16 ", "YU12", "I420", "RGB3", "BGR3", "XR24", "MJPG", "JPEG", "Z16 ".
+/// fourcc spellings "Y16 ", "YU12", "I420", "RGB3", "BGR3", "XR24", "MJPG", "JPEG", "Z16 ",
+/// "Y8I ".
 /// Returns std::nullopt for anything else. Thread-safe (pure).
 std::optional<PixelFormat> pixelFormatFromName(std::string_view name);
 
@@ -58,8 +64,8 @@ std::optional<PixelFormat> pixelFormatFromFourcc(uint32_t fourcc);
 /// Maps a DRM fourcc (as libcamera::PixelFormat::fourcc() returns) to its format, minding that
 /// DRM names packed RGB by little-endian word order: DRM RGB888 ("RG24") is kBgr24 in memory,
 /// DRM BGR888 ("BG24") is kRgb24. Also R8 -> kGrey, R16 -> kY16, YUYV, UYVY, NV12,
-/// YU12 -> kYuv420, XR24 -> kXrgb8888, MJPG -> kMjpeg. std::nullopt for anything else.
-/// Thread-safe (pure).
+/// YU12 -> kYuv420, XR24 -> kXrgb8888, MJPG -> kMjpeg. std::nullopt for anything else (DRM
+/// has no depth or interleaved-stereo format: never kZ16 or kY8i). Thread-safe (pure).
 std::optional<PixelFormat> pixelFormatFromDrmFourcc(uint32_t fourcc);
 
 /// The canonical V4L2 fourcc of `format` (e.g. V4L2_PIX_FMT_YUYV). Thread-safe (pure).
@@ -69,7 +75,7 @@ uint32_t fourccOf(PixelFormat format);
 /// bytes become '.'. Thread-safe (pure).
 std::string fourccToString(uint32_t fourcc);
 
-/// Bytes of one row of the first plane without padding (e.g. 2 * width for YUYV); 0 for
+/// Bytes of one row of the first plane without padding (e.g. 2 * width for YUYV and Y8I); 0 for
 /// kMjpeg (compressed) and for width <= 0. Thread-safe (pure).
 size_t minRowBytes(PixelFormat format, int width);
 

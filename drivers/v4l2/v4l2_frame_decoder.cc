@@ -11,6 +11,9 @@ ConvertResult decodeV4l2Frame(V4l2Mode mode, const RawImage& raw, bool color, do
     case V4l2Mode::kDepth:
       return toDepth(raw, depth_scale_m, &out->depth);
     case V4l2Mode::kSideBySide: {
+      if (raw.format == PixelFormat::kY8i) {
+        return splitInterleaved(raw, &out->left, &out->right);  // full-width views
+      }
       GrayImage both;
       if (ConvertResult result = toGray(raw, &both); !result) return result;
       return splitSideBySide(both, &out->left, &out->right);

@@ -19,7 +19,8 @@ struct V4l2Images {
 ///   kMono        left = toGray(raw); color = toColor(raw) if `color` and raw is not grey
 ///   kDepth       depth = toDepth(raw, depth_scale_m)
 ///   kStereoPair  left = toGray(raw) (one camera of the pair; the caller assigns the side)
-///   kSideBySide  left, right = splitSideBySide(toGray(raw))
+///   kSideBySide  left, right = splitSideBySide(toGray(raw)): halves of width raw.width / 2;
+///                for kY8i splitInterleaved(raw): each view the full raw.width
 /// Returns the first failing conversion's result. Thread-safe (no shared state).
 ConvertResult decodeV4l2Frame(V4l2Mode mode, const RawImage& raw, bool color, double depth_scale_m,
                               V4l2Images* out);

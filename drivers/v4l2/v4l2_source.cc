@@ -71,7 +71,7 @@ std::unique_ptr<V4l2Source> V4l2Source::open(const V4l2SourceConfig& config,
     return fail("v4l2 source: " + problem);
   }
   const bool stereo = config.mode == V4l2Mode::kStereoPair || config.mode == V4l2Mode::kSideBySide;
-  const int camera_width = config.mode == V4l2Mode::kSideBySide ? config.width / 2 : config.width;
+  const int camera_width = config.cameraWidth();  // Y8I side by side: full-width views
   if (stereo && rectifier) {
     const PinholeIntrinsics& raw = rectifier->raw().left.intrinsics;
     if (raw.width != camera_width || raw.height != config.height) {
@@ -96,6 +96,12 @@ std::unique_ptr<V4l2Source> V4l2Source::open(const V4l2SourceConfig& config,
                          std::to_string(config.width) + "x" + std::to_string(config.height) +
                          " at " + formatRateHz(device->rateHz()) + " Hz, " +
                          std::to_string(device->bufferCount()) + " buffers");
+  }
+  if (config.mode == V4l2Mode::kSideBySide) {
+    info.notes.push_back(
+        std::string(source->format_ == PixelFormat::kY8i ? "interleaved" : "side by side") +
+        " stereo: two " + std::to_string(camera_width) + "x" + std::to_string(config.height) +
+        " views in each frame");
   }
   if (stereo) {
     if (source->rectifier_) {

@@ -1,8 +1,8 @@
 #pragma once
 
 // V4L2 cameras as a FrameSource: one camera, a depth node, a two-camera stereo pair or a
-// side-by-side stereo camera; bad frames dropped and counted; devices that disappear are
-// reopened with exponential back-off.
+// side-by-side stereo camera (or one interleaving its views, Y8I); bad frames dropped and
+// counted; devices that disappear are reopened with exponential back-off.
 
 #include <cstdint>
 #include <deque>
@@ -57,7 +57,8 @@ class V4l2Source : public FrameSource {
  public:
   /// Validates `config`, opens and configures the devices (setting exposure and gain if
   /// given) and starts streaming. `rectifier` (may be null) is used in the stereo modes: its
-  /// raw resolution must be the per-camera frame size, and its rectified() calibration
+  /// raw resolution must be the per-camera frame size (config.cameraWidth() x height: half
+  /// the frame side by side, the whole frame for Y8I), and its rectified() calibration
   /// becomes SourceInfo::stereo; without it frames carry the raw pair and SourceInfo::stereo
   /// is unset. Returns nullptr with a message in *error (if non-null) when the config is
   /// invalid, the rectifier does not fit, or a device cannot be opened or configured

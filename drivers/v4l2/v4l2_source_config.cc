@@ -48,6 +48,10 @@ std::string V4l2SourceConfig::validate() const {
   }
   const std::optional<PixelFormat> format = pixelFormatFromName(pixel_format);
   if (!format) return "pixel_format: unknown format '" + pixel_format + "'";
+  if (mode != V4l2Mode::kSideBySide && *format == PixelFormat::kY8i) {
+    return "pixel_format: Y8I is interleaved stereo (left and right in one frame); use mode "
+           "side_by_side";
+  }
   const bool depth_format = *format == PixelFormat::kZ16 || *format == PixelFormat::kY16;
   if (mode == V4l2Mode::kDepth && !depth_format) {
     return "pixel_format: depth mode needs Z16 (or Y16), got " + pixel_format;
@@ -59,7 +63,8 @@ std::string V4l2SourceConfig::validate() const {
     return "width/height: must be within 1.." + std::to_string(kMaxImageSide) + ", got " +
            std::to_string(width) + "x" + std::to_string(height);
   }
-  if (mode == V4l2Mode::kSideBySide && width % 2 != 0) {
+  // Y8I interleaves its two views pixel by pixel: no halves, any width.
+  if (mode == V4l2Mode::kSideBySide && *format != PixelFormat::kY8i && width % 2 != 0) {
     return "width: side_by_side needs an even width, got " + std::to_string(width);
   }
   if (!std::isfinite(rate_hz) || rate_hz < 0.0) {
@@ -100,6 +105,12 @@ std::string V4l2SourceConfig::validate() const {
   }
   if (stalls_before_reopen < 1) return "stalls_before_reopen: must be >= 1";
   return {};
+}
+
+int V4l2SourceConfig::cameraWidth() const {
+  if (mode != V4l2Mode::kSideBySide) return width;
+  if (pixelFormatFromName(pixel_format) == PixelFormat::kY8i) return width;
+  return width / 2;
 }
 
 }  // namespace cblox

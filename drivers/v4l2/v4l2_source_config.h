@@ -17,7 +17,8 @@ enum class V4l2Mode {
   kMono,        ///< one camera: CaptureFrame::left (grey), and colour if asked
   kDepth,       ///< one depth node (Z16): CaptureFrame::depth
   kStereoPair,  ///< two cameras, left and right, paired by timestamp: left, right
-  kSideBySide,  ///< one camera delivering both views side by side in each frame: left, right
+  kSideBySide,  ///< one camera delivering both views in each frame: left, right; side by side
+                ///< (two halves), or interleaved for pixel format Y8I (two full-width views)
 };
 
 /// "mono", "depth", "stereo_pair", "side_by_side". Thread-safe (pure).
@@ -32,7 +33,7 @@ struct V4l2SourceConfig {
   V4l2Mode mode = V4l2Mode::kMono;
   /// A name pixelFormatFromName() parses: "YUYV", "MJPEG", "GREY", "Z16", ...
   std::string pixel_format = "YUYV";
-  int width = 640;  ///< of the device frame (both views for kSideBySide)
+  int width = 640;  ///< of the device frame (both views for kSideBySide; cameraWidth())
   int height = 480;
   double rate_hz = 30.0;  ///< requested; 0 keeps the driver's
   int buffer_count = 4;   ///< mmap buffers per device, 2..32
@@ -64,10 +65,16 @@ struct V4l2SourceConfig {
   int stalls_before_reopen = 3;
 
   /// Returns "" if usable, else a message naming the first bad field (device count for the
-  /// mode, unknown or mode-incompatible pixel format, sizes, rate, counts, tolerance, depth
-  /// scale and range, intrinsics size vs. the frame, back-off and timeouts).
+  /// mode, unknown or mode-incompatible pixel format: Z16 only in kDepth, Y8I only in
+  /// kSideBySide; sizes, with an even width for kSideBySide except Y8I; rate, counts,
+  /// tolerance, depth scale and range, intrinsics size vs. the frame, back-off and timeouts).
   /// Thread-safe (pure).
   std::string validate() const;
+
+  /// Width of one camera's image: width / 2 for kSideBySide (two halves side by side), but
+  /// the full width for kSideBySide with pixel format Y8I (interleaved: each view is as wide
+  /// as the frame) and for the other modes. Thread-safe (pure).
+  int cameraWidth() const;
 };
 
 }  // namespace cblox

@@ -80,6 +80,16 @@ TEST(CaptureConfigTest, ExampleConfigsLoad) {
   EXPECT_EQ(d415.source_config.v4l2.depth_intrinsics->fx, 423.0);
   EXPECT_EQ(d415.source_config.v4l2.T_B_D.translation().y(), 0.06);
   EXPECT_FALSE(d415.publish_stereo);
+  const CaptureConfig ir_pair = load("realsense_ir_pair_uvc.yaml");
+  EXPECT_EQ(ir_pair.source.rfind("v4l2:/dev/video", 0), 0u);
+  EXPECT_EQ(ir_pair.source_config.v4l2.mode, V4l2Mode::kSideBySide);
+  EXPECT_EQ(ir_pair.source_config.v4l2.pixel_format, "Y8I");
+  EXPECT_EQ(ir_pair.source_config.v4l2.width, 848);
+  EXPECT_EQ(ir_pair.source_config.v4l2.height, 480);
+  EXPECT_EQ(ir_pair.source_config.v4l2.cameraWidth(), 848);  // interleaved: full-width views
+  EXPECT_EQ(ir_pair.source_config.calibration_file, "/etc/cblox/calibration/d415_ir_camchain.yaml");
+  EXPECT_TRUE(ir_pair.publish_stereo);
+  EXPECT_FALSE(ir_pair.stereo_depth.has_value());  // the D4xx's depth node gives depth
   const CaptureConfig csi = load("csi_libcamera.yaml");
   EXPECT_EQ(csi.source, "libcamera:0");
   EXPECT_EQ(csi.source_config.libcamera.mode, LibcameraStereoMode::kSideBySide);

@@ -52,6 +52,9 @@ TEST(LibcameraFormat, RefusesUnsupportedFormats) {
   // libcamera 0.0.3 has no 16-bit grey or depth stream format.
   EXPECT_FALSE(libcameraFormatOf(PixelFormat::kY16).has_value());
   EXPECT_FALSE(libcameraFormatOf(PixelFormat::kZ16).has_value());
+  // Nor an interleaved stereo one (V4L2's Y8I): its fourcc maps to nothing.
+  EXPECT_FALSE(libcameraFormatOf(PixelFormat::kY8i).has_value());
+  EXPECT_FALSE(pixelFormatFromLibcamera(libcamera::PixelFormat(fourccOf(PixelFormat::kY8i))));
 }
 
 TEST(LibcameraFormat, ParsesCbloxAndLibcameraNames) {
@@ -82,6 +85,8 @@ TEST(LibcameraFormat, RefusesUnknownOrUnconvertibleNames) {
   EXPECT_TRUE(contains(error, "'SRGGB10' (a libcamera format) cannot be converted"));
   EXPECT_FALSE(parseLibcameraPixelFormat("Y16", &error).has_value());
   EXPECT_TRUE(contains(error, "'Y16' has no libcamera stream format"));
+  EXPECT_FALSE(parseLibcameraPixelFormat("Y8I", &error).has_value());
+  EXPECT_TRUE(contains(error, "'Y8I' has no libcamera stream format"));
   EXPECT_FALSE(parseLibcameraPixelFormat("", &error).has_value());
   EXPECT_FALSE(parseLibcameraPixelFormat("YUYV ", nullptr).has_value());
 }

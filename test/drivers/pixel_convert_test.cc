@@ -157,6 +157,32 @@ Buffer encode16(const Image<uint16_t>& image, size_t stride) {
   return buffer;
 }
 
+/// Y8I as the kernel documents it (pixfmt-y8i.rst): each pixel a 16-bit word, the left
+/// view's byte first, the right's second; padding after each row filled with kPad.
+Buffer encodeY8i(const GrayImage& left, const GrayImage& right, size_t stride) {
+  Buffer buffer;
+  buffer.bytes.assign(stride * static_cast<size_t>(left.height), kPad);
+  for (int v = 0; v < left.height; ++v) {
+    for (int u = 0; u < left.width; ++u) {
+      uint8_t* p = buffer.bytes.data() + static_cast<size_t>(v) * stride + 2 * u;
+      p[0] = left(u, v);
+      p[1] = right(u, v);
+    }
+  }
+  return buffer;
+}
+
+/// Two different grey patterns of one size (no value of one at the same pixel of the other).
+GrayImage greyPattern(int width, int height, int seed) {
+  GrayImage image(width, height);
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      image(u, v) = static_cast<uint8_t>((seed * 101 + u * 7 + v * 31 + u * v) % 256);
+    }
+  }
+  return image;
+}
+
 std::vector<uint8_t> compressJpeg(const ColorImage& image, int quality, int subsampling) {
   std::vector<uint8_t> rgb;
   for (const Color& c : image.data) rgb.insert(rgb.end(), {c.r, c.g, c.b});
@@ -220,7 +246,7 @@ TEST(PixelFormatTest, NamesAndFourccsRoundTrip) {
   for (PixelFormat f :
        {PixelFormat::kGrey, PixelFormat::kY16, PixelFormat::kYuyv, PixelFormat::kUyvy,
         PixelFormat::kNv12, PixelFormat::kYuv420, PixelFormat::kRgb24, PixelFormat::kBgr24,
-        PixelFormat::kXrgb8888, PixelFormat::kMjpeg, PixelFormat::kZ16}) {
+        PixelFormat::kXrgb8888, PixelFormat::kMjpeg, PixelFormat::kZ16, PixelFormat::kY8i}) {
     EXPECT_EQ(pixelFormatFromFourcc(fourccOf(f)), f) << pixelFormatName(f);
     EXPECT_EQ(pixelFormatFromName(pixelFormatName(f)), f) << pixelFormatName(f);
   }
@@ -237,6 +263,17 @@ TEST(PixelFormatTest, NamesAndFourccsRoundTrip) {
   EXPECT_EQ(pixelFormatFromName("MJPG"), PixelFormat::kMjpeg);
   EXPECT_EQ(pixelFormatFromName("I420"), PixelFormat::kYuv420);
   EXPECT_EQ(pixelFormatFromName("H264"), std::nullopt);
+  // Y8I: the RealSense IR pair, 16 bits a pixel.
+  EXPECT_EQ(pixelFormatName(PixelFormat::kY8i), "Y8I");
+  EXPECT_EQ(fourccOf(PixelFormat::kY8i), V4L2_PIX_FMT_Y8I);
+  EXPECT_EQ(fourccToString(V4L2_PIX_FMT_Y8I), "Y8I ");
+  EXPECT_EQ(pixelFormatFromName("Y8I"), PixelFormat::kY8i);
+  EXPECT_EQ(pixelFormatFromName("Y8I "), PixelFormat::kY8i);
+  EXPECT_EQ(pixelFormatFromName("y8i"), PixelFormat::kY8i);
+  EXPECT_EQ(pixelFormatFromFourcc(V4L2_PIX_FMT_Y8I), PixelFormat::kY8i);
+  EXPECT_EQ(pixelFormatFromFourcc(V4L2_PIX_FMT_Y12I), std::nullopt);
+  EXPECT_EQ(minRowBytes(PixelFormat::kY8i, 848), 1696u);
+  EXPECT_EQ(minRowBytes(PixelFormat::kY8i, 0), 0u);
 }
 
 TEST(PixelFormatTest, DrmFourccsNameRgbByWordOrder) {
@@ -250,6 +287,9 @@ TEST(PixelFormatTest, DrmFourccsNameRgbByWordOrder) {
   EXPECT_EQ(pixelFormatFromDrmFourcc(drm("R8  ")), PixelFormat::kGrey);
   EXPECT_EQ(pixelFormatFromDrmFourcc(drm("YU12")), PixelFormat::kYuv420);
   EXPECT_EQ(pixelFormatFromDrmFourcc(drm("NV21")), std::nullopt);
+  // DRM (and so libcamera) has no interleaved stereo or depth format.
+  EXPECT_EQ(pixelFormatFromDrmFourcc(drm("Y8I ")), std::nullopt);
+  EXPECT_EQ(pixelFormatFromDrmFourcc(drm("Z16 ")), std::nullopt);
 }
 
 TEST(PixelFormatTest, RequiredBytesExemptsOnlyTheLastRowsPadding) {
@@ -258,6 +298,8 @@ TEST(PixelFormatTest, RequiredBytesExemptsOnlyTheLastRowsPadding) {
   EXPECT_EQ(requiredBytes(RawImage{PixelFormat::kNv12, 4, 4, 8, nullptr, 0}), 32u + 8 + 4);
   EXPECT_EQ(requiredBytes(RawImage{PixelFormat::kYuv420, 4, 4, 8, nullptr, 0}), 32u + 8 + 4 + 2);
   EXPECT_EQ(requiredBytes(RawImage{PixelFormat::kMjpeg, 4, 4, 0, nullptr, 0}), 0u);
+  EXPECT_EQ(requiredBytes(RawImage{PixelFormat::kY8i, 5, 3, 0, nullptr, 0}), 30u);
+  EXPECT_EQ(requiredBytes(RawImage{PixelFormat::kY8i, 5, 3, 16, nullptr, 0}), 16u * 2 + 10);
 }
 
 // ---- Grey and depth
@@ -585,6 +627,116 @@ TEST(PixelConvertTest, SideBySideRejectsOddAndEmptyFrames) {
   inconsistent.data.resize(10);
   EXPECT_EQ(splitSideBySide(inconsistent, &left, &right).error, ConvertError::kShortBuffer);
   EXPECT_EQ(left(0, 0), 9);  // untouched
+}
+
+// ---- Interleaved stereo (Y8I)
+
+TEST(PixelConvertTest, Y8iByteOrderIsLeftThenRight) {
+  // The kernel's table: start + 0: Y'00left Y'00right Y'01left Y'01right ...
+  const std::vector<uint8_t> bytes = {10, 20, 11, 21, 12, 22, 13, 23, 14, 24, 15, 25};
+  GrayImage left, right;
+  const ConvertResult result = splitInterleaved(
+      RawImage{PixelFormat::kY8i, 3, 2, 0, bytes.data(), bytes.size()}, &left, &right);
+  ASSERT_TRUE(result) << result.message;
+  EXPECT_EQ(left.width, 3);
+  EXPECT_EQ(left.height, 2);
+  EXPECT_EQ(left.data, (std::vector<uint8_t>{10, 11, 12, 13, 14, 15}));
+  EXPECT_EQ(right.data, (std::vector<uint8_t>{20, 21, 22, 23, 24, 25}));
+}
+
+TEST(PixelConvertTest, Y8iSplitsBackToBothPatternsExactly) {
+  // An odd width: Y8I has no halves, each view is as wide as the frame.
+  const int w = 7, h = 5;
+  const GrayImage left_pattern = greyPattern(w, h, 1);
+  const GrayImage right_pattern = greyPattern(w, h, 2);
+  ASSERT_NE(left_pattern.data, right_pattern.data);
+  for (size_t stride : {size_t{0}, size_t{14}, size_t{20}, size_t{64}}) {
+    SCOPED_TRACE("stride " + std::to_string(stride));
+    const Buffer buffer = encodeY8i(left_pattern, right_pattern, stride == 0 ? 14 : stride);
+    GrayImage left, right;
+    const ConvertResult result =
+        splitInterleaved(buffer.raw(PixelFormat::kY8i, w, h, stride), &left, &right);
+    ASSERT_TRUE(result) << result.message;
+    ASSERT_TRUE(left.sameSize(left_pattern));
+    ASSERT_TRUE(right.sameSize(right_pattern));
+    EXPECT_EQ(left.data, left_pattern.data);
+    EXPECT_EQ(right.data, right_pattern.data);
+  }
+  // A buffer cut just after the last row's pixels (no padding after it) is enough.
+  Buffer exact = encodeY8i(left_pattern, right_pattern, 20);
+  exact.bytes.resize(20 * (h - 1) + 2 * w);
+  GrayImage left, right;
+  ASSERT_TRUE(splitInterleaved(exact.raw(PixelFormat::kY8i, w, h, 20), &left, &right));
+  EXPECT_EQ(left.data, left_pattern.data);
+  EXPECT_EQ(right.data, right_pattern.data);
+}
+
+TEST(PixelConvertTest, Y8iBadLayoutsFailAndLeaveTheOutputsAlone) {
+  const int w = 7, h = 5;
+  const Buffer buffer = encodeY8i(greyPattern(w, h, 1), greyPattern(w, h, 2), 16);
+  GrayImage left(1, 1, 9), right(2, 1, 8);
+
+  ConvertResult result = splitInterleaved(
+      RawImage{PixelFormat::kY8i, w, h, 16, buffer.bytes.data(), 16 * (h - 1) + 2 * w - 1}, &left,
+      &right);
+  EXPECT_EQ(result.error, ConvertError::kShortBuffer);
+  EXPECT_EQ(result.message, "Y8I 7x5: buffer holds 77 bytes, needs 78");
+  result = splitInterleaved(RawImage{PixelFormat::kY8i, w, h, 16, nullptr, buffer.bytes.size()},
+                            &left, &right);
+  EXPECT_EQ(result.error, ConvertError::kShortBuffer);
+
+  result = splitInterleaved(buffer.raw(PixelFormat::kY8i, 0, h, 16), &left, &right);
+  EXPECT_EQ(result.error, ConvertError::kBadSize);
+  EXPECT_EQ(result.message, "Y8I 0x5: size must be within 1..16384 per side");
+  EXPECT_EQ(splitInterleaved(buffer.raw(PixelFormat::kY8i, w, 0, 16), &left, &right).error,
+            ConvertError::kBadSize);
+  EXPECT_EQ(splitInterleaved(buffer.raw(PixelFormat::kY8i, w, -3, 16), &left, &right).error,
+            ConvertError::kBadSize);
+  EXPECT_EQ(splitInterleaved(buffer.raw(PixelFormat::kY8i, 20000, 1, 0), &left, &right).error,
+            ConvertError::kBadSize);
+
+  // A stride of one view's width (W bytes, not 2W) is the classic mistake.
+  result = splitInterleaved(buffer.raw(PixelFormat::kY8i, w, h, 13), &left, &right);
+  EXPECT_EQ(result.error, ConvertError::kBadStride);
+  EXPECT_EQ(result.message, "Y8I 7x5: stride 13 is less than a row of 14 bytes");
+  EXPECT_EQ(
+      splitInterleaved(buffer.raw(PixelFormat::kY8i, w, h, size_t{1} << 40), &left, &right).error,
+      ConvertError::kBadStride);
+  // A stride that pushes the last row past the end of the buffer.
+  EXPECT_EQ(splitInterleaved(buffer.raw(PixelFormat::kY8i, w, h, 32), &left, &right).error,
+            ConvertError::kShortBuffer);
+
+  // Only Y8I is interleaved.
+  result = splitInterleaved(buffer.raw(PixelFormat::kYuyv, 8, h, 16), &left, &right);
+  EXPECT_EQ(result.error, ConvertError::kUnsupported);
+  EXPECT_EQ(result.message,
+            "YUYV 8x5: cannot split YUYV into a stereo pair: only Y8I is interleaved stereo");
+
+  EXPECT_EQ(left.width, 1);  // untouched by every failure
+  EXPECT_EQ(left(0, 0), 9);
+  EXPECT_EQ(right.width, 2);
+  EXPECT_EQ(right(1, 0), 8);
+}
+
+TEST(PixelConvertTest, Y8iIsNotOneImage) {
+  const Buffer buffer = encodeY8i(greyPattern(4, 2, 1), greyPattern(4, 2, 2), 8);
+  const RawImage raw = buffer.raw(PixelFormat::kY8i, 4, 2, 0);
+  GrayImage gray(1, 1, 5);
+  ConvertResult result = toGray(raw, &gray);
+  EXPECT_EQ(result.error, ConvertError::kUnsupported);
+  EXPECT_EQ(result.message,
+            "Y8I 4x2: cannot convert Y8I to grey: it is interleaved stereo (left and right in "
+            "one frame); use mode side_by_side");
+  ColorImage color;
+  result = toColor(raw, &color);
+  EXPECT_EQ(result.error, ConvertError::kUnsupported);
+  EXPECT_NE(result.message.find("use mode side_by_side"), std::string::npos) << result.message;
+  DepthImage depth;
+  EXPECT_EQ(toDepth(raw, 0.001, &depth).error, ConvertError::kUnsupported);
+  EXPECT_EQ(gray.width, 1);  // untouched
+  EXPECT_EQ(gray(0, 0), 5);
+  EXPECT_TRUE(color.empty());
+  EXPECT_TRUE(depth.empty());
 }
 
 }  // namespace

@@ -141,6 +141,53 @@ TEST(V4l2FrameDecoderTest, DecodesEachMode) {
   EXPECT_EQ(convertErrorName(short_frame.error), "short_buffer");
 }
 
+TEST(V4l2FrameDecoderTest, Y8iSideBySideGivesFullWidthViews) {
+  // A 5x3 Y8I frame (odd width: no halves) with 4 bytes of padding after each 10-byte row:
+  // left (first byte) = 10 v + u, right (second byte) = 100 + 10 v + u.
+  const int w = 5, h = 3;
+  const size_t stride = 14;
+  std::vector<uint8_t> y8i(stride * h, 0xEE);
+  std::vector<uint8_t> left_expected, right_expected;
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const auto l = static_cast<uint8_t>(10 * v + u);
+      const auto r = static_cast<uint8_t>(100 + 10 * v + u);
+      y8i[static_cast<size_t>(v) * stride + 2 * static_cast<size_t>(u)] = l;
+      y8i[static_cast<size_t>(v) * stride + 2 * static_cast<size_t>(u) + 1] = r;
+      left_expected.push_back(l);
+      right_expected.push_back(r);
+    }
+  }
+  const RawImage raw{PixelFormat::kY8i, w, h, stride, y8i.data(), y8i.size()};
+  V4l2Images images;
+  const ConvertResult result = decodeV4l2Frame(V4l2Mode::kSideBySide, raw, false, 0.0, &images);
+  ASSERT_TRUE(result) << result.message;
+  EXPECT_EQ(images.left.width, w);
+  EXPECT_EQ(images.left.height, h);
+  EXPECT_EQ(images.right.width, w);
+  EXPECT_EQ(images.right.height, h);
+  EXPECT_EQ(images.left.data, left_expected);
+  EXPECT_EQ(images.right.data, right_expected);
+  EXPECT_TRUE(images.depth.empty());
+  EXPECT_TRUE(images.color.empty());
+
+  // Any other mode cannot make one image of it, and says which mode can.
+  for (V4l2Mode mode : {V4l2Mode::kMono, V4l2Mode::kStereoPair}) {
+    const ConvertResult refused = decodeV4l2Frame(mode, raw, true, 0.0, &images);
+    EXPECT_EQ(refused.error, ConvertError::kUnsupported) << v4l2ModeName(mode);
+    EXPECT_NE(refused.message.find("use mode side_by_side"), std::string::npos) << refused.message;
+  }
+  EXPECT_EQ(decodeV4l2Frame(V4l2Mode::kDepth, raw, false, 0.001, &images).error,
+            ConvertError::kUnsupported);
+
+  // A frame cut short.
+  const ConvertResult short_frame = decodeV4l2Frame(
+      V4l2Mode::kSideBySide, RawImage{PixelFormat::kY8i, w, h, stride, y8i.data(), 37}, false, 0.0,
+      &images);
+  EXPECT_EQ(short_frame.error, ConvertError::kShortBuffer);
+  EXPECT_TRUE(images.left.empty());
+}
+
 // ---- Configuration
 
 TEST(V4l2SourceConfigTest, ModesByName) {
@@ -194,6 +241,43 @@ TEST(V4l2SourceConfigTest, ValidationNamesTheField) {
   EXPECT_EQ(config.validate(), "stalls_before_reopen: must be >= 1");
 }
 
+TEST(V4l2SourceConfigTest, Y8iIsOnlyForSideBySide) {
+  const std::string refused =
+      "pixel_format: Y8I is interleaved stereo (left and right in one frame); use mode "
+      "side_by_side";
+  V4l2SourceConfig config;
+  config.pixel_format = "Y8I";
+  config.width = 848;
+  config.height = 480;
+  EXPECT_EQ(config.validate(), refused);  // mono
+  config.mode = V4l2Mode::kDepth;
+  EXPECT_EQ(config.validate(), refused);
+  config.mode = V4l2Mode::kStereoPair;
+  config.devices = {"/dev/video0", "/dev/video2"};
+  EXPECT_EQ(config.validate(), refused);
+
+  config = V4l2SourceConfig{};
+  config.mode = V4l2Mode::kSideBySide;
+  config.pixel_format = "Y8I";
+  config.width = 848;
+  config.height = 480;
+  EXPECT_EQ(config.validate(), "");
+  EXPECT_EQ(config.cameraWidth(), 848);  // each view is the full width
+  config.pixel_format = "Y8I ";          // the fourcc spelling
+  EXPECT_EQ(config.validate(), "");
+  // No halves: an odd width is fine for Y8I (and only for it).
+  config.width = 1281;
+  EXPECT_EQ(config.validate(), "");
+  EXPECT_EQ(config.cameraWidth(), 1281);
+  config.pixel_format = "GREY";
+  EXPECT_EQ(config.validate(), "width: side_by_side needs an even width, got 1281");
+  config.width = 2560;
+  EXPECT_EQ(config.cameraWidth(), 1280);  // side by side: halves
+
+  config = V4l2SourceConfig{};
+  EXPECT_EQ(config.cameraWidth(), 640);  // mono: the frame
+}
+
 // ---- Opening (no camera needed for the failures)
 
 TEST(V4l2SourceTest, OpenFailsWithTheDevicesMessage) {
@@ -234,6 +318,16 @@ TEST(V4l2SourceTest, RectifierMustMatchTheCameraSize) {
   // The right size gets as far as opening the device.
   config.width = 640;
   config.height = 240;
+  EXPECT_EQ(V4l2Source::open(config, rectifier, &error), nullptr);
+  EXPECT_EQ(error, "/dev/video99: no such device");
+
+  // Y8I interleaves full-width views: the calibration's width is the frame's, not half.
+  config.pixel_format = "Y8I";
+  EXPECT_EQ(V4l2Source::open(config, rectifier, &error), nullptr);
+  EXPECT_EQ(error,
+            "v4l2 source: the stereo calibration rig.yaml is for 320x240 images, the cameras "
+            "deliver 640x240");
+  config.width = 320;
   EXPECT_EQ(V4l2Source::open(config, rectifier, &error), nullptr);
   EXPECT_EQ(error, "/dev/video99: no such device");
 }

@@ -5,7 +5,8 @@
 # thread-safety rule (integration, pose updates and fusion on concurrent threads), and the
 # mapper's threads (integrator, maintenance, export worker fed from several threads), and
 # the sparse SLAM's threads (tracking, local mapping with triangulation and local BA, loop
-# closing) on the real 7-Scenes RGB-D frames when ../shared/data has them. The vocabulary
+# closing) on the real 7-Scenes RGB-D frames when ../shared/data has them, and
+# cblox-capture's dense-stereo thread. The vocabulary
 # comes from the Release build (build/, trained there first). Libraries not built with TSan
 # are suppressed (scripts/tsan.supp). Exit status is the tests'.
 # Usage: scripts/tsan.sh
@@ -25,7 +26,7 @@ cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCBLOX_BUILD_VOCABULARY=OFF -DCBLOX_VOCABULARY_FILE="$PWD/$RELEASE_DIR/vocabulary/cblox_orb.vocab" \
   >/dev/null
 cmake --build "$BUILD_DIR" --target test_integrator test_mesh test_submap test_mapper test_tracking \
-  -j"$(nproc)"
+  test_stereo_depth_worker -j"$(nproc)"
 export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/scripts/tsan.supp"
 "$BUILD_DIR/test/integrator/test_integrator" --gtest_brief=1
 "$BUILD_DIR/test/mesh/test_mesh" --gtest_brief=1
@@ -33,4 +34,5 @@ export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/s
 "$BUILD_DIR/test/daemon/test_mapper" --gtest_brief=1
 "$BUILD_DIR/test/tracking/test_tracking" --gtest_brief=1 \
   --gtest_filter='RgbdTrackingTest.*:SparseMapTest.*:KeyframeTriangulationTest.*'
+"$BUILD_DIR/test/daemon/test_stereo_depth_worker" --gtest_brief=1
 echo "tsan: no data race reported"

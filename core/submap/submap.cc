@@ -40,6 +40,19 @@ Submap::Submap(SubmapId id, const LayerConfig& layer_config, const Transformatio
   refreshStatistics();
 }
 
+Submap::Submap(SubmapId id, TsdfLayer layer, const Transformationd& T_G_M,
+               KeyframeId anchor_keyframe, int64_t creation_time_ns)
+    : id_(id),
+      layer_config_(layer.config()),
+      anchor_keyframe_(anchor_keyframe),
+      creation_time_ns_(creation_time_ns),
+      T_G_M_(T_G_M),
+      layer_(std::move(layer)) {
+  if (!isFinitePose(T_G_M)) throw std::invalid_argument("Submap: T_G_M is not finite");
+  keyframe_ids_.insert(anchor_keyframe);
+  refreshStatistics();
+}
+
 Transformationd Submap::T_G_M() const {
   std::lock_guard lock(meta_mutex_);
   return T_G_M_;

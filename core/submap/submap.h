@@ -94,6 +94,12 @@ class Submap {
   /// Throws std::invalid_argument when the layer config is invalid or T_G_M is not finite.
   Submap(SubmapId id, const LayerConfig& layer_config, const Transformationd& T_G_M,
          KeyframeId anchor_keyframe, int64_t creation_time_ns);
+  /// A new, active submap that takes over an existing `layer` (restoring a saved map; see
+  /// SubmapCollection::restoreSubmap); layerConfig() is layer.config(). The anchor keyframe is
+  /// recorded as its first keyframe and the statistics are refreshed. Throws
+  /// std::invalid_argument when T_G_M is not finite.
+  Submap(SubmapId id, TsdfLayer layer, const Transformationd& T_G_M, KeyframeId anchor_keyframe,
+         int64_t creation_time_ns);
 
   Submap(const Submap&) = delete;
   Submap& operator=(const Submap&) = delete;

@@ -1,6 +1,9 @@
 #include "core/submap/submap_collection.h"
 
+#include <algorithm>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 namespace cblox {
 
@@ -38,6 +41,51 @@ std::shared_ptr<Submap> SubmapCollection::createSubmap(const Transformationd& T_
   }
   finishOutsideLock(previous);
   return submap;
+}
+
+std::shared_ptr<Submap> SubmapCollection::restoreSubmap(SubmapId id, TsdfLayer layer,
+                                                        const Transformationd& T_G_M,
+                                                        KeyframeId anchor_keyframe,
+                                                        int64_t creation_time_ns, bool finished) {
+  if (!isFinitePose(T_G_M)) {
+    throw std::invalid_argument("SubmapCollection::restoreSubmap: T_G_M is not finite");
+  }
+  if (layer.voxelSize() != config_.layer.voxel_size ||
+      layer.voxelsPerSide() != config_.layer.voxels_per_side) {
+    throw std::invalid_argument(
+        "SubmapCollection::restoreSubmap: the layer's config differs from the collection's");
+  }
+  // Built (and finished) before it becomes visible: nobody else can hold its layer lock.
+  auto submap =
+      std::make_shared<Submap>(id, std::move(layer), T_G_M, anchor_keyframe, creation_time_ns);
+  if (finished) submap->finish();
+  std::shared_ptr<Submap> previous;
+  {
+    std::lock_guard lock(mutex_);
+    if (id < next_id_) {
+      throw std::invalid_argument("SubmapCollection::restoreSubmap: id " + std::to_string(id) +
+                                  " is below the next id " + std::to_string(next_id_));
+    }
+    next_id_ = id + 1;
+    submaps_.emplace(id, submap);
+    anchored_[anchor_keyframe].push_back(id);
+    if (!finished) {
+      previous = std::move(active_);
+      active_ = submap;
+    }
+  }
+  finishOutsideLock(previous);
+  return submap;
+}
+
+SubmapId SubmapCollection::nextSubmapId() const {
+  std::lock_guard lock(mutex_);
+  return next_id_;
+}
+
+void SubmapCollection::reserveSubmapIds(SubmapId next_id) {
+  std::lock_guard lock(mutex_);
+  next_id_ = std::max(next_id_, next_id);
 }
 
 std::shared_ptr<Submap> SubmapCollection::getSubmap(SubmapId id) const {
@@ -95,6 +143,16 @@ std::vector<std::shared_ptr<Submap>> SubmapCollection::submaps() const {
   result.reserve(submaps_.size());
   for (const auto& [id, submap] : submaps_) result.push_back(submap);
   return result;
+}
+
+SubmapCollectionState SubmapCollection::snapshot() const {
+  std::lock_guard lock(mutex_);
+  SubmapCollectionState state;
+  state.submaps.reserve(submaps_.size());
+  for (const auto& [id, submap] : submaps_) state.submaps.push_back(submap);
+  state.active = active_;
+  state.next_submap_id = next_id_;
+  return state;
 }
 
 size_t SubmapCollection::size() const {

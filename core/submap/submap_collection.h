@@ -42,6 +42,13 @@ struct SubmapPose {
   bool active = false;  ///< it is the collection's active submap
 };
 
+/// The whole collection as seen at one instant (SubmapCollection::snapshot), e.g. for saving it.
+struct SubmapCollectionState {
+  std::vector<std::shared_ptr<Submap>> submaps;  ///< in creation (id) order
+  std::shared_ptr<Submap> active;                ///< nullptr when there is no active submap
+  SubmapId next_submap_id = 0;                   ///< the id the next createSubmap() assigns
+};
+
 /// The map: a collection of submaps Π = {π_p} with at most one active submap.
 ///
 /// Thread safety (the mapper's threads; written down for issue 3.3):
@@ -86,6 +93,23 @@ class SubmapCollection {
   std::shared_ptr<Submap> createSubmap(const Transformationd& T_G_M, KeyframeId anchor_keyframe,
                                        int64_t creation_time_ns);
 
+  /// Re-creates a saved submap (loading a map): takes over `layer` (its config must equal
+  /// config().layer), keeps `id`, and sets the next id past it. When `finished` it is finished
+  /// at once and the active submap does not change; otherwise it becomes the active one and
+  /// the previously active submap is finished (as in createSubmap). Further keyframes are added
+  /// with Submap::addKeyframe. Throws std::invalid_argument (and changes nothing) when `id` is
+  /// below nextSubmapId() (ids only increase and are never reused), the layer config differs
+  /// or T_G_M is not finite. Thread-safe; blocks like createSubmap when it finishes one.
+  std::shared_ptr<Submap> restoreSubmap(SubmapId id, TsdfLayer layer, const Transformationd& T_G_M,
+                                        KeyframeId anchor_keyframe, int64_t creation_time_ns,
+                                        bool finished);
+  /// The id the next createSubmap() assigns. Thread-safe.
+  SubmapId nextSubmapId() const;
+  /// Raises the next id to `next_id` (no change when it is already at least that), so that ids
+  /// of saved submaps that were removed before saving are not reused after loading.
+  /// Thread-safe.
+  void reserveSubmapIds(SubmapId next_id);
+
   /// nullptr when no submap has this id. Thread-safe.
   std::shared_ptr<Submap> getSubmap(SubmapId id) const;
   /// The active submap, nullptr when there is none (before the first, after
@@ -102,6 +126,10 @@ class SubmapCollection {
   /// Submaps in creation order. Thread-safe (a snapshot of the container; see the class
   /// comment for which layers the caller may touch).
   std::vector<std::shared_ptr<Submap>> submaps() const;
+  /// Submaps, active submap and next id taken under one lock, so they are consistent with
+  /// each other (the active submap is in the list). Thread-safe (see the class comment for
+  /// which layers the caller may touch).
+  SubmapCollectionState snapshot() const;
   /// Thread-safe.
   size_t size() const;
   /// Thread-safe.

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -121,6 +122,62 @@ TEST(SubmapCollection, CreateActivateRemoveIterate) {
                                        50, 0),
                std::invalid_argument);
   EXPECT_EQ(collection.size(), 2u);
+}
+
+// restoreSubmap keeps the saved ids (ids only increase), takes over the layer without a copy,
+// finishes finished submaps at once and makes an unfinished one active; snapshot() is
+// consistent and reserveSubmapIds() keeps ids of removed submaps from being reused.
+TEST(SubmapCollection, RestoreSubmapKeepsIdsLayersAndActiveState) {
+  SubmapCollection collection(collectionConfig());
+  TsdfLayer layer(collectionConfig().layer);
+  layer.allocateBlock(BlockIndex(-3, 0, 7))->voxel(5) = TsdfVoxel{0.01f, 2.0f, Color{1, 2, 3}};
+  const Block* block = layer.getBlock(BlockIndex(-3, 0, 7));
+  const Transformationd P2 = pose(0.2, {0, 1, 0}, {1, 2, 3});
+  const auto s2 = collection.restoreSubmap(2, std::move(layer), P2, 20, 2000, /*finished=*/true);
+  EXPECT_EQ(s2->id(), 2);
+  EXPECT_TRUE(s2->isFinished());
+  EXPECT_EQ(s2->layer().getBlock(BlockIndex(-3, 0, 7)), block);  // moved, not copied
+  EXPECT_EQ(s2->numBlocks(), 1u);
+  EXPECT_EQ(s2->anchorKeyframe(), 20);
+  EXPECT_EQ(s2->creationTimeNs(), 2000);
+  EXPECT_TRUE(s2->T_G_M().isApprox(P2, 0.0));
+  EXPECT_EQ(collection.activeSubmap(), nullptr);
+  EXPECT_EQ(collection.nextSubmapId(), 3);
+
+  const auto s5 = collection.restoreSubmap(5, TsdfLayer(collectionConfig().layer),
+                                           Transformationd(), 50, 5000, /*finished=*/false);
+  EXPECT_TRUE(s5->isActive());
+  EXPECT_EQ(collection.activeSubmap(), s5);
+  // Ids below the next one, another geometry, a non-finite pose: refused, nothing changes.
+  EXPECT_THROW(collection.restoreSubmap(4, TsdfLayer(collectionConfig().layer), Transformationd(),
+                                        1, 0, true),
+               std::invalid_argument);
+  EXPECT_THROW(
+      collection.restoreSubmap(9, TsdfLayer(LayerConfig{0.05f, 8}), Transformationd(), 1, 0, true),
+      std::invalid_argument);
+  EXPECT_THROW(
+      collection.restoreSubmap(
+          9, TsdfLayer(collectionConfig().layer),
+          Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d(NAN, 0, 0)), 1, 0, true),
+      std::invalid_argument);
+  EXPECT_EQ(collection.submapIds(), (std::vector<SubmapId>{2, 5}));
+  EXPECT_EQ(collection.nextSubmapId(), 6);
+
+  // Anchored to its keyframe like a created submap.
+  const Transformationd Q = pose(0.5, {1, 0, 0}, {0, 0, 1});
+  EXPECT_EQ(collection.updateKeyframePoses({{20, Q}}).submaps_moved, 1u);
+  EXPECT_TRUE(s2->T_G_M().isApprox(Q, 0.0));
+
+  collection.reserveSubmapIds(8);
+  collection.reserveSubmapIds(7);  // never lowers it
+  const SubmapCollectionState state = collection.snapshot();
+  EXPECT_EQ(state.next_submap_id, 8);
+  EXPECT_EQ(state.active, s5);
+  ASSERT_EQ(state.submaps.size(), 2u);
+  EXPECT_EQ(state.submaps[0], s2);
+  // A created submap continues after the reserved ids and finishes the restored active one.
+  EXPECT_EQ(collection.createSubmap(Transformationd(), 80, 8000)->id(), 8);
+  EXPECT_TRUE(s5->isFinished());
 }
 
 // updateKeyframePoses moves exactly the submaps anchored to the batch's keyframes; known

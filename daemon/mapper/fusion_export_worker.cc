@@ -63,12 +63,16 @@ void FusionExportWorker::stop() {
 }
 
 void FusionExportWorker::submitExport(MapperCommand command, ReplyCallback reply) {
+  submitJob(std::move(command), nullptr, std::move(reply));
+}
+
+void FusionExportWorker::submitJob(MapperCommand command, Job job, ReplyCallback reply) {
   bool queued = false, stopping = false;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stopping = stop_;
     if (!stopping && commands_.size() < config_.command_queue_capacity) {
-      commands_.push_back(QueuedCommand{std::move(command), std::move(reply)});
+      commands_.push_back(QueuedCommand{std::move(command), std::move(reply), std::move(job)});
       queued = true;
     }
   }
@@ -79,7 +83,7 @@ void FusionExportWorker::submitExport(MapperCommand command, ReplyCallback reply
   MapperReply r;
   r.id = command.id;
   r.ok = false;
-  r.message = stopping ? "mapper stopping" : "busy: too many exports waiting, try again later";
+  r.message = stopping ? "mapper stopping" : "busy: too many commands waiting, try again later";
   if (reply) reply(r);
 }
 
@@ -120,7 +124,7 @@ void FusionExportWorker::loop() {
     cv_.wait(lock, [this] { return stop_ || !commands_.empty() || !fusions_.empty(); });
     if (stop_) break;
     busy_ = true;
-    if (commands_.empty()) {  // exports first: an operator is waiting for them
+    if (commands_.empty()) {  // commands first: an operator is waiting for them
       const FusionPair pair = fusions_.front();
       fusions_.pop_front();
       lock.unlock();
@@ -129,27 +133,33 @@ void FusionExportWorker::loop() {
       QueuedCommand queued = std::move(commands_.front());
       commands_.pop_front();
       lock.unlock();
-      runExport(queued);
+      runCommand(queued);
     }
     lock.lock();
     busy_ = false;
   }
 }
 
-void FusionExportWorker::runExport(QueuedCommand& queued) {
+void FusionExportWorker::runCommand(QueuedCommand& queued) {
   MapperReply reply;
   try {
-    const std::string& path = queued.command.args.at("path");
-    reply = queued.command.name == "export_mesh"
-                ? exportGlobalMesh(*collection_, config_.exports, config_.output_dir, path)
-                : exportSubvolumeMeshes(*collection_, config_.exports, config_.output_dir, path);
+    if (queued.job) {
+      reply = queued.job();
+    } else {
+      const std::string& path = queued.command.args.at("path");
+      reply = queued.command.name == "export_mesh"
+                  ? exportGlobalMesh(*collection_, config_.exports, config_.output_dir, path)
+                  : exportSubvolumeMeshes(*collection_, config_.exports, config_.output_dir, path);
+    }
   } catch (const std::exception& e) {
     reply = MapperReply{};
     reply.ok = false;
-    reply.message = std::string("export failed: ") + e.what();
+    reply.message = queued.command.name + " failed: " + e.what();
   }
   reply.id = queued.command.id;
-  (reply.ok ? exports_done_ : exports_failed_).fetch_add(1, std::memory_order_relaxed);
+  if (!queued.job) {
+    (reply.ok ? exports_done_ : exports_failed_).fetch_add(1, std::memory_order_relaxed);
+  }
   log_(queued.command.name + ": " + reply.message);
   if (queued.reply) queued.reply(reply);
 }

@@ -1,8 +1,8 @@
 #pragma once
 
 // The mapper's fusion / export worker: one low-priority thread that is the single owner of
-// finished subvolume layers (SubmapCollection's rule). It runs exports first (an operator is
-// waiting), then the fusions map maintenance accepted.
+// finished subvolume layers (SubmapCollection's rule). It runs commands first (exports, map
+// saves and loads: an operator is waiting), then the fusions map maintenance accepted.
 
 #include <atomic>
 #include <condition_variable>
@@ -47,6 +47,9 @@ class FusionExportWorker {
   using LogSink = std::function<void(const std::string&)>;
   /// After each pair: whether it was fused (false: not done, and logged why).
   using FusionCallback = std::function<void(const FusionPair& pair, bool fused)>;
+  /// A command the submitter carries out itself on the worker thread (save_map, load_map:
+  /// they run where fusions run, so no fusion changes the map meanwhile); returns the reply.
+  using Job = std::function<MapperReply()>;
 
   /// `collection` must outlive the worker.
   FusionExportWorker(SubmapCollection* collection, FusionExportWorkerConfig config,
@@ -65,6 +68,12 @@ class FusionExportWorker {
   /// Queues "export_mesh" or "export_submap_meshes" {path} (checked by the caller); when the
   /// queue is full or the worker stopping, `reply` is called at once with ok = false.
   void submitExport(MapperCommand command, ReplyCallback reply);
+  /// Queues `command` (checked by the caller) to be carried out by `job` on the worker
+  /// thread, in the same queue as the exports and with the same refusals (queue full,
+  /// stopping: `reply` at once with ok = false). `reply` gets the job's reply with the
+  /// command's id; a job that throws is answered ok = false with the exception's message.
+  /// Jobs are not counted in exportsDone() / exportsFailed().
+  void submitJob(MapperCommand command, Job job, ReplyCallback reply);
   /// Queues pairs for fusion (ignored once stopping).
   void submitFusions(const std::vector<FusionPair>& pairs);
 
@@ -77,11 +86,12 @@ class FusionExportWorker {
   struct QueuedCommand {
     MapperCommand command;
     ReplyCallback reply;
+    Job job;  // empty for the exports
   };
   void loop();
   void lowerPriority();
   void fuse(const FusionPair& pair);
-  void runExport(QueuedCommand& queued);
+  void runCommand(QueuedCommand& queued);
 
   SubmapCollection* const collection_;
   const FusionExportWorkerConfig config_;

@@ -4,6 +4,7 @@
 //
 //   cblox-mapper --config config/mapper.yaml                       # ground-truth poses
 //   cblox-mapper --pose-source tracker --output-dir /data/maps
+//   cblox-mapper --config config/mapper.yaml --load-map /data/maps/run1   # continue a saved map
 //
 // Subscribes: CBLOX_DEPTH (depth_frame_t); ground_truth mode: CBLOX_GT_POSE
 // (pose_stamped_t); tracker mode: CBLOX_FRAME_POSE (frame_pose_t), CBLOX_KEYFRAME
@@ -15,6 +16,8 @@
 // for the map maintenance's fusion candidates.
 // Poses on CBLOX_GT_POSE / CBLOX_FRAME_POSE are of the body (primary camera) frame B; a depth
 // frame's camera is placed at T_G_B * calibration.T_B_C.
+// --load-map DIR loads a saved map (cblox-ctl save-map) before the mapper serves; a map that
+// cannot be loaded (missing, corrupt, other voxel size) is a configuration error.
 // Exit status: 0 stopped by SIGINT/SIGTERM, 1 runtime error, 2 usage or configuration error.
 
 #include <chrono>
@@ -40,7 +43,7 @@ using Clock = std::chrono::steady_clock;
 
 struct Args {
   DaemonOptions daemon;
-  std::optional<std::string> pose_source, output_dir;
+  std::optional<std::string> pose_source, output_dir, load_map;
 };
 
 MapperProcessConfig buildConfig(const Args& args) {
@@ -61,6 +64,15 @@ int run(const Args& args) {
     return 1;
   }
   Mapper mapper(m);
+  if (args.load_map) {
+    // Before any input arrives: the operator must see a map that cannot be loaded.
+    const MapperReply loaded = mapper.loadMap(*args.load_map);
+    if (!loaded.ok) throw ConfigError("--load-map: " + loaded.message);
+    if (!args.daemon.quiet) {
+      std::printf("mapper: %s\n", loaded.message.c_str());
+      std::fflush(stdout);
+    }
+  }
   std::string error;
   if (!mapper.start(&error)) {
     std::fprintf(stderr, "cblox-mapper: %s\n", error.c_str());
@@ -151,6 +163,9 @@ int main(int argc, char** argv) {
   cblox::addDaemonOptions(app, &args.daemon, "config/mapper.yaml");
   app.add_option("--pose-source", args.pose_source, "ground_truth | tracker")->type_name("SOURCE");
   app.add_option("--output-dir", args.output_dir, "where exports go (paths inside it only)")
+      ->type_name("DIR");
+  app.add_option("--load-map", args.load_map,
+                 "load this saved map directory (cblox-ctl save-map) before serving")
       ->type_name("DIR");
   if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
   return cblox::runProcess("cblox-mapper", [&] { return cblox::run(args); });

@@ -245,6 +245,21 @@ void MapMaintenance::advanceInputClock(int64_t utime) {
   }
 }
 
+void MapMaintenance::adoptLoadedSubmaps(const std::vector<std::shared_ptr<Submap>>& submaps) {
+  // *policy_mutex_ is held by the caller (keyframes_seen_).
+  for (const std::shared_ptr<Submap>& submap : submaps) {
+    for (const KeyframeId id : submap->keyframeIds()) {
+      keyframes_seen_.insert(id);
+      max_keyframe_seen_ = std::max(max_keyframe_seen_, id);
+    }
+  }
+  // The covisibility graph is not restored: landmark ids are not part of the map files.
+  std::lock_guard<std::mutex> lock(scheduler_mutex_);
+  for (const std::shared_ptr<Submap>& submap : submaps) {
+    scheduler_.addSubvolume(submap->id(), submap->anchorKeyframe());
+  }
+}
+
 void MapMaintenance::requestCovariances() {
   if (!covariance_requester_) return;
   std::optional<FusionCovarianceRequest> request;

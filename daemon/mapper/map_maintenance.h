@@ -90,6 +90,14 @@ class MapMaintenance {
   void onFusionResult(const FusionPair& pair, bool fused);
   /// An accepted depth frame or pose at `utime` (MaintenanceClock::kInput's time).
   void advanceInputClock(int64_t utime);
+  /// Makes submaps restored from a saved map (loadMap) known as created ones are: their
+  /// keyframe ids count as applied (a repeated id is a duplicate; a synthesised one gets the
+  /// next unused id) and each is a subvolume of the fusion scheduler with its anchor
+  /// keyframe. Not restored: the covisibility graph (landmark ids are not saved), so a loaded
+  /// subvolume is no fusion candidate until keyframes that join it bring landmarks. Call
+  /// with `*policy_mutex` held (as passed to the constructor), right after the load, before
+  /// any keyframe is applied to the loaded map.
+  void adoptLoadedSubmaps(const std::vector<std::shared_ptr<Submap>>& submaps);
 
   /// Nothing queued and nothing in hand.
   bool idle() const;

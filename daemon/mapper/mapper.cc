@@ -8,8 +8,10 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "core/persistence/map_store.h"
 #include "daemon/common/text_format.h"
 #include "daemon/mapper/map_epoch_key.h"
+#include "daemon/mapper/map_persistence.h"
 #include "daemon/mapper/output_path.h"
 
 namespace cblox {
@@ -273,8 +275,10 @@ void Mapper::onCommand(const MapperCommand& command, ReplyCallback reply) {
     if (reply) reply(statusReply(command));
     return;
   }
-  if (command.name != "export_mesh" && command.name != "export_submap_meshes") {
-    fail("unknown command (known: status, export_mesh, export_submap_meshes)");
+  if (command.name != "export_mesh" && command.name != "export_submap_meshes" &&
+      command.name != "save_map" && command.name != "load_map") {
+    fail("unknown command (known: status, export_mesh, export_submap_meshes, save_map, "
+         "load_map)");
     return;
   }
   const auto path = command.args.find("path");
@@ -283,11 +287,93 @@ void Mapper::onCommand(const MapperCommand& command, ReplyCallback reply) {
     return;
   }
   std::string error;
+  if (command.name == "load_map") {
+    // The operator's map directory: not confined. Checked again on the worker (loadMap).
+    if (const size_t n = collection_.size(); n > 0) {
+      fail(notEmptyMessage(n));
+      return;
+    }
+    const std::string dir = path->second;
+    worker_.submitJob(command, [this, dir] { return loadMap(dir); }, std::move(reply));
+    return;
+  }
   if (!resolveOutputPath(output_dir_, path->second, &error)) {
     fail(error);
     return;
   }
+  if (command.name == "save_map") {
+    // On the worker: no fusion changes finished layers while they are written.
+    const std::string dir = path->second;
+    worker_.submitJob(
+        command,
+        [this, dir] { return saveMapToOutputDir(collection_, output_dir_, dir, statusCounters()); },
+        std::move(reply));
+    return;
+  }
   worker_.submitExport(command, std::move(reply));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Saved maps
+
+std::string Mapper::notEmptyMessage(size_t num_submaps) {
+  return "the map is not empty (" + std::to_string(num_submaps) +
+         " subvolumes): load a map into a fresh mapper";
+}
+
+MapperReply Mapper::loadMap(const std::string& dir) {
+  MapperReply reply;
+  const Clock::time_point start = Clock::now();
+  std::string error;
+  // The geometry first, so the refusal names both (loadMap checks it again).
+  const std::optional<MapManifest> manifest = readManifest(dir, &error);
+  if (!manifest) {
+    reply.message = "map not loaded: " + error;
+    return reply;
+  }
+  const LayerConfig& saved = manifest->config.layer;
+  if (saved.voxel_size != config_.layer.voxel_size ||
+      saved.voxels_per_side != config_.layer.voxels_per_side) {
+    reply.message = "map not loaded: " +
+                    (std::filesystem::path(dir) / kManifestFileName).string() +
+                    ": the map's layer (voxel size " + fixed(saved.voxel_size, 4) + " m, " +
+                    std::to_string(saved.voxels_per_side) +
+                    " voxels per side) differs from the mapper's (voxel size " +
+                    fixed(config_.layer.voxel_size, 4) + " m, " +
+                    std::to_string(config_.layer.voxels_per_side) + " voxels per side)";
+    return reply;
+  }
+  MapLoadReport report;
+  {
+    // Held across the load and the adoption: no keyframe creates or joins a subvolume
+    // meanwhile (map maintenance's keyframe path holds it across createSubmap).
+    std::lock_guard<std::mutex> lock(policy_mutex_);
+    if (const size_t n = collection_.size(); n > 0) {
+      reply.message = notEmptyMessage(n);
+      return reply;
+    }
+    if (!cblox::loadMap(dir, &collection_, &report, &error)) {
+      reply.message = "map not loaded: " + error;
+      return reply;
+    }
+    maintenance_.adoptLoadedSubmaps(collection_.submaps());
+    policy_.reset();  // no decision about the loaded active subvolume is pending
+  }
+  const double seconds = secondsSince(start);
+  reply.ok = true;
+  // Not restored: the covisibility graph (landmark ids are not saved) and the tracker's map,
+  // so a tracker that starts afresh numbers its keyframes from 0 again.
+  reply.message = "loaded " + dir + ": " + std::to_string(report.submaps) + " subvolumes, " +
+                  std::to_string(report.blocks) + " blocks, " + std::to_string(report.bytes_read) +
+                  " bytes in " + fixed(seconds, 3) +
+                  " s (covisibility not restored: loaded subvolumes are no fusion candidates)";
+  reply.values = {{"path", dir},
+                  {"submaps", std::to_string(report.submaps)},
+                  {"blocks", std::to_string(report.blocks)},
+                  {"bytes", std::to_string(report.bytes_read)},
+                  {"seconds", fixed(seconds, 3)},
+                  {"generation", std::to_string(report.generation)}};
+  return reply;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -358,6 +444,40 @@ std::vector<CovisibilityCandidate> Mapper::covisibilityEdges() const {
   return maintenance_.covisibilityEdges();
 }
 
+namespace {
+
+// The counters of a status, in the order "status" replies with them.
+std::vector<std::pair<std::string, uint64_t>> integerCounters(const MapperStatus& s) {
+  return {{"frames_received", s.frames_received},
+          {"frames_integrated", s.frames_integrated},
+          {"frames_cut_by_budget", s.frames_cut_by_budget},
+          {"frames_dropped", s.frames_dropped},
+          {"frames_rejected", s.frames_rejected},
+          {"keyframes", s.keyframes_applied},
+          {"pose_batches", s.keyframe_batches},
+          {"source_restarts", s.source_restarts},
+          {"fusion_candidates", s.fusion.candidates},
+          {"covariance_requested", s.fusion.requested},
+          {"subvolumes_fused", s.fusion.fused},
+          {"rejected_by_q", s.fusion.rejected_by_q},
+          {"covariance_errors", s.fusion.covariance_errors}};
+}
+
+}  // namespace
+
+std::map<std::string, int64_t> Mapper::statusCounters() const {
+  std::map<std::string, int64_t> counters;
+  const MapperStatus s = status();
+  for (const auto& [name, value] : integerCounters(s)) {
+    counters[name] = static_cast<int64_t>(value);
+  }
+  for (size_t i = 0; i < kNumInputProblems; ++i) {
+    counters[std::string("rejected_") + inputProblemName(static_cast<InputProblem>(i))] =
+        static_cast<int64_t>(s.problems[i]);
+  }
+  return counters;
+}
+
 MapperReply Mapper::statusReply(const MapperCommand& command) const {
   const MapperStatus s = status();
   MapperReply reply;
@@ -372,22 +492,12 @@ MapperReply Mapper::statusReply(const MapperCommand& command) const {
                   {"subvolumes", std::to_string(s.num_submaps)},
                   {"active_subvolume", std::to_string(s.active_submap_id)},
                   {"blocks", std::to_string(s.num_blocks)},
-                  {"memory_bytes", std::to_string(s.memory_bytes)},
-                  {"frames_received", std::to_string(s.frames_received)},
-                  {"frames_integrated", std::to_string(s.frames_integrated)},
-                  {"frames_cut_by_budget", std::to_string(s.frames_cut_by_budget)},
-                  {"frames_dropped", std::to_string(s.frames_dropped)},
-                  {"frames_rejected", std::to_string(s.frames_rejected)},
-                  {"keyframes", std::to_string(s.keyframes_applied)},
-                  {"pose_batches", std::to_string(s.keyframe_batches)},
-                  {"source_restarts", std::to_string(s.source_restarts)},
-                  {"fusion_candidates", std::to_string(s.fusion.candidates)},
-                  {"covariance_requested", std::to_string(s.fusion.requested)},
-                  {"subvolumes_fused", std::to_string(s.fusion.fused)},
-                  {"rejected_by_q", std::to_string(s.fusion.rejected_by_q)},
-                  {"covariance_errors", std::to_string(s.fusion.covariance_errors)},
-                  {"integration_ms_median", fixed(s.integration_ms_median, 2)},
-                  {"integration_ms_p99", fixed(s.integration_ms_p99, 2)}};
+                  {"memory_bytes", std::to_string(s.memory_bytes)}};
+  for (const auto& [name, value] : integerCounters(s)) {
+    reply.values.emplace_back(name, std::to_string(value));
+  }
+  reply.values.emplace_back("integration_ms_median", fixed(s.integration_ms_median, 2));
+  reply.values.emplace_back("integration_ms_p99", fixed(s.integration_ms_p99, 2));
   for (size_t i = 0; i < kNumInputProblems; ++i) {
     if (s.problems[i] > 0) {
       reply.values.emplace_back(

@@ -87,7 +87,7 @@ struct MapperStatus {
 /// - Callers (the LCM thread in cblox-mapper, or a test) call the on*() inputs. They only
 ///   validate, count, and hand the input over: depth frames to the bounded InTray
 ///   in-tray (newest wins), poses to the PoseBuffer, keyframes and pose batches to the
-///   maintenance queue, export commands to the worker queue. They never block on the map.
+///   maintenance queue, export, save_map and load_map commands to the worker queue. They never block on the map.
 /// - Integrator thread (FrameIntegration, frame_integration.h): takes the newest pending
 ///   frame whose pose the PoseBuffer can give (waiting up to max_pose_wait_s for a pose that
 ///   is not there yet; frames it can never serve are rejected and counted by reason), applies
@@ -103,7 +103,7 @@ struct MapperStatus {
 ///   through its queue and pairs with q >= q_min go to the worker's fusion queue.
 /// - Fusion/export worker thread (FusionExportWorker), at low priority (nice worker_niceness,
 ///   SCHED_IDLE): the single owner of FINISHED submap layers (SubmapCollection's rule); runs
-///   exports first, then fusions: the newer subvolume of a pair is fused into the older
+///   commands first (exports, save_map, load_map), then fusions: the newer subvolume of a pair is fused into the older
 ///   (fuseSubmaps: trilinear, its keyframes join the older, so pose batches naming them stay known)
 ///   and removed from the collection. Both are finished (the active subvolume is never fused); only
 ///   the worker reads finished layers, so no reader sees a half-fused subvolume. It holds the
@@ -168,11 +168,32 @@ class Mapper {
   /// The reply to covariance request `request_id`: one answer per requested pair, in
   /// order. Queued for the maintenance thread. Thread-safe.
   void onCovarianceReply(int64_t request_id, std::vector<FusionCovarianceAnswer> answers);
-  /// A command. "status" is answered at once on the calling thread; "export_mesh" {path} and
-  /// "export_submap_meshes" {path} are queued for the worker and answered from it; anything
-  /// else is answered at once with ok = false. `reply` is called exactly once (also when the
-  /// mapper stops first). Thread-safe.
+  /// A command. "status" is answered at once on the calling thread; "export_mesh" {path},
+  /// "export_submap_meshes" {path}, "save_map" {path} and "load_map" {path} are queued for
+  /// the worker and answered from it; anything else is answered at once with ok = false.
+  /// Paths of exports and save_map are confined to the output directory (resolveOutputPath;
+  /// refused at once otherwise); save_map writes a map directory there (saveMapToOutputDir,
+  /// with statusCounters()). load_map's path is any map directory (loadMap below); it is
+  /// refused at once while the map has a subvolume. `reply` is called exactly once (also
+  /// when the mapper stops first). Thread-safe.
   void onCommand(const MapperCommand& command, ReplyCallback reply);
+  /// Loads the saved map in `dir` (a map directory, core/persistence/map_store.h; not confined
+  /// to the output directory: the operator's --load-map, or the load_map command) into the
+  /// map, which must be empty, and makes its subvolumes known to map maintenance
+  /// (MapMaintenance::adoptLoadedSubmaps). Refused, map unchanged, with a message in the
+  /// reply: the map has a subvolume ("the map is not empty (N subvolumes): ..."), the saved
+  /// layer geometry differs from config().layer (both named), or a file is missing or
+  /// corrupt (named, loadMap's message). The reply's values: path, submaps, blocks, bytes,
+  /// seconds, generation. Not restored (said in the message): the covisibility graph, so
+  /// loaded subvolumes are no fusion candidates. Counters start from zero (the saved ones
+  /// are not taken over). Thread-safe; holds the policy mutex during the load, so no
+  /// keyframe creates a subvolume meanwhile (frames wait). Call before start() or on the
+  /// worker (the load_map command).
+  MapperReply loadMap(const std::string& dir);
+  /// The integer counters of status() by the names "status" replies with (frames_integrated,
+  /// subvolumes_fused, ...; rejected_<kind> for every problem kind, zeros included): what
+  /// save_map stores in the manifest. Thread-safe.
+  std::map<std::string, int64_t> statusCounters() const;
   /// Counts and logs a problem found outside the mapper (e.g. a message that failed to
   /// decode in the LCM adapter). A depth-frame kind also counts as a received frame.
   /// Thread-safe.
@@ -199,6 +220,7 @@ class Mapper {
 
  private:
   MapperReply statusReply(const MapperCommand& command) const;
+  static std::string notEmptyMessage(size_t num_submaps);
 
   void count(InputProblem problem, const std::string& message, uint64_t n = 1);
   // True when `utime` is more than restart_after_backwards_s older than `newest_utime`.

@@ -13,7 +13,7 @@ namespace cblox {
 /// A command (from command_t). Plain value type.
 struct MapperCommand {
   int64_t id = 0;
-  std::string name;  ///< "status", "export_mesh", "export_submap_meshes"
+  std::string name;  ///< "status", "export_mesh", "export_submap_meshes", "save_map", "load_map"
   std::map<std::string, std::string> args;
 };
 

@@ -4,12 +4,14 @@
 //   cblox-ctl status
 //   cblox-ctl export-mesh map.ply
 //   cblox-ctl export-submap-meshes submaps/
+//   cblox-ctl save-map maps/run1                 # a map directory (README, "Map file format")
+//   cblox-ctl load-map /data/maps/run1           # into a mapper whose map is still empty
 //   cblox-ctl --timeout 30 --lcm-url "udpm://239.255.76.67:7667?ttl=0" export-mesh map.ply
 //   cblox-ctl status --all                      # every process: pid, state, rates, CPU, ...
 //   cblox-ctl status --all --listen 3 --expect tracker,mapper
 //
 // Paths are relative to the mapper's configured output directory (the mapper rejects
-// absolute paths outside it and any "..").
+// absolute paths outside it and any ".."); load-map's is any map directory the mapper can read.
 // `status --all` listens to CBLOX_HEARTBEAT and CBLOX_MAP_STATUS for --listen seconds (1.5)
 // and prints one row per process heard (and per expected process not heard), then the map.
 // Every message is decoded through the wire check (lcmtypes/wire_check.h): a malformed
@@ -364,11 +366,13 @@ int main(int argc, char** argv) {
                  "status: print the mapper's statistics; status --all: one row per process\n"
                  "(heartbeats for --listen seconds) and the map; export-mesh PATH: write the\n"
                  "global mesh (PLY); export-submap-meshes DIR: one mesh per subvolume,\n"
-                 "coloured by subvolume")
+                 "coloured by subvolume; save-map DIR: save the map (a map directory);\n"
+                 "load-map DIR: load a saved map into a mapper whose map is empty")
       ->required()
       ->type_name("COMMAND");
   CLI::Option* path_option =
-      app.add_option("path", path, "PATH or DIR, relative to the mapper's output directory")
+      app.add_option("path", path,
+                     "PATH or DIR, relative to the mapper's output directory (load-map: any)")
           ->type_name("ARG");
   app.add_option("--lcm-url", url, "LCM URL (default: LCM's default)")->type_name("URL");
   app.add_option("--timeout", timeout_s, "seconds to wait for the mapper's reply")
@@ -410,6 +414,14 @@ int main(int argc, char** argv) {
     command.arg_values = {path};
   } else if (verb == "export-submap-meshes" && has_path) {
     command.name = "export_submap_meshes";
+    command.arg_keys = {"path"};
+    command.arg_values = {path};
+  } else if (verb == "save-map" && has_path) {
+    command.name = "save_map";
+    command.arg_keys = {"path"};
+    command.arg_values = {path};
+  } else if (verb == "load-map" && has_path) {
+    command.name = "load_map";
     command.arg_keys = {"path"};
     command.arg_values = {path};
   } else {

@@ -97,6 +97,21 @@ TEST_F(CtlTest, ExportMeshSendsThePathAndPrintsTheReply) {
   EXPECT_EQ(output.find("not yours"), std::string::npos) << output;
 }
 
+TEST_F(CtlTest, SaveMapAndLoadMapSendThePath) {
+  std::string output;
+  EXPECT_EQ(runCtl(&responder_, &lcm_, {"save-map", "maps/run1"}, &output), 0) << output;
+  EXPECT_EQ(runCtl(&responder_, &lcm_, {"load-map", "/data/maps/run1"}, &output), 0) << output;
+  ASSERT_EQ(responder_.received.size(), 2u);
+  EXPECT_EQ(responder_.received[0].name, "save_map");
+  ASSERT_EQ(responder_.received[0].num_args, 1);
+  EXPECT_EQ(responder_.received[0].arg_keys[0], "path");
+  EXPECT_EQ(responder_.received[0].arg_values[0], "maps/run1");
+  EXPECT_EQ(responder_.received[1].name, "load_map");
+  ASSERT_EQ(responder_.received[1].num_args, 1);
+  EXPECT_EQ(responder_.received[1].arg_values[0], "/data/maps/run1");
+  EXPECT_NE(output.find("vertices: 1234"), std::string::npos) << output;
+}
+
 TEST_F(CtlTest, FailureReplyExitsOne) {
   responder_.ok = false;
   std::string output;
@@ -116,6 +131,8 @@ TEST_F(CtlTest, UsageErrorsExitTwo) {
   std::string output;
   EXPECT_EQ(runCtl(&responder_, &lcm_, {"explode"}, &output), 2);
   EXPECT_EQ(runCtl(&responder_, &lcm_, {"export-mesh"}, &output), 2);
+  EXPECT_EQ(runCtl(&responder_, &lcm_, {"save-map"}, &output), 2);
+  EXPECT_EQ(runCtl(&responder_, &lcm_, {"load-map"}, &output), 2);
   EXPECT_EQ(runCtl(&responder_, &lcm_, {"--timeout", "-1", "status"}, &output), 2);
   EXPECT_TRUE(responder_.received.empty());
 }

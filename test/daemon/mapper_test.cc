@@ -1,5 +1,6 @@
 // The Mapper in-process (no LCM): ground-truth and tracker pose modes, subvolume creation,
-// exports confined to the output directory, pose batches, rejected and dropped frames.
+// exports confined to the output directory, pose batches, rejected and dropped frames, maps
+// saved and loaded over the command channel (save_map, load_map, and --load-map's loadMap).
 
 #include "daemon/mapper/mapper.h"
 
@@ -8,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <future>
 #include <limits>
 #include <mutex>
@@ -762,6 +764,132 @@ TEST(MapperTest, SubmapColoursDiffer) {
     colours.insert({c.r, c.g, c.b});
   }
   EXPECT_EQ(colours.size(), 32u);
+}
+
+// A map saved over the command channel and loaded into a fresh mapper (load_map on an
+// empty mapper, and loadMap before start() as cblox-mapper --load-map does) exports the same
+// mesh and has the same subvolumes and blocks; the loaded map can be continued.
+TEST(MapperTest, SavedMapLoadsIntoAFreshMapperWithTheSameMesh) {
+  test::TempDir dir("mapper_save");
+  Mapper saver(testConfig(dir.path() / "a"));
+  std::string error;
+  ASSERT_TRUE(saver.start(&error)) << error;
+  feed(&saver, 0, 18);
+  const MapperStatus saved_status = saver.status();
+  ASSERT_GE(saved_status.num_submaps, 2u);
+  const MapperReply saved = runCommand(&saver, "save_map", "maps/run1");
+  ASSERT_TRUE(saved.ok) << saved.message;
+  const std::filesystem::path map_dir = dir.path() / "a" / "maps" / "run1";
+  EXPECT_EQ(saved.value("path"), map_dir.string());
+  EXPECT_EQ(saved.value("submaps"), std::to_string(saved_status.num_submaps));
+  EXPECT_EQ(saved.value("blocks"), std::to_string(saved_status.num_blocks));
+  uint64_t bytes = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(map_dir)) {
+    bytes += entry.file_size();
+  }
+  EXPECT_EQ(saved.value("bytes"), std::to_string(bytes));
+  EXPECT_FALSE(saved.value("seconds").empty());
+  ASSERT_TRUE(runCommand(&saver, "export_mesh", "saved.ply").ok);
+  const std::string saved_mesh = test::readFile((dir.path() / "a" / "saved.ply").string());
+  ASSERT_FALSE(saved_mesh.empty());
+
+  // load_map over the command channel, into a mapper that has not seen a frame.
+  {
+    Mapper loader(testConfig(dir.path() / "b"));
+    ASSERT_TRUE(loader.start(&error)) << error;
+    const MapperReply loaded = runCommand(&loader, "load_map", map_dir.string());
+    ASSERT_TRUE(loaded.ok) << loaded.message;
+    EXPECT_NE(loaded.message.find("covisibility not restored"), std::string::npos);
+    EXPECT_EQ(loaded.value("submaps"), saved.value("submaps"));
+    EXPECT_EQ(loaded.value("blocks"), saved.value("blocks"));
+    const MapperStatus s = loader.status();
+    EXPECT_EQ(s.num_submaps, saved_status.num_submaps);
+    EXPECT_EQ(s.num_blocks, saved_status.num_blocks);
+    EXPECT_EQ(s.active_submap_id, saved_status.active_submap_id);
+    ASSERT_TRUE(runCommand(&loader, "export_mesh", "loaded.ply").ok);
+    EXPECT_TRUE(test::readFile((dir.path() / "b" / "loaded.ply").string()) == saved_mesh);
+
+    // The loaded map goes on: the loaded keyframe ids are known, so the synthesised keyframes
+    // of the new frames (ids 0, 3, ... again) are not duplicates.
+    feed(&loader, 0, 9);
+    const MapperStatus after = loader.status();
+    EXPECT_EQ(after.frames_integrated, 9u);
+    EXPECT_EQ(after.problem(InputProblem::kKeyframeDuplicate), 0u);
+    EXPECT_GT(after.num_submaps, saved_status.num_submaps);
+  }
+
+  // cblox-mapper --load-map: loadMap before start().
+  Mapper at_start(testConfig(dir.path() / "c"));
+  const MapperReply loaded = at_start.loadMap(map_dir.string());
+  ASSERT_TRUE(loaded.ok) << loaded.message;
+  ASSERT_TRUE(at_start.start(&error)) << error;
+  EXPECT_EQ(at_start.status().num_submaps, saved_status.num_submaps);
+  EXPECT_EQ(at_start.status().num_blocks, saved_status.num_blocks);
+  ASSERT_TRUE(runCommand(&at_start, "export_mesh", "loaded.ply").ok);
+  EXPECT_TRUE(test::readFile((dir.path() / "c" / "loaded.ply").string()) == saved_mesh);
+}
+
+// save_map is confined like the exports; load_map is refused on a map that is not empty, on
+// another layer geometry and on a corrupt map (the file named), and the mapper still serves.
+TEST(MapperTest, SaveAndLoadMapRefusals) {
+  test::TempDir dir("mapper_save_refused");
+  Mapper mapper(testConfig(dir.path() / "a"));
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  feed(&mapper, 0, 12);
+  const std::string escape = dir.path().filename().string() + "_escape";
+  const MapperReply escaped = runCommand(&mapper, "save_map", "../" + escape);
+  EXPECT_FALSE(escaped.ok);
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / escape));
+  EXPECT_FALSE(std::filesystem::exists(dir.path().parent_path() / escape));
+  EXPECT_FALSE(runCommand(&mapper, "save_map").ok);  // no path
+  ASSERT_TRUE(runCommand(&mapper, "save_map", "map").ok);
+  const std::filesystem::path map_dir = dir.path() / "a" / "map";
+
+  const MapperReply not_empty = runCommand(&mapper, "load_map", map_dir.string());
+  EXPECT_FALSE(not_empty.ok);
+  EXPECT_NE(not_empty.message.find("the map is not empty ("), std::string::npos)
+      << not_empty.message;
+  EXPECT_NE(not_empty.message.find("load a map into a fresh mapper"), std::string::npos);
+
+  MapperConfig coarse = testConfig(dir.path() / "b");
+  coarse.layer.voxel_size = 0.05f;
+  Mapper other_geometry(coarse);
+  const MapperReply geometry = other_geometry.loadMap(map_dir.string());
+  EXPECT_FALSE(geometry.ok);
+  EXPECT_NE(geometry.message.find("0.0500"), std::string::npos) << geometry.message;
+  EXPECT_NE(geometry.message.find("0.0400"), std::string::npos) << geometry.message;
+  EXPECT_EQ(other_geometry.status().num_submaps, 0u);
+
+  // Flip one byte in the middle of a submap file.
+  std::filesystem::path submap_file;
+  for (const auto& entry : std::filesystem::directory_iterator(map_dir)) {
+    if (entry.path().extension() == ".cbsub") submap_file = entry.path();
+  }
+  ASSERT_FALSE(submap_file.empty());
+  {
+    std::fstream f(submap_file, std::ios::in | std::ios::out | std::ios::binary);
+    const auto middle = static_cast<std::streamoff>(std::filesystem::file_size(submap_file) / 2);
+    f.seekg(middle);
+    char byte = 0;
+    f.read(&byte, 1);
+    byte = static_cast<char>(byte ^ 0x5a);
+    f.seekp(middle);
+    f.write(&byte, 1);
+  }
+  Mapper fresh(testConfig(dir.path() / "c"));
+  ASSERT_TRUE(fresh.start(&error)) << error;
+  const MapperReply corrupt = runCommand(&fresh, "load_map", map_dir.string());
+  EXPECT_FALSE(corrupt.ok);
+  EXPECT_NE(corrupt.message.find(submap_file.filename().string()), std::string::npos)
+      << corrupt.message;
+  EXPECT_EQ(fresh.status().num_submaps, 0u);
+  const MapperReply status = runCommand(&fresh, "status");
+  EXPECT_TRUE(status.ok);
+  EXPECT_EQ(status.value("subvolumes"), "0");
+  EXPECT_FALSE(fresh.loadMap((dir.path() / "nothing_here").string()).ok);
+  feed(&fresh, 0, 3);  // still integrating
+  EXPECT_EQ(fresh.status().frames_integrated, 3u);
 }
 
 }  // namespace

@@ -41,8 +41,8 @@ MapperReply exportGlobalMesh(const SubmapCollection& collection, const MapExport
                              const std::filesystem::path& output_dir, const std::string& path_arg) {
   MapperReply reply;
   std::string error;
-  const auto path = resolveOutputPath(output_dir, path_arg, &error);
-  if (!path || !staysInsideOnDisk(output_dir, *path, &error)) {
+  const auto path = writableOutputPath(output_dir, path_arg, &error);
+  if (!path) {
     reply.message = error;
     return reply;
   }
@@ -89,8 +89,8 @@ MapperReply exportSubvolumeMeshes(const SubmapCollection& collection,
                                   const std::filesystem::path& output_dir, const std::string& dir_arg) {
   MapperReply reply;
   std::string error;
-  const auto dir = resolveOutputPath(output_dir, dir_arg, &error);
-  if (!dir || !staysInsideOnDisk(output_dir, *dir, &error)) {
+  const auto dir = writableOutputPath(output_dir, dir_arg, &error);
+  if (!dir) {
     reply.message = error;
     return reply;
   }

@@ -14,8 +14,8 @@ MapperReply saveMapToOutputDir(const SubmapCollection& collection,
                                const std::map<std::string, int64_t>& counters) {
   MapperReply reply;
   std::string error;
-  const auto dir = resolveOutputPath(output_dir, dir_arg, &error);
-  if (!dir || !staysInsideOnDisk(output_dir, *dir, &error)) {
+  const auto dir = writableOutputPath(output_dir, dir_arg, &error);
+  if (!dir) {
     reply.message = error;
     return reply;
   }

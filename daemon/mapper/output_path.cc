@@ -51,4 +51,12 @@ bool staysInsideOnDisk(const std::filesystem::path& output_dir,
   return true;
 }
 
+std::optional<std::filesystem::path> writableOutputPath(const std::filesystem::path& output_dir,
+                                                        const std::string& requested,
+                                                        std::string* error) {
+  std::optional<std::filesystem::path> path = resolveOutputPath(output_dir, requested, error);
+  if (!path || !staysInsideOnDisk(output_dir, *path, error)) return std::nullopt;
+  return path;
+}
+
 }  // namespace cblox

@@ -23,4 +23,10 @@ std::optional<std::filesystem::path> resolveOutputPath(const std::filesystem::pa
 bool staysInsideOnDisk(const std::filesystem::path& output_dir,
                        const std::filesystem::path& target, std::string* error);
 
+/// resolveOutputPath, then staysInsideOnDisk: the path to write to right now, or std::nullopt
+/// with the first refusal's message. Thread-safe (reads the file system only).
+std::optional<std::filesystem::path> writableOutputPath(const std::filesystem::path& output_dir,
+                                                        const std::string& requested,
+                                                        std::string* error);
+
 }  // namespace cblox

@@ -24,6 +24,9 @@ Submap::WriteLock::~WriteLock() { unlock(); }
 void Submap::WriteLock::unlock() {
   if (!lock_.owns_lock()) return;
   submap_->refreshStatistics();
+  // Bumped while the lock is still held: a reader that copies the layer under lockLayer()
+  // after reading revision() sees either this frame's voxels or a newer revision.
+  submap_->revision_.fetch_add(1, std::memory_order_acq_rel);
   lock_.unlock();
 }
 
@@ -51,6 +54,7 @@ Submap::Submap(SubmapId id, TsdfLayer layer, const Transformationd& T_G_M,
   if (!isFinitePose(T_G_M)) throw std::invalid_argument("Submap: T_G_M is not finite");
   keyframe_ids_.insert(anchor_keyframe);
   refreshStatistics();
+  revision_.store(1, std::memory_order_release);  // restored: not the empty layer of revision 0
 }
 
 Transformationd Submap::T_G_M() const {

@@ -60,11 +60,22 @@ bool isFinitePose(const Transformationd& T);
 /// - numBlocks(), memoryBytes(), isActive(), isFinished() are atomic snapshots; the block and
 ///   memory figures are refreshed by the layer's writer (WriteLock release, fusion,
 ///   refreshStatistics()).
+///
+/// Change tracking: revision() is bumped whenever the layer may have changed: when a
+/// non-empty WriteLock is released (an integrated frame), whenever mutableLayer() is handed
+/// out (fusion writes through it; the bump happens before the write), and by the restoring
+/// constructor (a restored layer is revision 1, a new empty one 0). Metadata changes (T_G_M,
+/// keyframes) do not bump it. A reader that records revision() BEFORE copying the layer (a
+/// checkpoint) knows the layer is unchanged since its copy while revision() still returns the
+/// recorded value: an active layer is copied under lockLayer() and the WriteLock bumps before
+/// it releases the lock; a finished layer is written only by the fusion worker, which is also
+/// the thread that copies it, after taking mutableLayer() (and so after the bump).
 /// Lock order: layer lock -> SubmapCollection mutex -> submap metadata mutex.
 class Submap {
  public:
   /// Exclusive write access to an active submap's layer (one integrated frame). Empty (false)
-  /// when the submap was already finished. Releasing it refreshes numBlocks()/memoryBytes().
+  /// when the submap was already finished. Releasing it refreshes numBlocks()/memoryBytes()
+  /// and bumps revision().
   /// Movable, not copyable; used by one thread.
   class WriteLock {
    public:
@@ -96,7 +107,7 @@ class Submap {
          KeyframeId anchor_keyframe, int64_t creation_time_ns);
   /// A new, active submap that takes over an existing `layer` (restoring a saved map; see
   /// SubmapCollection::restoreSubmap); layerConfig() is layer.config(). The anchor keyframe is
-  /// recorded as its first keyframe and the statistics are refreshed. Throws
+  /// recorded as its first keyframe, the statistics are refreshed and revision() is 1. Throws
   /// std::invalid_argument when T_G_M is not finite.
   Submap(SubmapId id, TsdfLayer layer, const Transformationd& T_G_M, KeyframeId anchor_keyframe,
          int64_t creation_time_ns);
@@ -156,8 +167,16 @@ class Submap {
   /// single-threaded tools). Not synchronised by itself.
   const TsdfLayer& layer() const { return layer_; }
   /// Write access for the owner of a FINISHED submap (the fusion worker), or when no other
-  /// thread uses the submap. Writers call refreshStatistics() when done. Not synchronised.
-  TsdfLayer* mutableLayer() { return &layer_; }
+  /// thread uses the submap. Writers call refreshStatistics() when done. Bumps revision() (the
+  /// caller may write through the pointer). Not synchronised (the bump itself is atomic).
+  TsdfLayer* mutableLayer() {
+    revision_.fetch_add(1, std::memory_order_acq_rel);
+    return &layer_;
+  }
+
+  /// How often the layer may have changed (see "Change tracking" above): equal values mean
+  /// an unchanged layer. Thread-safe (atomic).
+  uint64_t revision() const { return revision_.load(std::memory_order_acquire); }
 
   /// Allocated blocks as of the last refresh. Thread-safe (atomic snapshot).
   size_t numBlocks() const { return num_blocks_.load(std::memory_order_relaxed); }
@@ -182,6 +201,7 @@ class Submap {
   TsdfLayer layer_;
   std::atomic<size_t> num_blocks_{0};
   std::atomic<size_t> memory_bytes_{0};
+  std::atomic<uint64_t> revision_{0};
 };
 
 }  // namespace cblox

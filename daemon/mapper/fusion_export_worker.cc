@@ -30,6 +30,7 @@ void FusionExportWorker::start() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (started_) return;
   started_ = true;
+  periodic_due_ = std::chrono::steady_clock::now() + periodic_period_;
   thread_ = std::thread([this] { loop(); });
 }
 
@@ -87,6 +88,13 @@ void FusionExportWorker::submitJob(MapperCommand command, Job job, ReplyCallback
   if (reply) reply(r);
 }
 
+void FusionExportWorker::setPeriodicTask(double period_s, PeriodicTask task) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  periodic_period_ = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(period_s));
+  periodic_task_ = std::move(task);
+}
+
 void FusionExportWorker::submitFusions(const std::vector<FusionPair>& pairs) {
   if (pairs.empty()) return;
   {
@@ -120,11 +128,23 @@ void FusionExportWorker::lowerPriority() {
 void FusionExportWorker::loop() {
   lowerPriority();
   std::unique_lock<std::mutex> lock(mutex_);
+  const auto has_work = [this] { return stop_ || !commands_.empty() || !fusions_.empty(); };
   while (true) {
-    cv_.wait(lock, [this] { return stop_ || !commands_.empty() || !fusions_.empty(); });
+    if (periodic_task_) {
+      cv_.wait_until(lock, periodic_due_, has_work);
+    } else {
+      cv_.wait(lock, has_work);
+    }
     if (stop_) break;
+    const bool periodic_due =
+        periodic_task_ && std::chrono::steady_clock::now() >= periodic_due_;
+    if (commands_.empty() && fusions_.empty() && !periodic_due) continue;
     busy_ = true;
-    if (commands_.empty()) {  // commands first: an operator is waiting for them
+    if (commands_.empty() && periodic_due) {  // after the commands, before the fusions
+      periodic_due_ = std::chrono::steady_clock::now() + periodic_period_;
+      lock.unlock();
+      periodic_task_();
+    } else if (commands_.empty()) {  // commands first: an operator is waiting for them
       const FusionPair pair = fusions_.front();
       fusions_.pop_front();
       lock.unlock();

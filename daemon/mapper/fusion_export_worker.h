@@ -5,6 +5,7 @@
 // saves and loads: an operator is waiting), then the fusions map maintenance accepted.
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
@@ -50,6 +51,8 @@ class FusionExportWorker {
   /// A command the submitter carries out itself on the worker thread (save_map, load_map:
   /// they run where fusions run, so no fusion changes the map meanwhile); returns the reply.
   using Job = std::function<MapperReply()>;
+  /// Work the worker does on its own schedule (the mapper's periodic checkpoint).
+  using PeriodicTask = std::function<void()>;
 
   /// `collection` must outlive the worker.
   FusionExportWorker(SubmapCollection* collection, FusionExportWorkerConfig config,
@@ -74,6 +77,12 @@ class FusionExportWorker {
   /// command's id; a job that throws is answered ok = false with the exception's message.
   /// Jobs are not counted in exportsDone() / exportsFailed().
   void submitJob(MapperCommand command, Job job, ReplyCallback reply);
+  /// Runs `task` on the worker thread every `period_s` seconds (> 0, finite), the first time
+  /// `period_s` after start(): when due, it goes after the commands waiting and before the
+  /// fusions (a backlog of fusions does not delay it). The next one is due `period_s` after
+  /// the previous one began (none is made up for). The task in hand finishes before stop()
+  /// returns; while it runs, idle() is false. `task` must not throw. Call before start().
+  void setPeriodicTask(double period_s, PeriodicTask task);
   /// Queues pairs for fusion (ignored once stopping).
   void submitFusions(const std::vector<FusionPair>& pairs);
 
@@ -103,6 +112,9 @@ class FusionExportWorker {
   std::deque<QueuedCommand> commands_;
   std::deque<FusionPair> fusions_;
   bool busy_ = false, stop_ = false, started_ = false;
+  std::chrono::steady_clock::duration periodic_period_{};
+  PeriodicTask periodic_task_;  // empty: none
+  std::chrono::steady_clock::time_point periodic_due_;
   std::thread thread_;
   std::atomic<uint64_t> exports_done_{0}, exports_failed_{0};
 };

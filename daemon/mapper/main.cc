@@ -17,7 +17,9 @@
 // Poses on CBLOX_GT_POSE / CBLOX_FRAME_POSE are of the body (primary camera) frame B; a depth
 // frame's camera is placed at T_G_B * calibration.T_B_C.
 // --load-map DIR loads a saved map (cblox-ctl save-map) before the mapper serves; a map that
-// cannot be loaded (missing, corrupt, other voxel size) is a configuration error.
+// cannot be loaded (missing, corrupt, other voxel size) is a configuration error. Without it,
+// checkpoint.resume loads the last periodic checkpoint of checkpoint.dir the same way (none
+// there: a first run, the map starts empty; unreadable: a configuration error).
 // Exit status: 0 stopped by SIGINT/SIGTERM, 1 runtime error, 2 usage or configuration error.
 
 #include <chrono>
@@ -69,7 +71,18 @@ int run(const Args& args) {
     const MapperReply loaded = mapper.loadMap(*args.load_map);
     if (!loaded.ok) throw ConfigError("--load-map: " + loaded.message);
     if (!args.daemon.quiet) {
-      std::printf("mapper: %s\n", loaded.message.c_str());
+      std::printf("mapper: %s%s\n", loaded.message.c_str(),
+                  m.checkpoint.enabled()
+                      ? ("; checkpoints go to " + m.checkpoint.dir + " (not resumed from)").c_str()
+                      : "");
+      std::fflush(stdout);
+    }
+  } else if (const std::optional<MapperReply> resumed = mapper.resumeFromCheckpoint()) {
+    // An unreadable checkpoint is not silently replaced by an empty map: the operator decides
+    // (repair or move it, or set checkpoint.resume: false).
+    if (!resumed->ok) throw ConfigError(resumed->message);
+    if (!args.daemon.quiet) {
+      std::printf("mapper: %s\n", resumed->message.c_str());
       std::fflush(stdout);
     }
   }

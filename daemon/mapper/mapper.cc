@@ -81,7 +81,12 @@ Mapper::Mapper(const MapperConfig& config, LogSink log)
           &collection_, &policy_, &policy_mutex_, &maintenance_,
           [this](InputProblem problem, const std::string& message, uint64_t n) {
             count(problem, message, n);
-          }) {}
+          }) {
+  if (config_.checkpoint.enabled()) {
+    checkpointer_ = std::make_unique<MapCheckpointer>(config_.checkpoint.dir);
+    worker_.setPeriodicTask(config_.checkpoint.period_s, [this] { runCheckpoint(); });
+  }
+}
 
 void Mapper::setCovarianceRequester(CovarianceRequester requester) {
   maintenance_.setCovarianceRequester(std::move(requester));
@@ -376,6 +381,53 @@ MapperReply Mapper::loadMap(const std::string& dir) {
   return reply;
 }
 
+std::optional<MapperReply> Mapper::resumeFromCheckpoint() {
+  const MapperCheckpointConfig& c = config_.checkpoint;
+  if (!c.resume || c.dir.empty()) return std::nullopt;
+  std::error_code ec;
+  const std::filesystem::path manifest = std::filesystem::path(c.dir) / kManifestFileName;
+  // No manifest at all: a first run (a checkpoint that never committed leaves none either).
+  // Anything else, even an unreadable manifest, goes to loadMap, which names the problem.
+  if (!std::filesystem::exists(manifest, ec) && !ec) return std::nullopt;
+  MapperReply reply = loadMap(c.dir);
+  if (reply.ok) {
+    reply.message = "resumed from " + c.dir + " generation " + reply.value("generation") + ": " +
+                    reply.value("submaps") + " subvolumes (" + reply.message + ")";
+  } else {
+    reply.message = "cannot resume from checkpoint.dir " + c.dir + ": " + reply.message;
+  }
+  return reply;
+}
+
+void Mapper::runCheckpoint() {
+  std::string error;
+  std::optional<MapCheckpointReport> report;
+  try {
+    report = checkpointer_->checkpoint(collection_, statusCounters(), &error);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  if (!report) {
+    checkpoint_failures_.fetch_add(1, std::memory_order_relaxed);
+    if (error != last_checkpoint_error_) {  // once per distinct message
+      log("checkpoint into " + checkpointer_->dir() + " failed (the last one stays): " + error);
+      last_checkpoint_error_ = error;
+    }
+    return;
+  }
+  const bool first = checkpoints_written_.fetch_add(1, std::memory_order_relaxed) == 0;
+  last_checkpoint_ms_.store(static_cast<float>(report->milliseconds), std::memory_order_relaxed);
+  if (first || !last_checkpoint_error_.empty()) {
+    log(std::string(first ? "first checkpoint" : "checkpoints written again") + " into " +
+        checkpointer_->dir() + ": generation " + std::to_string(report->generation) + ", " +
+        std::to_string(report->submaps) + " subvolumes (" +
+        std::to_string(report->submaps_written) + " written), " +
+        std::to_string(report->bytes_written) + " bytes in " + fixed(report->milliseconds, 1) +
+        " ms; then every " + fixed(config_.checkpoint.period_s, 2) + " s");
+    last_checkpoint_error_.clear();
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Integrator thread
 
@@ -428,6 +480,9 @@ MapperStatus Mapper::status() const {
   s.source_restarts = source_restarts_.load();
   s.exports_done = worker_.exportsDone();
   s.exports_failed = worker_.exportsFailed();
+  s.checkpoints_written = checkpoints_written_.load(std::memory_order_relaxed);
+  s.checkpoint_failures = checkpoint_failures_.load(std::memory_order_relaxed);
+  s.last_checkpoint_ms = last_checkpoint_ms_.load(std::memory_order_relaxed);
   s.fusion = maintenance_.schedulerStats();
   for (size_t i = 0; i < kNumInputProblems; ++i) {
     s.problems[i] = problems_[i].load(std::memory_order_relaxed);
@@ -460,7 +515,9 @@ std::vector<std::pair<std::string, uint64_t>> integerCounters(const MapperStatus
           {"covariance_requested", s.fusion.requested},
           {"subvolumes_fused", s.fusion.fused},
           {"rejected_by_q", s.fusion.rejected_by_q},
-          {"covariance_errors", s.fusion.covariance_errors}};
+          {"covariance_errors", s.fusion.covariance_errors},
+          {"checkpoints_written", s.checkpoints_written},
+          {"checkpoint_failures", s.checkpoint_failures}};
 }
 
 }  // namespace
@@ -498,6 +555,7 @@ MapperReply Mapper::statusReply(const MapperCommand& command) const {
   }
   reply.values.emplace_back("integration_ms_median", fixed(s.integration_ms_median, 2));
   reply.values.emplace_back("integration_ms_p99", fixed(s.integration_ms_p99, 2));
+  reply.values.emplace_back("last_checkpoint_ms", fixed(s.last_checkpoint_ms, 1));
   for (size_t i = 0; i < kNumInputProblems; ++i) {
     if (s.problems[i] > 0) {
       reply.values.emplace_back(

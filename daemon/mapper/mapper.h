@@ -31,6 +31,7 @@
 #include "core/integrator/make_integrator.h"
 #include "core/maintenance/fusion_scheduler.h"
 #include "core/mesh/mesh_integrator.h"
+#include "core/persistence/map_checkpointer.h"
 #include "core/submap/submap_collection.h"
 #include "core/submap/submap_creation_policy.h"
 #include "core/submap/submap_fusion.h"
@@ -69,6 +70,9 @@ struct MapperStatus {
   uint64_t source_restarts = 0;    ///< depth or pose time stamps went back (new stream)
   uint64_t exports_done = 0;
   uint64_t exports_failed = 0;
+  uint64_t checkpoints_written = 0;   ///< periodic checkpoints committed (checkpoint.dir)
+  uint64_t checkpoint_failures = 0;   ///< periodic checkpoints that failed (map unchanged)
+  float last_checkpoint_ms = 0.0f;    ///< wall time of the last committed checkpoint; 0: none
   /// Map maintenance (FusionSchedulerStats): candidate pairs, pairs whose covariance was
   /// requested, accepted for fusion, rejected by q, answered with an error; fusions done and
   /// failed; requests timed out.
@@ -108,7 +112,10 @@ struct MapperStatus {
 ///   and removed from the collection. Both are finished (the active subvolume is never fused); only
 ///   the worker reads finished layers, so no reader sees a half-fused subvolume. It holds the
 ///   ACTIVE submap's layer lock only while copying that layer (a block memcpy), never while fusing,
-///   meshing or writing, so an export delays integration by the copy.
+///   meshing or writing, so an export delays integration by the copy. With checkpoint.dir and
+///   checkpoint.period_s set, it also writes a checkpoint every period_s (its periodic task,
+///   MapCheckpointer: only new and changed subvolumes, then the manifest), never on the
+///   integrator thread; resumeFromCheckpoint() loads the last one at start.
 ///
 /// Shared state and its guards: the SubmapCollection and Submaps are thread-safe by their own rule;
 /// the creation policy (not thread-safe) is guarded by policy_mutex_, which the integrator holds
@@ -190,6 +197,14 @@ class Mapper {
   /// keyframe creates a subvolume meanwhile (frames wait). Call before start() or on the
   /// worker (the load_map command).
   MapperReply loadMap(const std::string& dir);
+  /// Resume at start (cblox-mapper, when no --load-map is given): when checkpoint.resume is
+  /// set and checkpoint.dir holds a manifest, loads that checkpoint with loadMap() (same
+  /// contract; the map must be empty). Returns std::nullopt when there is nothing to resume
+  /// (resume off, no dir, or no manifest in it: a first run). Otherwise loadMap()'s reply,
+  /// whose message is "resumed from <dir> generation N: S subvolumes (...)" on success; a
+  /// failed reply (an unreadable checkpoint) is not to be ignored: cblox-mapper exits with
+  /// status 2 and the message, the operator decides. Thread-safe; call before start().
+  std::optional<MapperReply> resumeFromCheckpoint();
   /// The integer counters of status() by the names "status" replies with (frames_integrated,
   /// subvolumes_fused, ...; rejected_<kind> for every problem kind, zeros included): what
   /// save_map stores in the manifest. Thread-safe.
@@ -222,6 +237,9 @@ class Mapper {
   MapperReply statusReply(const MapperCommand& command) const;
   static std::string notEmptyMessage(size_t num_submaps);
 
+  // The periodic checkpoint (worker thread only): counts, logs a failure once per distinct
+  // message, and when it recovers.
+  void runCheckpoint();
   void count(InputProblem problem, const std::string& message, uint64_t n = 1);
   // True when `utime` is more than restart_after_backwards_s older than `newest_utime`.
   bool isRestart(int64_t newest_utime, int64_t utime) const;
@@ -246,6 +264,13 @@ class Mapper {
 
   bool started_ = false, stopped_ = false;
   std::mutex lifecycle_mutex_;
+
+  // Periodic checkpoints: the checkpointer and the last failure's message are the worker's
+  // (runCheckpoint); the counters are read by status().
+  std::unique_ptr<MapCheckpointer> checkpointer_;  // null when checkpoints are off
+  std::string last_checkpoint_error_;
+  std::atomic<uint64_t> checkpoints_written_{0}, checkpoint_failures_{0};
+  std::atomic<float> last_checkpoint_ms_{0.0f};
 
   // Exports and accepted fusions, on its own low-priority thread; reports fusions to
   // maintenance_.

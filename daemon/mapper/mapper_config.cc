@@ -17,6 +17,13 @@ IntegratorConfig MapperConfig::defaultIntegratorConfig() {
   return config;
 }
 
+std::string MapperCheckpointConfig::validate() const {
+  if (!(period_s >= 0.0) || !std::isfinite(period_s)) {
+    return "period_s must be finite and >= 0, got " + std::to_string(period_s);
+  }
+  return {};
+}
+
 std::string MapperConfig::validate() const {
   if (std::string e = layer.validate(); !e.empty()) return "layer." + e;
   if (std::string e = integrator.validate(layer.voxel_size); !e.empty()) return "integrator." + e;
@@ -46,6 +53,7 @@ std::string MapperConfig::validate() const {
   if (!(log_interval_s > 0.0) || !std::isfinite(log_interval_s)) {
     return "log_interval_s must be finite and > 0, got " + std::to_string(log_interval_s);
   }
+  if (std::string e = checkpoint.validate(); !e.empty()) return "checkpoint." + e;
   return {};
 }
 

@@ -53,6 +53,25 @@ inline bool isTimeRestart(int64_t newest_utime, int64_t utime, double restart_af
   return static_cast<double>(newest_utime - utime) * 1e-6 > restart_after_backwards_s;
 }
 
+/// Periodic incremental checkpoints of the map and resume at start (the `checkpoint` part of
+/// config/mapper.yaml; README "Map file format"). Plain value type.
+struct MapperCheckpointConfig {
+  /// The checkpoint map directory (any path, not confined to output_dir; created by the first
+  /// checkpoint). Empty = no checkpoints and no resume.
+  std::string dir;
+  /// A checkpoint every this many seconds, on the fusion/export worker (finite, >= 0);
+  /// 0 = no checkpoints.
+  double period_s = 0.0;
+  /// At start, load the checkpoint in `dir` when it has a manifest (unless --load-map names
+  /// a map); a checkpoint that cannot be loaded is a configuration error.
+  bool resume = true;
+
+  /// Checkpoints are written (dir set and period_s > 0).
+  bool enabled() const { return !dir.empty() && period_s > 0.0; }
+  /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
+  std::string validate() const;
+};
+
 /// Settings of a Mapper (the `mapper` part of config/mapper.yaml). Plain value type.
 /// Defaults are sized for 752x480 depth at 10-20 Hz on a 2-core computer that also tracks.
 struct MapperConfig {
@@ -101,6 +120,8 @@ struct MapperConfig {
   bool worker_sched_idle = true;
   /// Minimum interval between two log lines of the same bad-input kind, seconds (> 0).
   double log_interval_s = 10.0;
+  /// Periodic checkpoints into checkpoint.dir and resume from them (off by default).
+  MapperCheckpointConfig checkpoint;
   /// The clock of map maintenance (kInput for deterministic replay; not a YAML key).
   MaintenanceClock maintenance_clock = MaintenanceClock::kSteady;
 

@@ -88,7 +88,7 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
       root, top,
       {"pose_source", "lcm_url", "output_dir", "input_silence_s", "channels", "layer",
        "integrator", "mesh", "fusion", "maintenance", "subvolumes", "poses", "queues", "worker",
-       "status"});
+       "status", "checkpoint"});
   if (isAbsent(root)) return config;
 
   if (root["pose_source"]) {
@@ -175,6 +175,14 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
     readOptional(status, "status", "progress_period_s", &config.progress_period_s);
     readOptional(status, "status", "timing_window", &m.timing_window);
     readOptional(status, "status", "log_interval_s", &m.log_interval_s);
+  }
+
+  const YAML::Node checkpoint = root["checkpoint"];
+  requireKnownKeys(checkpoint, "checkpoint", {"dir", "period_s", "resume"});
+  if (!isAbsent(checkpoint)) {
+    readOptional(checkpoint, "checkpoint", "dir", &m.checkpoint.dir);
+    readOptional(checkpoint, "checkpoint", "period_s", &m.checkpoint.period_s);
+    readOptional(checkpoint, "checkpoint", "resume", &m.checkpoint.resume);
   }
 
   if (const std::string e = config.validate(); !e.empty()) throw ConfigError(top + ": " + e);

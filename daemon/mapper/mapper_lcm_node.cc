@@ -91,6 +91,9 @@ void MapperNode::publishHeartbeat(const MapperStatus& s, const char* state) {
       .add("pose_batches", s.keyframe_batches)
       .add("exports_done", s.exports_done)
       .add("exports_failed", s.exports_failed)
+      .add("checkpoints_written", s.checkpoints_written)
+      .add("checkpoint_failures", s.checkpoint_failures)
+      .add("last_checkpoint_ms", static_cast<uint64_t>(std::lround(s.last_checkpoint_ms)))
       .add("source_restarts", s.source_restarts);
   for (size_t i = 0; i < kNumInputProblems; ++i) {
     hb.add(std::string("rejected_") + inputProblemName(static_cast<InputProblem>(i)),

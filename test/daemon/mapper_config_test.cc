@@ -72,6 +72,10 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(shipped.progress_period_s, defaults.progress_period_s);
   EXPECT_EQ(a.timing_window, b.timing_window);
   EXPECT_EQ(a.log_interval_s, b.log_interval_s);
+  EXPECT_EQ(a.checkpoint.dir, b.checkpoint.dir);
+  EXPECT_EQ(a.checkpoint.period_s, b.checkpoint.period_s);
+  EXPECT_EQ(a.checkpoint.resume, b.checkpoint.resume);
+  EXPECT_FALSE(b.checkpoint.enabled());  // off unless configured
   EXPECT_TRUE(defaults.validate().empty()) << defaults.validate();
 }
 
@@ -99,6 +103,7 @@ TEST(MapperConfigTest, ReadsOverrides) {
       "queues: {pending_frames: 2, maintenance: 8, commands: 1}\n"
       "worker: {niceness: 19, sched_idle: false}\n"
       "status: {period_s: 0.5, progress_period_s: 2, timing_window: 10, log_interval_s: 1}\n"
+      "checkpoint: {dir: /data/ckpt, period_s: 30, resume: false}\n"
       "fusion: {num_threads: 1}\nmesh: {use_color: false}\n"
       "maintenance: {enabled: false, min_shared_landmarks: 50, min_shared_ratio: 0.5, q_min: "
       "2500, max_pairs_per_request: 3, reply_timeout_s: 1, retry_after_s: 9, "
@@ -127,6 +132,10 @@ TEST(MapperConfigTest, ReadsOverrides) {
   EXPECT_EQ(config.progress_period_s, 2.0);
   EXPECT_EQ(m.timing_window, 10u);
   EXPECT_EQ(m.log_interval_s, 1.0);
+  EXPECT_EQ(m.checkpoint.dir, "/data/ckpt");
+  EXPECT_EQ(m.checkpoint.period_s, 30.0);
+  EXPECT_FALSE(m.checkpoint.resume);
+  EXPECT_TRUE(m.checkpoint.enabled());
   EXPECT_EQ(m.fusion.num_threads, 1);
   EXPECT_FALSE(m.mesh.use_color);
   EXPECT_FALSE(m.maintenance.enabled);
@@ -168,6 +177,11 @@ TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"fusion: {num_threads: 0}\n", "num_threads"},
       {"output_dir: ''\n", "output_dir"},
       {"integrator: {num_threads: two}\n", "integrator.num_threads"},
+      {"checkpoint: {period_s: -1}\n", "checkpoint.period_s"},
+      {"checkpoint: {period_s: .nan}\n", "checkpoint.period_s"},
+      {"checkpoint: {period_s: .inf}\n", "checkpoint.period_s"},
+      {"checkpoint: {interval_s: 5}\n", "interval_s"},
+      {"checkpoint: {resume: maybe}\n", "checkpoint.resume"},
   };
   for (const Case& c : cases) {
     try {

@@ -892,5 +892,125 @@ TEST(MapperTest, SaveAndLoadMapRefusals) {
   EXPECT_EQ(fresh.status().frames_integrated, 3u);
 }
 
+
+/// Waits (up to 30 s) until `mapper` has committed at least `n` periodic checkpoints.
+bool waitForCheckpoints(const Mapper& mapper, uint64_t n) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (mapper.status().checkpoints_written < n) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(milliseconds(5));
+  }
+  return true;
+}
+
+MapperConfig checkpointConfig(const std::filesystem::path& output_dir,
+                              const std::filesystem::path& checkpoint_dir) {
+  MapperConfig config = testConfig(output_dir);
+  config.checkpoint.dir = checkpoint_dir.string();
+  config.checkpoint.period_s = 0.05;
+  return config;
+}
+
+// The worker writes a checkpoint every checkpoint.period_s (counted in status); a new mapper
+// resumes from it (as cblox-mapper does at start) with the subvolumes, blocks and exported mesh
+// of the first mapper at that checkpoint, and can go on mapping.
+TEST(MapperTest, PeriodicCheckpointResumesIntoANewMapperWithTheSameMesh) {
+  test::TempDir dir("mapper_checkpoint");
+  const std::filesystem::path checkpoint_dir = dir.path() / "ckpt";
+  std::string saved_mesh;
+  MapperStatus saved_status;
+  {
+    LogLines log;
+    Mapper first(checkpointConfig(dir.path() / "a", checkpoint_dir), log.sink());
+    EXPECT_FALSE(first.resumeFromCheckpoint());  // first run: no manifest yet
+    std::string error;
+    ASSERT_TRUE(first.start(&error)) << error;
+    feed(&first, 0, 18);
+    // Two more checkpoints: at least one began after the last frame, and nothing changes the
+    // map meanwhile (no fusions without a covariance requester).
+    const uint64_t after_feed = first.status().checkpoints_written;
+    ASSERT_TRUE(waitForCheckpoints(first, after_feed + 2));
+    saved_status = first.status();
+    EXPECT_GE(saved_status.num_submaps, 2u);
+    EXPECT_EQ(saved_status.checkpoint_failures, 0u);
+    EXPECT_GT(saved_status.last_checkpoint_ms, 0.0f);
+    EXPECT_EQ(log.countContaining("first checkpoint into " + checkpoint_dir.string()), 1u);
+    const MapperReply status = runCommand(&first, "status");
+    EXPECT_NE(status.value("checkpoints_written"), "");
+    EXPECT_EQ(status.value("checkpoint_failures"), "0");
+    EXPECT_NE(status.value("last_checkpoint_ms"), "");
+    ASSERT_TRUE(runCommand(&first, "export_mesh", "first.ply").ok);
+    saved_mesh = test::readFile((dir.path() / "a" / "first.ply").string());
+    ASSERT_FALSE(saved_mesh.empty());
+    first.stop();
+  }
+  ASSERT_TRUE(std::filesystem::exists(checkpoint_dir / kManifestFileName));
+
+  Mapper resumed(checkpointConfig(dir.path() / "b", checkpoint_dir));
+  const std::optional<MapperReply> reply = resumed.resumeFromCheckpoint();
+  ASSERT_TRUE(reply);
+  ASSERT_TRUE(reply->ok) << reply->message;
+  EXPECT_EQ(reply->message.rfind("resumed from " + checkpoint_dir.string() + " generation " +
+                                     reply->value("generation") + ": " +
+                                     std::to_string(saved_status.num_submaps) + " subvolumes",
+                                 0),
+            0u)
+      << reply->message;
+  std::string error;
+  ASSERT_TRUE(resumed.start(&error)) << error;
+  EXPECT_EQ(resumed.status().num_submaps, saved_status.num_submaps);
+  EXPECT_EQ(resumed.status().num_blocks, saved_status.num_blocks);
+  EXPECT_EQ(resumed.status().active_submap_id, saved_status.active_submap_id);
+  ASSERT_TRUE(runCommand(&resumed, "export_mesh", "resumed.ply").ok);
+  EXPECT_TRUE(test::readFile((dir.path() / "b" / "resumed.ply").string()) == saved_mesh);
+  // It goes on, and checkpoints into the same directory again.
+  const uint64_t before = resumed.status().checkpoints_written;
+  feed(&resumed, 18, 24);
+  ASSERT_TRUE(waitForCheckpoints(resumed, before + 2));
+  EXPECT_EQ(resumed.status().checkpoint_failures, 0u);
+}
+
+// Resume is skipped when off or on a first run; an unreadable checkpoint is refused with the
+// file named (cblox-mapper exits 2); a failing checkpoint is counted, logged once per
+// distinct message, and the mapper keeps mapping.
+TEST(MapperTest, CheckpointResumeRefusalsAndFailures) {
+  test::TempDir dir("mapper_checkpoint_bad");
+  MapperConfig off = checkpointConfig(dir.path() / "a", dir.path() / "ckpt");
+  off.checkpoint.resume = false;
+  const std::string manifest = (dir.path() / "ckpt" / kManifestFileName).string();
+  std::filesystem::create_directories(dir.path() / "ckpt");
+  { std::ofstream(manifest) << "not a manifest"; }
+  EXPECT_FALSE(Mapper(off).resumeFromCheckpoint());  // resume: false
+  MapperConfig no_dir = testConfig(dir.path() / "a");
+  EXPECT_FALSE(Mapper(no_dir).resumeFromCheckpoint());  // no checkpoint.dir
+
+  Mapper corrupt(checkpointConfig(dir.path() / "a", dir.path() / "ckpt"));
+  const std::optional<MapperReply> refused = corrupt.resumeFromCheckpoint();
+  ASSERT_TRUE(refused);
+  EXPECT_FALSE(refused->ok);
+  EXPECT_NE(refused->message.find("cannot resume from checkpoint.dir"), std::string::npos)
+      << refused->message;
+  EXPECT_NE(refused->message.find(manifest), std::string::npos) << refused->message;
+  EXPECT_EQ(corrupt.status().num_submaps, 0u);
+
+  // The checkpoint directory is a regular file: every checkpoint fails the same way.
+  const std::filesystem::path blocked = dir.path() / "blocked";
+  { std::ofstream(blocked) << "x"; }
+  LogLines log;
+  Mapper failing(checkpointConfig(dir.path() / "b", blocked), log.sink());
+  EXPECT_FALSE(failing.resumeFromCheckpoint());  // no manifest there
+  std::string error;
+  ASSERT_TRUE(failing.start(&error)) << error;
+  feed(&failing, 0, 6);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (failing.status().checkpoint_failures < 3 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(milliseconds(5));
+  }
+  EXPECT_GE(failing.status().checkpoint_failures, 3u);
+  EXPECT_EQ(failing.status().checkpoints_written, 0u);
+  EXPECT_EQ(log.countContaining("checkpoint into " + blocked.string() + " failed"), 1u);
+  EXPECT_EQ(failing.status().frames_integrated, 6u);
+}
+
 }  // namespace
 }  // namespace cblox

@@ -74,6 +74,41 @@ TEST(Submap, MetadataAndLifeCycle) {
       std::invalid_argument);
 }
 
+// revision() changes whenever the layer may have changed: an integration write lock
+// released, mutableLayer() handed out, a restored layer; not for metadata or empty locks.
+TEST(Submap, RevisionBumpsWhenTheLayerMayHaveChanged) {
+  Submap submap(3, LayerConfig{}, Transformationd(), 1, 0);
+  EXPECT_EQ(submap.revision(), 0u);
+  EXPECT_TRUE(submap.addKeyframe(2));
+  EXPECT_TRUE(submap.setT_G_M(pose(0.1, {0, 0, 1}, {1, 0, 0})));
+  EXPECT_EQ(submap.revision(), 0u);  // metadata only
+  {
+    Submap::WriteLock lock = submap.lockForIntegration();
+    ASSERT_TRUE(lock);
+    lock.layer().allocateBlock(BlockIndex(0, 0, 0));
+    EXPECT_EQ(submap.revision(), 0u);  // not before the frame is done
+  }
+  EXPECT_EQ(submap.revision(), 1u);
+  {
+    Submap::WriteLock lock = submap.lockForIntegration();
+    lock.unlock();
+    lock.unlock();  // released once: one bump
+  }
+  EXPECT_EQ(submap.revision(), 2u);
+  submap.finish();
+  EXPECT_FALSE(submap.lockForIntegration());  // empty lock: no bump
+  EXPECT_EQ(submap.revision(), 2u);
+  (void)submap.layer();
+  EXPECT_EQ(submap.revision(), 2u);  // reading does not count
+  submap.mutableLayer()->allocateBlock(BlockIndex(1, 0, 0));
+  EXPECT_EQ(submap.revision(), 3u);
+
+  TsdfLayer layer(LayerConfig{});
+  layer.allocateBlock(BlockIndex(0, 0, 0));
+  const Submap restored(4, std::move(layer), Transformationd(), 1, 0);
+  EXPECT_EQ(restored.revision(), 1u);
+}
+
 TEST(SubmapCollection, CreateActivateRemoveIterate) {
   SubmapCollection collection(collectionConfig());
   EXPECT_TRUE(collection.empty());

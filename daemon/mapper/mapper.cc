@@ -121,6 +121,9 @@ void Mapper::stop() {
   // keyframe. Maintenance then applies what is still queued, so the map's frames are final.
   integration_.stop();
   maintenance_.stop();
+  // Every thread is stopped: one last checkpoint of the final map, so that a clean stop
+  // (SIGTERM from systemd) loses nothing integrated since the last periodic one.
+  if (checkpointer_ != nullptr) runCheckpoint();
 }
 
 void Mapper::log(const std::string& line) const {

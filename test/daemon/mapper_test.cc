@@ -970,6 +970,39 @@ TEST(MapperTest, PeriodicCheckpointResumesIntoANewMapperWithTheSameMesh) {
   EXPECT_EQ(resumed.status().checkpoint_failures, 0u);
 }
 
+// A clean stop writes a last checkpoint: what was integrated after the last periodic one
+// (here: none was due yet, the period being an hour) is not lost.
+TEST(MapperTest, CleanStopWritesALastCheckpoint) {
+  test::TempDir dir("mapper_checkpoint_stop");
+  const std::filesystem::path checkpoint_dir = dir.path() / "ckpt";
+  MapperConfig config = checkpointConfig(dir.path() / "a", checkpoint_dir);
+  config.checkpoint.period_s = 3600.0;
+  std::string saved_mesh;
+  MapperStatus saved_status;
+  {
+    Mapper first(config);
+    std::string error;
+    ASSERT_TRUE(first.start(&error)) << error;
+    feed(&first, 0, 18);
+    EXPECT_EQ(first.status().checkpoints_written, 0u);
+    ASSERT_TRUE(runCommand(&first, "export_mesh", "first.ply").ok);
+    saved_mesh = test::readFile((dir.path() / "a" / "first.ply").string());
+    saved_status = first.status();
+    first.stop();
+    EXPECT_EQ(first.status().checkpoints_written, 1u);
+  }
+  Mapper resumed(checkpointConfig(dir.path() / "b", checkpoint_dir));
+  const std::optional<MapperReply> reply = resumed.resumeFromCheckpoint();
+  ASSERT_TRUE(reply);
+  ASSERT_TRUE(reply->ok) << reply->message;
+  std::string error;
+  ASSERT_TRUE(resumed.start(&error)) << error;
+  EXPECT_EQ(resumed.status().num_submaps, saved_status.num_submaps);
+  EXPECT_EQ(resumed.status().num_blocks, saved_status.num_blocks);
+  ASSERT_TRUE(runCommand(&resumed, "export_mesh", "resumed.ply").ok);
+  EXPECT_TRUE(test::readFile((dir.path() / "b" / "resumed.ply").string()) == saved_mesh);
+}
+
 // Resume is skipped when off or on a first run; an unreadable checkpoint is refused with the
 // file named (cblox-mapper exits 2); a failing checkpoint is counted, logged once per
 // distinct message, and the mapper keeps mapping.

@@ -53,4 +53,15 @@ std::optional<MapCheckpointReport> MapCheckpointer::checkpoint(
   return report;
 }
 
+void MapCheckpointer::adoptLoaded(const MapManifest& manifest,
+                                  const SubmapCollection& collection) {
+  written_revisions_.clear();
+  for (const SubmapRecord& record : manifest.submaps) {
+    if (const std::shared_ptr<Submap> submap = collection.getSubmap(record.id)) {
+      written_revisions_.emplace(record.id, submap->revision());
+    }
+  }
+  previous_ = manifest;
+}
+
 }  // namespace cblox

@@ -26,8 +26,9 @@ struct MapCheckpointReport {
 /// last committed and the Submap::revision() each submap had when its file was last written;
 /// checkpoint() rewrites only the submaps that are new or whose revision changed since, then
 /// commits a new manifest (writeMapCheckpoint), which no longer lists removed (fused)
-/// submaps. The first checkpoint of an instance writes every submap (files of an earlier
-/// process in the directory are never reused; they are removed once unlisted).
+/// submaps. The first checkpoint of an instance writes every submap, unless adoptLoaded()
+/// told it that the collection was just loaded from this very directory (a resume): then the
+/// loaded files are listed again and only what changed since the load is written.
 ///
 /// Errors: a failed checkpoint leaves the committed map and this object's memory unchanged
 /// (the next one retries the same submaps).
@@ -45,6 +46,12 @@ class MapCheckpointer {
   std::optional<MapCheckpointReport> checkpoint(const SubmapCollection& collection,
                                                 const std::map<std::string, int64_t>& counters,
                                                 std::string* error);
+
+  /// After loadMap(dir(), ...) into `collection` and before anything changes it: takes
+  /// `manifest` (the one loaded) as the last committed checkpoint and the submaps' current
+  /// revisions as those of its files, so the next checkpoint reuses them. Submaps the manifest
+  /// does not list are written next time as new.
+  void adoptLoaded(const MapManifest& manifest, const SubmapCollection& collection);
 
   const std::string& dir() const { return dir_; }
   /// The manifest last committed by this instance; std::nullopt before the first success.

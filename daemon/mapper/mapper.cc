@@ -393,6 +393,14 @@ std::optional<MapperReply> Mapper::resumeFromCheckpoint() {
   // Anything else, even an unreadable manifest, goes to loadMap, which names the problem.
   if (!std::filesystem::exists(manifest, ec) && !ec) return std::nullopt;
   MapperReply reply = loadMap(c.dir);
+  if (reply.ok && checkpointer_ != nullptr) {
+    // The checkpoint directory is the one just loaded: its files are listed again by the next
+    // checkpoint instead of being rewritten (nothing has integrated yet).
+    std::string error;
+    if (const std::optional<MapManifest> loaded = readManifest(c.dir, &error)) {
+      checkpointer_->adoptLoaded(*loaded, collection_);
+    }
+  }
   if (reply.ok) {
     reply.message = "resumed from " + c.dir + " generation " + reply.value("generation") + ": " +
                     reply.value("submaps") + " subvolumes (" + reply.message + ")";

@@ -89,6 +89,34 @@ TEST(MapCheckpointer, WritesOnlyNewAndChangedSubmaps) {
   expectLoadsEqual(checkpointer.dir(), *collection);
 }
 
+// A resume: the collection loaded from the checkpoint directory is adopted, and the next
+// checkpoint lists the loaded files again; a frame into one submap then writes only it.
+TEST(MapCheckpointer, AfterAResumeTheLoadedFilesAreReused) {
+  test::TempDir dir("cblox_checkpointer_resume");
+  const std::unique_ptr<SubmapCollection> original = test::buildTestCollection();
+  MapCheckpointer first(dir.path().string());
+  checkpointOk(&first, *original);
+
+  std::string error;
+  MapLoadReport load;
+  const std::unique_ptr<SubmapCollection> loaded = loadMap(dir.path().string(), &load, &error);
+  ASSERT_TRUE(loaded) << error;
+  const std::optional<MapManifest> manifest = readManifest(dir.path().string(), &error);
+  ASSERT_TRUE(manifest) << error;
+  MapCheckpointer resumed(dir.path().string());
+  resumed.adoptLoaded(*manifest, *loaded);
+  const MapCheckpointReport again = checkpointOk(&resumed, *loaded);
+  EXPECT_EQ(again.submaps_written, 0u);
+  EXPECT_EQ(again.submaps_reused, 4u);
+  EXPECT_GT(again.generation, manifest->generation);
+  expectLoadsEqual(resumed.dir(), *original);
+
+  loaded->getSubmap(4)->mutableLayer();  // a fusion-style write: the revision moves
+  const MapCheckpointReport changed = checkpointOk(&resumed, *loaded);
+  EXPECT_EQ(changed.submaps_written, 1u);
+  EXPECT_EQ(changed.submaps_reused, 3u);
+}
+
 TEST(MapCheckpointer, AFailedCheckpointIsRetriedInFull) {
   test::TempDir dir("cblox_checkpointer");
   const std::unique_ptr<SubmapCollection> collection = test::buildTestCollection();

@@ -181,6 +181,12 @@ std::shared_ptr<const Mesh> loadSimSceneMesh(const std::string& spec, std::strin
   return std::make_shared<const Mesh>(std::move(*mesh));
 }
 
+bool isCameraSpec(const std::string& spec) {
+  const std::string kind = spec.substr(0, spec.find(':'));
+  return spec.find(':') != std::string::npos &&
+         (kind == "v4l2" || kind == "v4l2-stereo" || kind == "libcamera");
+}
+
 std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const SourceConfig& options,
                                              std::string* error,
                                              std::vector<std::string>* warnings) {
@@ -193,8 +199,7 @@ std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const Sour
     return nullptr;
   }
   const std::string kind = spec.substr(0, colon), what = spec.substr(colon + 1);
-  const bool camera = kind == "v4l2" || kind == "v4l2-stereo" || kind == "libcamera";
-  if (!camera && !options.calibration_file.empty() && warnings != nullptr) {
+  if (!isCameraSpec(spec) && !options.calibration_file.empty() && warnings != nullptr) {
     warnings->push_back("calibration " + options.calibration_file +
                         " is for camera sources and is not used: " + kind +
                         " sources carry their own calibration");

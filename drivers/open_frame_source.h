@@ -63,6 +63,10 @@ std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const Sour
                                              std::string* error,
                                              std::vector<std::string>* warnings = nullptr);
 
+/// True for the specs of live cameras (v4l2:, v4l2-stereo:, libcamera:), which
+/// SourceConfig::calibration_file and a capture's device wait apply to. Thread-safe (pure).
+bool isCameraSpec(const std::string& spec);
+
 /// For sim sources: the ground-truth mesh of the scene a spec names (built-in or loaded), or
 /// nullptr with a message. A loaded mesh's warnings (loadSceneMesh's report, e.g. non-manifold
 /// edges, which are accepted) are appended to `*warnings` when it is not null. Thread-safe.

@@ -194,7 +194,7 @@ int run(const Args& args) {
       openFrameSource(config.source, config.source_config, &error, &warnings);
   // A camera that is not there yet (USB enumerating at boot, a cable being plugged) is waited
   // for up to device_wait_s, once a second; then its error stands (exit 2).
-  const bool camera = config.source.rfind("v4l2", 0) == 0 || config.source.rfind("libcamera:", 0) == 0;
+  const bool camera = isCameraSpec(config.source);
   if (source == nullptr && camera && config.device_wait_s > 0) {
     std::fprintf(stderr, "cblox-capture: waiting up to %.0f s for the camera: %s\n",
                  config.device_wait_s, error.c_str());

@@ -366,6 +366,14 @@ MapperReply Mapper::loadMap(const std::string& dir) {
     }
     maintenance_.adoptLoadedSubmaps(collection_.submaps());
     policy_.reset();  // no decision about the loaded active subvolume is pending
+    // A map loaded from the checkpoint directory itself (a resume, or --load-map of it): the
+    // next checkpoint lists its files again instead of rewriting them. Checkpoints run on the
+    // worker, as load_map does, so none is between the manifest read above and this.
+    std::error_code ec;
+    if (checkpointer_ != nullptr &&
+        std::filesystem::equivalent(dir, checkpointer_->dir(), ec) && !ec) {
+      checkpointer_->adoptLoaded(*manifest, collection_);
+    }
   }
   const double seconds = secondsSince(start);
   reply.ok = true;
@@ -393,14 +401,6 @@ std::optional<MapperReply> Mapper::resumeFromCheckpoint() {
   // Anything else, even an unreadable manifest, goes to loadMap, which names the problem.
   if (!std::filesystem::exists(manifest, ec) && !ec) return std::nullopt;
   MapperReply reply = loadMap(c.dir);
-  if (reply.ok && checkpointer_ != nullptr) {
-    // The checkpoint directory is the one just loaded: its files are listed again by the next
-    // checkpoint instead of being rewritten (nothing has integrated yet).
-    std::string error;
-    if (const std::optional<MapManifest> loaded = readManifest(c.dir, &error)) {
-      checkpointer_->adoptLoaded(*loaded, collection_);
-    }
-  }
   if (reply.ok) {
     reply.message = "resumed from " + c.dir + " generation " + reply.value("generation") + ": " +
                     reply.value("submaps") + " subvolumes (" + reply.message + ")";

@@ -6,19 +6,17 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/eval/quantile.h"
+
 namespace cblox {
 
 RowErrorStats summarizeRowErrors(std::vector<double> offsets) {
   RowErrorStats stats;
   stats.samples = offsets.size();
   if (offsets.empty()) return stats;
-  std::sort(offsets.begin(), offsets.end());
-  const auto quantile = [&](double q) {
-    return offsets[std::min(offsets.size() - 1, static_cast<size_t>(q * offsets.size()))];
-  };
-  stats.median_px = quantile(0.5);
-  stats.p90_px = quantile(0.9);
-  stats.max_px = offsets.back();
+  stats.median_px = quantile(&offsets, 0.5);
+  stats.p90_px = quantile(&offsets, 0.9);
+  stats.max_px = *std::max_element(offsets.begin(), offsets.end());
   return stats;
 }
 

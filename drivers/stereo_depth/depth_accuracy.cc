@@ -6,18 +6,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/eval/quantile.h"
+
 namespace cblox {
-namespace {
-
-double quantile(std::vector<double>* values, double q) {
-  if (values->empty()) return 0.0;
-  const size_t k = std::min(values->size() - 1, static_cast<size_t>(q * values->size()));
-  std::nth_element(values->begin(), values->begin() + static_cast<std::ptrdiff_t>(k),
-                   values->end());
-  return (*values)[k];
-}
-
-}  // namespace
 
 DepthAccuracy compareToExactDepth(const DepthImage& estimate, int downscale,
                                   const DepthImage& exact, double bin_width_m) {

@@ -27,6 +27,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/eval/quantile.h"
 #include "daemon/common/cli.h"
 #include "drivers/open_frame_source.h"
 #include "drivers/stereo_depth/depth_accuracy.h"
@@ -72,11 +73,7 @@ double fastestMs(StereoDepthEstimator* estimator, const CaptureFrame& frame, Dep
   return best;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
+double median(std::vector<double> v) { return quantile(&v, 0.5); }
 
 nlohmann::json benchScene(const std::string& scene, int frames,
                           const std::vector<Variant>& all) {

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/io/ply_io.h"
+#include "core/io/text_fields.h"
 #include "drivers/calibration/calibration_file.h"
 #include "drivers/calibration/stereo_rectifier.h"
 #include "drivers/libcamera/libcamera_source.h"
@@ -116,17 +117,6 @@ bool loadRectifier(const SourceConfig& options, std::shared_ptr<const StereoRect
   } catch (const CalibrationError& e) {
     setError(error, e.what());
     return false;
-  }
-}
-
-std::vector<std::string> splitCommas(const std::string& text) {
-  std::vector<std::string> parts;
-  size_t start = 0;
-  while (true) {
-    const size_t comma = text.find(',', start);
-    parts.push_back(text.substr(start, comma == std::string::npos ? comma : comma - start));
-    if (comma == std::string::npos) return parts;
-    start = comma + 1;
   }
 }
 

@@ -15,11 +15,12 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/io/text_fields.h"
+#include "core/io/text_matrix.h"
 #include "core/io/tum_trajectory.h"
 #include "drivers/calibration/stereo_rectifier.h"
 #include "drivers/dataset/image_files.h"
 #include "drivers/dataset/reader_support.h"
-#include "core/io/text_matrix.h"
 
 namespace cblox {
 
@@ -40,22 +41,6 @@ using dataset_detail::isDirectory;
 using dataset_detail::isFile;
 using dataset_detail::join;
 using dataset_detail::setError;
-
-std::string trim(const std::string& s) {
-  const size_t first = s.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return {};
-  const size_t last = s.find_last_not_of(" \t\r\n");
-  return s.substr(first, last - first + 1);
-}
-
-std::vector<std::string> splitCommas(const std::string& line) {
-  std::vector<std::string> fields;
-  std::string field;
-  std::istringstream in(line);
-  while (std::getline(in, field, ',')) fields.push_back(trim(field));
-  if (!line.empty() && line.back() == ',') fields.emplace_back();
-  return fields;
-}
 
 // Parses a non-negative integer of nanoseconds (digits only).
 bool parseNanoseconds(const std::string& text, int64_t* value) {
@@ -276,7 +261,7 @@ bool readImageList(const std::string& path, std::vector<ImageEntry>* entries, st
   size_t line_number = 0;
   while (std::getline(in, line)) {
     ++line_number;
-    const std::string text = trim(line);
+    const std::string text = trimBlanks(line);
     if (text.empty() || text[0] == '#') continue;
     const std::vector<std::string> fields = splitCommas(text);
     if (fields.size() != 2 || fields[1].empty()) {
@@ -313,7 +298,7 @@ bool readGroundTruth(const std::string& path, int64_t epoch_ns, StampedTrajector
   int64_t previous_ns = 0;
   while (std::getline(in, line)) {
     ++line_number;
-    const std::string text = trim(line);
+    const std::string text = trimBlanks(line);
     if (text.empty() || text[0] == '#') continue;
     const std::vector<std::string> fields = splitCommas(text);
     if (fields.size() < 8) {

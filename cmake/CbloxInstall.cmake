@@ -18,7 +18,7 @@ set(CBLOX_BINDIR "${CMAKE_INSTALL_FULL_BINDIR}")
 set(CBLOX_DATADIR "${CMAKE_INSTALL_FULL_DATADIR}/cblox")
 
 install(TARGETS cblox-capture cblox-tracker cblox-mapper cblox-calib cblox-ctl cblox-eval cblox-integrate
-  cblox-vocabulary RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  cblox-vocabulary cblox-map-verify RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 # The launcher: its default config folder becomes CBLOX_CONFIG_DIR (it finds the binaries
 # next to itself).
 set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS

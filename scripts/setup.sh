@@ -15,6 +15,7 @@ packages=(
   libv4l-dev libturbojpeg0-dev v4l-utils
   libcamera-dev opencv-doc
   iproute2 util-linux python3
+  clang-14 libclang-rt-14-dev  # scripts/fuzz.sh: libFuzzer, ASan, UBSan
 )
 if [[ "${1:-}" == "--bench" ]]; then
   packages+=(libopen3d-dev)

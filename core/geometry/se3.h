@@ -51,6 +51,17 @@ class SE3 {
   /// Identity transform. Thread-safe.
   static SE3 Identity() { return SE3(); }
 
+  /// From a quaternion that is already unit (as rotation() returns it), kept bit for bit:
+  /// normalising it again may change its last bits, so a saved pose would not load
+  /// bit-identical. Precondition: |q| = 1 to rounding (the map file readers check it).
+  /// Thread-safe.
+  static SE3 fromUnitQuaternion(const Quat& q, const Vec3& t) {
+    SE3 T;
+    T.q_ = q;
+    T.t_ = t;
+    return T;
+  }
+
   /// From a 4x4 homogeneous matrix [R t; 0 1] (translation in metres). The 3x3 block is
   /// projected onto the nearest rotation in the Frobenius norm (SVD, det = +1); the bottom row
   /// is ignored. Thread-safe.

@@ -145,4 +145,47 @@ void FusionScheduler::onFusionFailed(const FusionPair& pair, double now_s) {
   ++stats_.fusions_failed;
 }
 
+FusionSchedulerState FusionScheduler::exportState(double now_s) const {
+  FusionSchedulerState state;
+  for (auto& [subvolume, landmarks] : graph_.landmarkSets()) {
+    if (!anchors_.contains(subvolume)) continue;
+    state.subvolumes.push_back(SubvolumeLandmarks{subvolume, std::move(landmarks)});
+  }
+  absl::flat_hash_set<PairKey> keys;
+  for (const auto& [key, at] : retry_at_) keys.insert(key);
+  for (const auto& [key, times] : rejections_) keys.insert(key);
+  for (const PairKey& key : keys) {
+    FusionPairBackoff b;
+    b.older = key.first;
+    b.newer = key.second;
+    if (const auto it = rejections_.find(key); it != rejections_.end()) b.rejections = it->second;
+    if (const auto it = retry_at_.find(key); it != retry_at_.end()) {
+      b.retry_in_s = std::max(0.0, it->second - now_s);
+    }
+    if (b.rejections == 0 && b.retry_in_s == 0.0) continue;  // nothing left to remember
+    state.backoffs.push_back(b);
+  }
+  std::sort(state.backoffs.begin(), state.backoffs.end(), [](const auto& x, const auto& y) {
+    return std::pair{x.older, x.newer} < std::pair{y.older, y.newer};
+  });
+  return state;
+}
+
+size_t FusionScheduler::restoreState(const FusionSchedulerState& state, double now_s) {
+  size_t ignored = 0;
+  for (const SubvolumeLandmarks& s : state.subvolumes) {
+    if (!addKeyframeLandmarks(s.subvolume, s.landmark_ids)) ++ignored;
+  }
+  for (const FusionPairBackoff& b : state.backoffs) {
+    if (!anchors_.contains(b.older) || !anchors_.contains(b.newer)) {
+      ++ignored;
+      continue;
+    }
+    const PairKey key{b.older, b.newer};
+    if (b.rejections > 0) rejections_[key] = b.rejections;
+    if (b.retry_in_s > 0.0) retry_at_[key] = now_s + b.retry_in_s;
+  }
+  return ignored;
+}
+
 }  // namespace cblox

@@ -12,6 +12,7 @@
 #include <absl/container/flat_hash_set.h>
 
 #include "core/maintenance/covisibility_graph.h"
+#include "core/maintenance/fusion_scheduler_state.h"
 
 namespace cblox {
 
@@ -129,6 +130,19 @@ class FusionScheduler {
   /// The fusion of `pair` did not happen (e.g. a subvolume vanished); both are free again and
   /// the pair waits retry_after_s.
   void onFusionFailed(const FusionPair& pair, double now_s);
+
+  /// What a resumed scheduler needs (fusion_scheduler_state.h): every known subvolume's
+  /// landmark set and every pair's back-off, its wait as seconds left after `now_s` (0 when
+  /// over). Requests in flight and fusions in progress are not included.
+  FusionSchedulerState exportState(double now_s) const;
+  /// Restores a state exported by exportState (maybe by another process, whose clock is not
+  /// this one: waits count from `now_s`). Only subvolumes known here (addSubvolume) take their
+  /// landmarks, only pairs of two known subvolumes their back-off; the rest is ignored.
+  /// Returns the number of entries ignored. Call on a scheduler that has seen no landmarks
+  /// and no replies (right after addSubvolume of the loaded subvolumes): then
+  /// exportState(now_s) returns `state` minus the ignored entries, and the graph equals the
+  /// exported one. Precondition: state.validate() is empty.
+  size_t restoreState(const FusionSchedulerState& state, double now_s);
 
   const SubvolumeCovisibilityGraph& graph() const { return graph_; }
   const FusionSchedulerStats& stats() const { return stats_; }

@@ -29,6 +29,14 @@ class ByteWriter {
   void f64(double v) { u64(std::bit_cast<uint64_t>(v)); }
   /// Raw bytes, no length.
   void bytes(std::string_view b) { out_->append(b.data(), b.size()); }
+  /// LEB128: 7 bits per byte, least significant first, high bit = more follow (1-10 bytes).
+  void uvarint(uint64_t v) {
+    while (v >= 0x80) {
+      u8(static_cast<uint8_t>(v | 0x80));
+      v >>= 7;
+    }
+    u8(static_cast<uint8_t>(v));
+  }
   /// uint32 length, then the bytes. Precondition: s.size() < 2^32.
   void str(std::string_view s) {
     u32(static_cast<uint32_t>(s.size()));
@@ -93,6 +101,23 @@ class ByteReader {
     if (!u64(&x)) return false;
     *v = std::bit_cast<double>(x);
     return true;
+  }
+  /// A uvarint (ByteWriter::uvarint); fails at the end of the data, after 10 bytes, or when
+  /// the value does not fit 64 bits.
+  bool uvarint(uint64_t* v) {
+    uint64_t x = 0;
+    for (int shift = 0; shift < 64; shift += 7) {
+      uint8_t byte = 0;
+      if (!u8(&byte)) return false;
+      const uint64_t bits = byte & 0x7fu;
+      if (shift == 63 && bits > 1) return ok_ = false;
+      x |= bits << shift;
+      if ((byte & 0x80u) == 0) {
+        *v = x;
+        return true;
+      }
+    }
+    return ok_ = false;
   }
   /// The next n bytes as a view into the data (no copy); fails when fewer remain.
   bool bytes(size_t n, std::string_view* v) {

@@ -13,7 +13,7 @@ MapCheckpointer::MapCheckpointer(std::string dir) : dir_(std::move(dir)) {}
 
 std::optional<MapCheckpointReport> MapCheckpointer::checkpoint(
     const SubmapCollection& collection, const std::map<std::string, int64_t>& counters,
-    std::string* error) {
+    const MaintenanceStateSource& maintenance, std::string* error) {
   const auto start = std::chrono::steady_clock::now();
   // The revisions are read BEFORE writeMapCheckpoint copies any voxel: a change made while
   // (or after) a submap is written bumps its revision past the one recorded here, so the next
@@ -28,8 +28,9 @@ std::optional<MapCheckpointReport> MapCheckpointer::checkpoint(
     if (it == written_revisions_.end() || it->second != revision) to_write.push_back(submap->id());
   }
   MapSaveReport save;
-  std::optional<MapManifest> manifest = writeMapCheckpoint(
-      collection, dir_, previous_ ? &*previous_ : nullptr, to_write, counters, &save, error);
+  std::optional<MapManifest> manifest =
+      writeMapCheckpoint(collection, dir_, previous_ ? &*previous_ : nullptr, to_write, counters,
+                         maintenance, &save, error, pause_);
   if (!manifest) return std::nullopt;
 
   // Every listed file holds its submap as of (at least) the revision read above. A submap
@@ -53,8 +54,7 @@ std::optional<MapCheckpointReport> MapCheckpointer::checkpoint(
   return report;
 }
 
-void MapCheckpointer::adoptLoaded(const MapManifest& manifest,
-                                  const SubmapCollection& collection) {
+void MapCheckpointer::adoptLoaded(const MapManifest& manifest, const SubmapCollection& collection) {
   written_revisions_.clear();
   for (const SubmapRecord& record : manifest.submaps) {
     if (const std::shared_ptr<Submap> submap = collection.getSubmap(record.id)) {

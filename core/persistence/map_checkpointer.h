@@ -1,5 +1,6 @@
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -7,6 +8,7 @@
 #include <string>
 
 #include "core/persistence/map_manifest.h"
+#include "core/persistence/map_store.h"
 #include "core/submap/submap_collection.h"
 
 namespace cblox {
@@ -40,11 +42,13 @@ class MapCheckpointer {
   /// `dir`: the checkpoint directory (created by the first checkpoint if missing).
   explicit MapCheckpointer(std::string dir);
 
-  /// Writes a checkpoint of `collection` with `counters` in the manifest. Returns what was
+  /// Writes a checkpoint of `collection` with `counters` and the maintenance state (see
+  /// writeMapCheckpoint; `maintenance` may be empty) in the manifest. Returns what was
   /// written, or std::nullopt with writeMapCheckpoint's message (naming the file) in *error
   /// (if non-null).
   std::optional<MapCheckpointReport> checkpoint(const SubmapCollection& collection,
                                                 const std::map<std::string, int64_t>& counters,
+                                                const MaintenanceStateSource& maintenance,
                                                 std::string* error);
 
   /// After loadMap(dir(), ...) into `collection` and before anything changes it: takes
@@ -53,6 +57,11 @@ class MapCheckpointer {
   /// does not list are written next time as new.
   void adoptLoaded(const MapManifest& manifest, const SubmapCollection& collection);
 
+  /// Test only (the crash test): every later checkpoint sleeps this long before each submap
+  /// file it writes and before its manifest (writeMapCheckpoint's pause_before_each_file).
+  /// 0 = off (the default).
+  void setPauseBeforeEachFile(std::chrono::milliseconds pause) { pause_ = pause; }
+
   const std::string& dir() const { return dir_; }
   /// The manifest last committed by this instance; std::nullopt before the first success.
   const std::optional<MapManifest>& lastManifest() const { return previous_; }
@@ -60,6 +69,7 @@ class MapCheckpointer {
  private:
   const std::string dir_;
   std::optional<MapManifest> previous_;
+  std::chrono::milliseconds pause_{0};
   // Submap id -> its revision() when its file (listed in previous_) was written.
   std::map<SubmapId, uint64_t> written_revisions_;
 };

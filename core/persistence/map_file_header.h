@@ -12,7 +12,7 @@ namespace cblox {
 /// fields little-endian:
 ///
 ///     offset  0  char[8]  magic           "CBLOXSUB" (submap file) or "CBLOXMAN" (manifest)
-///     offset  8  uint32   format version  1 for both today; readers refuse newer versions
+///     offset  8  uint32   format version  submap file 1, manifest 2; readers refuse newer ones
 ///     offset 12  uint32   flags           0 (reserved)
 ///     offset 16  uint64   payload length  bytes after the header; must equal file size - 32
 ///     offset 24  uint64   payload XXH64   xxHash64 (seed 0) of those bytes

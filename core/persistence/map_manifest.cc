@@ -1,11 +1,13 @@
 #include "core/persistence/map_manifest.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <utility>
 
 #include "core/io/atomic_file.h"
 #include "core/persistence/byte_codec.h"
+#include "core/persistence/pose_codec.h"
 #include "core/persistence/map_file_header.h"
 
 namespace cblox {
@@ -13,12 +15,16 @@ namespace {
 
 using persistence_detail::ByteReader;
 using persistence_detail::ByteWriter;
+using persistence_detail::readPose;
+using persistence_detail::writePose;
 
 constexpr size_t kMaxCounterNameBytes = 256;
 constexpr size_t kMaxFileNameBytes = 256;
 // Smallest encodings, for bounding counts by the bytes that remain.
 constexpr size_t kMinSubmapRecordBytes = 3 * 8 + 7 * 8 + 1 + 4 + 4 + 8 + 8 + 8;
 constexpr size_t kMinCounterBytes = 4 + 8;
+constexpr size_t kMinLandmarkSetBytes = 8 + 4;
+constexpr size_t kBackoffBytes = 8 + 8 + 4 + 8;
 
 std::string manifestPath(const std::string& dir) {
   return (std::filesystem::path(dir) / kManifestFileName).string();
@@ -28,6 +34,76 @@ std::optional<MapManifest> fail(std::string* error, const std::string& path,
                                 const std::string& what) {
   if (error != nullptr) *error = path + ": " + what;
   return std::nullopt;
+}
+
+// The version 2 maintenance section (map_manifest.h).
+void encodeMaintenance(const FusionSchedulerState& state, ByteWriter* w) {
+  w->u32(static_cast<uint32_t>(state.subvolumes.size()));
+  for (const SubvolumeLandmarks& s : state.subvolumes) {
+    w->i64(s.subvolume);
+    w->u32(static_cast<uint32_t>(s.landmark_ids.size()));
+    uint64_t previous = 0;
+    for (size_t k = 0; k < s.landmark_ids.size(); ++k) {
+      w->uvarint(k == 0 ? s.landmark_ids[k] : s.landmark_ids[k] - previous);
+      previous = s.landmark_ids[k];
+    }
+  }
+  w->u32(static_cast<uint32_t>(state.backoffs.size()));
+  for (const FusionPairBackoff& b : state.backoffs) {
+    w->i64(b.older);
+    w->i64(b.newer);
+    w->i32(b.rejections);
+    w->f64(b.retry_in_s);
+  }
+}
+
+// Reads the maintenance section into *state; empty when fine, else what is wrong. Every count
+// is bounded by the bytes that remain before anything is allocated.
+std::string decodeMaintenance(ByteReader* r, FusionSchedulerState* state) {
+  const auto out_of_bounds = [r](const std::string& what, uint64_t n) {
+    return what + " " + std::to_string(n) + " out of bounds for the " +
+           std::to_string(r->remaining()) + " bytes that remain";
+  };
+  uint32_t num_subvolumes = 0;
+  if (!r->u32(&num_subvolumes)) return "truncated: the payload ends inside the maintenance count";
+  if (num_subvolumes > r->remaining() / kMinLandmarkSetBytes) {
+    return out_of_bounds("maintenance subvolume count", num_subvolumes);
+  }
+  state->subvolumes.resize(num_subvolumes);
+  for (SubvolumeLandmarks& s : state->subvolumes) {
+    const std::string at = "maintenance record " + std::to_string(&s - state->subvolumes.data());
+    uint32_t num_landmarks = 0;
+    r->i64(&s.subvolume);
+    if (!r->u32(&num_landmarks)) return "truncated: the payload ends inside " + at;
+    if (num_landmarks > r->remaining()) {  // at least one byte each
+      return at + ": " + out_of_bounds("landmark count", num_landmarks);
+    }
+    s.landmark_ids.resize(num_landmarks);
+    uint64_t previous = 0;
+    for (size_t k = 0; k < num_landmarks; ++k) {
+      uint64_t v = 0;
+      if (!r->uvarint(&v)) return at + ": truncated or malformed landmark id " + std::to_string(k);
+      if (k > 0 && (v == 0 || v > UINT64_MAX - previous)) {
+        return at + ": landmark id " + std::to_string(k) + " does not increase (difference " +
+               std::to_string(v) + ")";
+      }
+      previous = s.landmark_ids[k] = k == 0 ? v : previous + v;
+    }
+  }
+  uint32_t num_backoffs = 0;
+  if (!r->u32(&num_backoffs)) return "truncated: the payload ends inside the back-off count";
+  if (num_backoffs > r->remaining() / kBackoffBytes) {
+    return out_of_bounds("back-off count", num_backoffs);
+  }
+  state->backoffs.resize(num_backoffs);
+  for (FusionPairBackoff& b : state->backoffs) {
+    r->i64(&b.older);
+    r->i64(&b.newer);
+    r->i32(&b.rejections);
+    r->f64(&b.retry_in_s);
+  }
+  if (!r->ok()) return "truncated: the payload ends inside the back-offs";
+  return "";
 }
 
 }  // namespace
@@ -73,6 +149,23 @@ std::string MapManifest::validate() const {
              std::to_string(kMaxCounterNameBytes) + " bytes";
     }
   }
+  if (const std::string e = maintenance.validate(); !e.empty()) return "maintenance: " + e;
+  const auto listed = [this](int64_t id) {  // the ids strictly increase (checked above)
+    const auto it = std::lower_bound(submaps.begin(), submaps.end(), id,
+                                     [](const SubmapRecord& s, int64_t v) { return s.id < v; });
+    return it != submaps.end() && it->id == id;
+  };
+  for (const SubvolumeLandmarks& s : maintenance.subvolumes) {
+    if (!listed(s.subvolume)) {
+      return "maintenance: subvolume " + std::to_string(s.subvolume) + " is not a listed submap";
+    }
+  }
+  for (const FusionPairBackoff& b : maintenance.backoffs) {
+    if (!listed(b.older) || !listed(b.newer)) {
+      return "maintenance: back-off of pair (" + std::to_string(b.older) + ", " +
+             std::to_string(b.newer) + ") names a submap that is not listed";
+    }
+  }
   return "";
 }
 
@@ -90,9 +183,7 @@ std::string encodeManifest(const MapManifest& manifest) {
     w.i64(s.id);
     w.i64(s.anchor_keyframe);
     w.i64(s.creation_time_ns);
-    const Eigen::Vector3d& t = s.T_G_M.translation();
-    const Eigen::Quaterniond& q = s.T_G_M.rotation();
-    for (const double v : {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()}) w.f64(v);
+    writePose(w, s.T_G_M);
     w.u8(s.finished ? 1 : 0);
     w.u32(static_cast<uint32_t>(s.keyframe_ids.size()));
     for (const KeyframeId k : s.keyframe_ids) w.i64(k);
@@ -106,6 +197,7 @@ std::string encodeManifest(const MapManifest& manifest) {
     w.str(name);
     w.i64(value);
   }
+  encodeMaintenance(manifest.maintenance, &w);
   return sealMapFile(kManifestFileMagic, kManifestVersion, payload);
 }
 
@@ -149,16 +241,16 @@ std::optional<MapManifest> readManifest(const std::string& dir, std::string* err
   m.submaps.resize(num_submaps);
   for (SubmapRecord& s : m.submaps) {
     const std::string at = "submap record " + std::to_string(&s - m.submaps.data());
-    double v[7];
     uint8_t finished = 0;
     uint32_t num_keyframes = 0;
     r.i64(&s.id);
     r.i64(&s.anchor_keyframe);
     r.i64(&s.creation_time_ns);
-    for (double& x : v) r.f64(&x);
+    const bool pose_ok = readPose(r, &s.T_G_M);
     r.u8(&finished);
     r.u32(&num_keyframes);
     if (!r.ok()) return truncated(at);
+    if (!pose_ok) return fail(error, path, at + ": T_G_M is not finite or its quaternion not unit");
     if (finished > 1) return fail(error, path, at + ": invalid finished flag");
     s.finished = finished == 1;
     if (num_keyframes > r.remaining() / 8) {
@@ -178,11 +270,6 @@ std::optional<MapManifest> readManifest(const std::string& dir, std::string* err
     r.u64(&s.file.payload_xxh64);
     r.u64(&s.file.num_blocks);
     if (!r.ok()) return truncated(at);
-    const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
-    if (!Eigen::Vector4d(v[3], v[4], v[5], v[6]).allFinite() || q.norm() < 0.5) {
-      return fail(error, path, at + ": T_G_M's quaternion is not finite or not unit");
-    }
-    s.T_G_M = Transformationd(q, Eigen::Vector3d(v[0], v[1], v[2]));
   }
   uint32_t num_counters = 0;
   if (!r.u32(&num_counters)) return truncated("the counter count");
@@ -203,9 +290,15 @@ std::optional<MapManifest> readManifest(const std::string& dir, std::string* err
       return fail(error, path, "counter " + std::to_string(i) + " repeats a name");
     }
   }
+  if (file->version >= 2) {
+    if (const std::string e = decodeMaintenance(&r, &m.maintenance); !e.empty()) {
+      return fail(error, path, e);
+    }
+  }
   if (r.remaining() != 0) {
     return fail(error, path,
-                std::to_string(r.remaining()) + " unexpected bytes after the counters");
+                std::to_string(r.remaining()) + " unexpected bytes after the " +
+                    (file->version >= 2 ? "maintenance section" : "counters"));
   }
   if (const std::string e = m.validate(); !e.empty())
     return fail(error, path, "inconsistent: " + e);

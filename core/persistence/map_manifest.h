@@ -7,14 +7,17 @@
 #include <vector>
 
 #include "core/geometry/se3.h"
+#include "core/maintenance/fusion_scheduler_state.h"
 #include "core/persistence/submap_file.h"
 #include "core/submap/submap.h"
 #include "core/submap/submap_collection.h"
 
 namespace cblox {
 
-/// Newest manifest format version this build writes and reads.
-inline constexpr uint32_t kManifestVersion = 1;
+/// Newest manifest format version this build writes; it reads 1 and 2. Version 2 appends the
+/// map maintenance section (covisibility landmark sets, pair back-offs); a version 1 manifest
+/// reads as one with an empty maintenance section.
+inline constexpr uint32_t kManifestVersion = 2;
 /// File name of the manifest inside a map directory.
 inline constexpr char kManifestFileName[] = "manifest.cbmap";
 
@@ -41,12 +44,17 @@ struct MapManifest {
   std::vector<SubmapRecord> submaps;         ///< ascending ids
   /// Free-form counters of the caller (e.g. frames integrated, fusions), saved verbatim.
   std::map<std::string, int64_t> counters;
+  /// The map maintenance's state (version 2; empty when read from version 1): the landmark
+  /// sets of the covisibility graph and the back-off of rejected pairs, for listed submaps.
+  FusionSchedulerState maintenance;
 
   /// Empty when consistent, otherwise what is wrong: invalid config, ids not strictly
   /// increasing or not below next_submap_id, a non-finite pose, keyframe ids not ascending
   /// or without the anchor, a file name that is not a submapFileName() of its submap, more
   /// than one unfinished submap, an active id that is not the unfinished submap (or an
-  /// unfinished submap that is not active), a counter name empty or longer than 256 bytes.
+  /// unfinished submap that is not active), a counter name empty or longer than 256 bytes,
+  /// a maintenance section that is not well-formed (FusionSchedulerState::validate) or names
+  /// a submap that is not listed.
   /// Thread-safe (pure).
   std::string validate() const;
 };
@@ -62,6 +70,12 @@ struct MapManifest {
 ///       uint32 length + file name bytes  uint64 file size  uint64 payload XXH64
 ///       uint64 block count
 ///     uint32 counter count, then per counter: uint32 length + name bytes, int64 value
+///   version 2 appends the maintenance section:
+///     uint32 subvolume count, then per subvolume (ascending ids, each a listed submap):
+///       int64 id  uint32 landmark count
+///       landmark ids ascending as uvarints (LEB128): the first as is, then differences (>= 1)
+///     uint32 back-off count, then per pair (ascending (older, newer), both listed):
+///       int64 older  int64 newer  int32 rejections by q in a row  f64 seconds left to wait
 ///
 /// Precondition: manifest.validate() is empty. Thread-safe (pure).
 std::string encodeManifest(const MapManifest& manifest);
@@ -71,10 +85,11 @@ std::string encodeManifest(const MapManifest& manifest);
 /// cannot be written. Thread-safe (no shared state); one writer per directory at a time.
 bool writeManifest(const MapManifest& manifest, const std::string& dir, std::string* error);
 
-/// Reads and verifies <dir>/manifest.cbmap: header (readMapFile), every count and length
-/// bounded by the bytes that remain before anything is allocated, no bytes left over, and
-/// validate(). Returns std::nullopt with "<path>: <what is wrong>" in *error (if non-null)
-/// otherwise. Does not open the submap files (loadMap does). Thread-safe (no shared state).
+/// Reads and verifies <dir>/manifest.cbmap (format version 1 or 2): header (readMapFile), every
+/// count and length bounded by the bytes that remain before anything is allocated, no bytes left
+/// over, and validate(). Returns std::nullopt with "<path>: <what is wrong>" in *error (if
+/// non-null) otherwise. Does not open the submap files (loadMap does). Thread-safe (no shared
+/// state).
 std::optional<MapManifest> readManifest(const std::string& dir, std::string* error);
 
 }  // namespace cblox

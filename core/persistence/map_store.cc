@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <system_error>
+#include <thread>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -47,6 +48,19 @@ uint64_t highestGeneration(const std::string& dir) {
   return highest;
 }
 
+// `state` without the subvolumes and pairs that the snapshot does not list (created after it,
+// or fused away before it).
+FusionSchedulerState restrictedTo(FusionSchedulerState state, const SubmapCollectionState& map) {
+  std::unordered_set<SubmapId> ids;
+  for (const std::shared_ptr<Submap>& submap : map.submaps) ids.insert(submap->id());
+  std::erase_if(state.subvolumes,
+                [&](const SubvolumeLandmarks& s) { return !ids.contains(s.subvolume); });
+  std::erase_if(state.backoffs, [&](const FusionPairBackoff& b) {
+    return !ids.contains(b.older) || !ids.contains(b.newer);
+  });
+  return state;
+}
+
 bool sameGeometry(const LayerConfig& a, const LayerConfig& b) {
   return a.voxel_size == b.voxel_size && a.voxels_per_side == b.voxels_per_side;
 }
@@ -70,6 +84,7 @@ bool restore(const MapManifest& manifest, const std::string& dir, SubmapCollecti
   MapLoadReport result;
   result.generation = manifest.generation;
   result.counters = manifest.counters;
+  result.maintenance = manifest.maintenance;
   std::error_code ec;
   result.bytes_read = fs::file_size(manifest_path, ec);
   std::vector<TsdfLayer> layers;
@@ -107,7 +122,9 @@ std::optional<MapManifest> writeMapCheckpoint(const SubmapCollection& collection
                                               const std::string& dir, const MapManifest* previous,
                                               const std::vector<SubmapId>& submaps_to_write,
                                               const std::map<std::string, int64_t>& counters,
-                                              MapSaveReport* report, std::string* error) {
+                                              const MaintenanceStateSource& maintenance,
+                                              MapSaveReport* report, std::string* error,
+                                              std::chrono::milliseconds pause_before_each_file) {
   if (!ensureDirectory(dir, error)) return std::nullopt;
   MapSaveReport result;
   MapManifest manifest;
@@ -123,6 +140,14 @@ std::optional<MapManifest> writeMapCheckpoint(const SubmapCollection& collection
   const std::unordered_set<SubmapId> to_write(submaps_to_write.begin(), submaps_to_write.end());
 
   const SubmapCollectionState state = collection.snapshot();
+  if (maintenance) {
+    manifest.maintenance = restrictedTo(maintenance(), state);
+    if (std::string e = manifest.maintenance.validate(); !e.empty()) {
+      setError(error, (fs::path(dir) / kManifestFileName).string() +
+                          ": not written, the maintenance state is inconsistent: " + e);
+      return std::nullopt;
+    }
+  }
   manifest.next_submap_id = state.next_submap_id;
   if (state.active) manifest.active_submap_id = state.active->id();
   for (const std::shared_ptr<Submap>& submap : state.submaps) {
@@ -144,6 +169,7 @@ std::optional<MapManifest> writeMapCheckpoint(const SubmapCollection& collection
       record.file = reuse->second->file;
       ++result.files_reused;
     } else {
+      if (pause_before_each_file.count() > 0) std::this_thread::sleep_for(pause_before_each_file);
       std::optional<SubmapFileInfo> info =
           writeSubmapFile(*submap, dir, manifest.generation, error);
       if (!info) return std::nullopt;
@@ -153,6 +179,7 @@ std::optional<MapManifest> writeMapCheckpoint(const SubmapCollection& collection
     }
     manifest.submaps.push_back(std::move(record));
   }
+  if (pause_before_each_file.count() > 0) std::this_thread::sleep_for(pause_before_each_file);
   if (!writeManifest(manifest, dir, error)) return std::nullopt;
   std::error_code ec;
   result.bytes_written += fs::file_size(fs::path(dir) / kManifestFileName, ec);
@@ -164,8 +191,9 @@ std::optional<MapManifest> writeMapCheckpoint(const SubmapCollection& collection
 
 std::optional<MapManifest> saveMap(const SubmapCollection& collection, const std::string& dir,
                                    const std::map<std::string, int64_t>& counters,
-                                   MapSaveReport* report, std::string* error) {
-  return writeMapCheckpoint(collection, dir, nullptr, {}, counters, report, error);
+                                   const MaintenanceStateSource& maintenance, MapSaveReport* report,
+                                   std::string* error) {
+  return writeMapCheckpoint(collection, dir, nullptr, {}, counters, maintenance, report, error);
 }
 
 bool loadMap(const std::string& dir, SubmapCollection* into, MapLoadReport* report,

@@ -1,17 +1,25 @@
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "core/maintenance/fusion_scheduler_state.h"
 #include "core/persistence/map_manifest.h"
 #include "core/submap/submap_collection.h"
 
 namespace cblox {
+
+/// Gives the map maintenance's state (FusionScheduler::exportState) for a checkpoint; called
+/// once, right after the collection's snapshot, so the state is at least as new as the map
+/// it goes with. May be empty (no maintenance state).
+using MaintenanceStateSource = std::function<FusionSchedulerState()>;
 
 /// What a save or checkpoint did.
 struct MapSaveReport {
@@ -29,6 +37,7 @@ struct MapLoadReport {
   uint64_t blocks = 0;
   uint64_t bytes_read = 0;                  ///< manifest and submap files
   std::map<std::string, int64_t> counters;  ///< the caller's counters, as saved
+  FusionSchedulerState maintenance;         ///< the map maintenance's state, as saved
   size_t unlisted_files = 0;                ///< files in the directory the manifest does not list
 };
 
@@ -37,27 +46,31 @@ struct MapLoadReport {
 /// submap that `previous` (the manifest this process last wrote into `dir`; null for none) does
 /// not list or whose listed file is missing or has another size; the other submaps keep the
 /// file `previous` lists. Then, last, the manifest (writeManifest) with the collection's
-/// state (SubmapCollection::snapshot(): poses, keyframes, active submap, next id), `counters`
-/// and a generation above every one in the directory, so no file the committed manifest lists
+/// state (SubmapCollection::snapshot(): poses, keyframes, active submap, next id), `counters`,
+/// the maintenance state from `maintenance` restricted to the listed submaps, and a generation
+/// above every one in the directory, so no file the committed manifest lists
 /// is overwritten: a crash at any point leaves the previous map loadable. Finally it removes
 /// the files no longer listed (removeUnlistedMapFiles; a failure there is not an error).
 /// Returns the manifest written (pass it as `previous` next time), or std::nullopt with a
 /// message naming the file in *error (if non-null); then the committed map is unchanged.
 /// `report` may be null. Ids in `submaps_to_write` that are not in the collection are ignored.
+/// `pause_before_each_file` (test only, 0 otherwise) sleeps before each submap file and before
+/// the manifest is written, widening the window in which a crash interrupts the checkpoint.
 /// Thread-safety: see writeSubmapFile (call it on the fusion worker, or while nothing modifies
 /// finished layers); the collection may change meanwhile (the manifest is a snapshot). One
 /// writer per directory at a time.
-std::optional<MapManifest> writeMapCheckpoint(const SubmapCollection& collection,
-                                              const std::string& dir, const MapManifest* previous,
-                                              const std::vector<SubmapId>& submaps_to_write,
-                                              const std::map<std::string, int64_t>& counters,
-                                              MapSaveReport* report, std::string* error);
+std::optional<MapManifest> writeMapCheckpoint(
+    const SubmapCollection& collection, const std::string& dir, const MapManifest* previous,
+    const std::vector<SubmapId>& submaps_to_write, const std::map<std::string, int64_t>& counters,
+    const MaintenanceStateSource& maintenance, MapSaveReport* report, std::string* error,
+    std::chrono::milliseconds pause_before_each_file = {});
 
 /// Full save: writeMapCheckpoint with no previous manifest, so every submap file is written.
 /// Same contract and thread-safety.
 std::optional<MapManifest> saveMap(const SubmapCollection& collection, const std::string& dir,
                                    const std::map<std::string, int64_t>& counters,
-                                   MapSaveReport* report, std::string* error);
+                                   const MaintenanceStateSource& maintenance, MapSaveReport* report,
+                                   std::string* error);
 
 /// Loads the map in `dir` into `into`, which must be empty and not have assigned ids at or
 /// above the first saved id, with the same layer geometry as the manifest (voxel size, voxels
@@ -65,7 +78,8 @@ std::optional<MapManifest> saveMap(const SubmapCollection& collection, const std
 /// lists (readSubmapFile: checksums, sizes, bounds), ignoring every other file (leftover
 /// temporaries, files of older generations). Only when all of them are valid it restores the
 /// submaps (SubmapCollection::restoreSubmap: ids, poses, anchors, creation times, finished
-/// flags, the active submap), their keyframes and the next id; otherwise it returns false with
+/// flags, the active submap), their keyframes and the next id, and returns the counters and
+/// the maintenance state in `report` (the caller restores those); otherwise it returns false with
 /// "<path>: <what is wrong>" in *error (if non-null) and `into` is unchanged. `report` may be
 /// null. The layers are decoded in memory before they go in (no copy). Thread-safe (no shared
 /// state), provided no other thread adds submaps to `into` during the load.

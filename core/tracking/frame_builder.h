@@ -48,6 +48,11 @@ class FrameBuilder {
   /// A grey image and a depth image registered to it (metres), both of the camera's size.
   std::shared_ptr<FrameFeatures> fromRgbd(const GrayImage& gray, const DepthImage& depth);
 
+  /// Builds the feature grid of `features` (keypoints in this camera's image) and, with a
+  /// vocabulary, its BoW vectors: what fromStereo / fromRgbd add to the extracted features,
+  /// for features restored from a file. Thread-safe (const; the vocabulary is read-only).
+  void index(FrameFeatures* features) const;
+
   const ScalePyramid& pyramid() const { return left_.scales(); }
 
  private:

@@ -175,4 +175,22 @@ std::vector<Landmark*> Keyframe::cull() {
   return orphans;
 }
 
+void Keyframe::restoreGraph(const std::vector<std::pair<Keyframe*, int>>& connections,
+                            Keyframe* parent, const std::vector<Keyframe*>& loop_edges,
+                            bool first_connection_pending, bool bad,
+                            const Transformationd& T_parent_this) {
+  connections_.clear();
+  for (const auto& [other, w] : connections) connections_[other] = w;
+  rebuildOrder();
+  if (bad) {
+    parent_ = parent;  // a culled keyframe is no child of its parent (cull)
+  } else {
+    changeParent(parent);
+  }
+  loop_edges_ = {loop_edges.begin(), loop_edges.end()};
+  first_connection_ = first_connection_pending;
+  bad_ = bad;
+  T_parent_this_ = T_parent_this;
+}
+
 }  // namespace cblox

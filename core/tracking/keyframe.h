@@ -4,6 +4,7 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <utility>
 #include <vector>
 
 #include "core/geometry/se3.h"
@@ -86,6 +87,15 @@ class Keyframe {
   std::vector<Landmark*> cull();
   /// Pose relative to the parent at the time of culling (valid when bad()).
   const Transformationd& T_parent_this() const { return T_parent_this_; }
+  /// updateConnections has not yet chosen the spanning-tree parent.
+  bool firstConnectionPending() const { return first_connection_; }
+
+  /// Restores the graph state a snapshot recorded (SparseMap::restore only): this end of
+  /// each connection (the other end restores its own), the parent (joined as its child unless
+  /// `bad`), the loop edges, the culled flag and T_parent_this.
+  void restoreGraph(const std::vector<std::pair<Keyframe*, int>>& connections, Keyframe* parent,
+                    const std::vector<Keyframe*>& loop_edges, bool first_connection_pending,
+                    bool bad, const Transformationd& T_parent_this);
 
   /// Bookkeeping of the threads (keyframe/frame ids of the last use), ORB-SLAM2 style.
   uint64_t track_reference_frame = 0;

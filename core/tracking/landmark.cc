@@ -90,4 +90,15 @@ double Landmark::foundRatio() const {
   return v > 0 ? static_cast<double>(found()) / v : 1.0;
 }
 
+void Landmark::restoreDerived(const OrbDescriptor& descriptor, const Eigen::Vector3d& normal,
+                              double min_distance, double max_distance, int visible,
+                              int found) {
+  descriptor_ = descriptor;
+  normal_ = normal;
+  min_distance_ = min_distance;
+  max_distance_ = max_distance;
+  visible_.store(visible, std::memory_order_relaxed);
+  found_.store(found, std::memory_order_relaxed);
+}
+
 }  // namespace cblox

@@ -67,6 +67,14 @@ class Landmark : public std::enable_shared_from_this<Landmark> {
   /// Pyramid level at which a feature of this landmark is expected at `distance` metres.
   int predictScale(double distance, const ScalePyramid& pyramid) const;
 
+  /// Restores what a snapshot recorded of the derived state (SparseMap::restore only):
+  /// the representative descriptor, the viewing direction, the raw distance range and the
+  /// visible / found counters.
+  void restoreDerived(const OrbDescriptor& descriptor, const Eigen::Vector3d& normal,
+                      double min_distance, double max_distance, int visible, int found);
+  double rawMinDistance() const { return min_distance_; }
+  double rawMaxDistance() const { return max_distance_; }
+
   /// Retired: culled, or merged into another landmark (replacement()).
   bool bad() const { return bad_; }
   void setBad() { bad_ = true; }

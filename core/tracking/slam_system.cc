@@ -90,6 +90,36 @@ TrackingResult SlamSystem::trackRgbd(uint64_t frame_id, int64_t timestamp_ns, co
   return tracker_.track(frame_id, timestamp_ns, std::move(features), T_C_G_initial);
 }
 
+SparseMapSnapshot SlamSystem::snapshot() const {
+  std::shared_lock<std::shared_mutex> lock(map_.mutex());
+  return takeSparseMapSnapshot(map_);
+}
+
+void SlamSystem::restore(const SparseMapSnapshot& snapshot, KeyframeId next_keyframe_id,
+                         LandmarkId next_landmark_id) {
+  if (tracker_.state() != TrackingState::kNotInitialized) {
+    throw std::invalid_argument("cannot restore a sparse map after frames were tracked");
+  }
+  SparseMapSnapshot indexed = snapshot;
+  for (KeyframeSnapshot& k : indexed.keyframes) {
+    if (k.features->size() == 0) continue;
+    auto features = std::make_shared<FrameFeatures>(*k.features);
+    builder_.index(features.get());
+    k.features = std::move(features);
+  }
+  {
+    std::unique_lock<std::shared_mutex> lock(map_.mutex());
+    map_.restore(indexed, builder_.pyramid().numLevels(), next_keyframe_id, next_landmark_id);
+  }
+  if (vocabulary_ != nullptr) {
+    std::shared_lock<std::shared_mutex> lock(map_.mutex());
+    for (const Keyframe* keyframe : map_.keyframes()) {
+      database_.add(keyframe->id, keyframe->features().bow);
+    }
+  }
+  tracker_.resumeLost();
+}
+
 void SlamSystem::AnnouncingSink::insertKeyframe(Keyframe* keyframe) {
   if (system_->on_keyframe_) {
     // Called by the tracker right after it made the keyframe, before local mapping has it;

@@ -79,6 +79,18 @@ class SlamSystem {
                            const DepthImage& depth,
                            const std::optional<Transformationd>& T_C_G_initial = std::nullopt);
 
+  /// A copy of the map as it is now (features shared, not copied), for a checkpoint.
+  /// Thread-safe (takes the map's shared lock).
+  SparseMapSnapshot snapshot() const;
+  /// Continues a saved map: before the first frame, replaces the (empty) map by `snapshot`
+  /// (SparseMap::restore with the id floors next_keyframe_id / next_landmark_id), rebuilds the
+  /// features' grids and BoW vectors and the keyframe database, and leaves the tracker lost,
+  /// so the next frames relocalize into the map. Throws std::invalid_argument (map left
+  /// empty) when frames were already tracked or the snapshot is inconsistent. Call from the
+  /// tracking thread, before trackStereo / trackRgbd.
+  void restore(const SparseMapSnapshot& snapshot, KeyframeId next_keyframe_id = 0,
+               LandmarkId next_landmark_id = 0);
+
   /// Waits until local mapping has processed every keyframe handed to it. Thread-safe.
   void waitUntilIdle();
   /// Stops the local mapping thread (after the keyframe in hand). Idempotent.

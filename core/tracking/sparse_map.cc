@@ -1,6 +1,7 @@
 #include "core/tracking/sparse_map.h"
 
 #include <algorithm>
+#include <stdexcept>
 #include <utility>
 
 namespace cblox {
@@ -103,6 +104,57 @@ std::vector<Landmark*> SparseMap::landmarks() const {
   std::sort(result.begin(), result.end(),
             [](const Landmark* a, const Landmark* b) { return a->id < b->id; });
   return result;
+}
+
+void SparseMap::restore(const SparseMapSnapshot& snapshot, int pyramid_levels,
+                        KeyframeId next_keyframe_id, LandmarkId next_landmark_id) {
+  if (!keyframes_.empty() || !landmarks_.empty()) {
+    throw std::invalid_argument("cannot restore a snapshot into a map that is not empty");
+  }
+  const std::string problem = snapshot.validate(pyramid_levels);
+  if (!problem.empty()) throw std::invalid_argument("inconsistent sparse map: " + problem);
+  if (next_keyframe_id > static_cast<KeyframeId>(snapshot.keyframes.size()) + kMaxSkippedKeyframeIds) {
+    throw std::invalid_argument("keyframe id floor " + std::to_string(next_keyframe_id) +
+                                " is more than " + std::to_string(kMaxSkippedKeyframeIds) +
+                                " above the map's " + std::to_string(snapshot.keyframes.size()) +
+                                " keyframes");
+  }
+
+  for (const KeyframeSnapshot& k : snapshot.keyframes) {
+    keyframes_.push_back(
+        std::make_unique<Keyframe>(k.id, k.frame_id, k.timestamp_ns, k.features, k.T_C_G));
+  }
+  static const auto kNoFeatures = std::make_shared<const FrameFeatures>();
+  while (static_cast<KeyframeId>(keyframes_.size()) < next_keyframe_id) {
+    const auto id = static_cast<KeyframeId>(keyframes_.size());
+    keyframes_.push_back(
+        std::make_unique<Keyframe>(id, 0, 0, kNoFeatures, Transformationd::Identity()));
+    keyframes_.back()->restoreGraph({}, nullptr, {}, false, true, Transformationd::Identity());
+  }
+  num_good_keyframes_ = 0;
+  for (const KeyframeSnapshot& k : snapshot.keyframes) {
+    std::vector<std::pair<Keyframe*, int>> connections;
+    connections.reserve(k.connections.size());
+    for (const auto& [other, w] : k.connections) connections.emplace_back(keyframe(other), w);
+    std::vector<Keyframe*> loop_edges;
+    for (const KeyframeId other : k.loop_edges) loop_edges.push_back(keyframe(other));
+    keyframes_[static_cast<size_t>(k.id)]->restoreGraph(
+        connections, keyframe(k.parent), loop_edges, k.first_connection_pending, k.bad,
+        k.T_parent_this);
+    if (!k.bad) ++num_good_keyframes_;
+  }
+  for (const LandmarkSnapshot& l : snapshot.landmarks) {
+    auto landmark = std::make_shared<Landmark>(l.id, l.p_G, keyframe(l.reference));
+    landmark->first_keyframe_id = l.first_keyframe_id;
+    for (const auto& [keyframe_id, index] : l.observations) {
+      addObservation(keyframe(keyframe_id), index, landmark.get());
+    }
+    landmark->restoreDerived(l.descriptor, l.normal, l.min_distance, l.max_distance, l.visible,
+                             l.found);
+    landmarks_.emplace(l.id, std::move(landmark));
+  }
+  next_landmark_id_ = std::max(snapshot.next_landmark_id, next_landmark_id);
+  change_index_ = snapshot.change_index;
 }
 
 }  // namespace cblox

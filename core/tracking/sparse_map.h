@@ -11,6 +11,7 @@
 
 #include "core/tracking/keyframe.h"
 #include "core/tracking/landmark.h"
+#include "core/tracking/sparse_map_snapshot.h"
 
 namespace cblox {
 
@@ -29,6 +30,9 @@ namespace cblox {
 /// and may keep one alive after it is retired (they check bad()).
 class SparseMap {
  public:
+  /// Most keyframe ids restore() skips above a snapshot (each costs a placeholder keyframe).
+  static constexpr KeyframeId kMaxSkippedKeyframeIds = KeyframeId{1} << 16;
+
   SparseMap() = default;
   SparseMap(const SparseMap&) = delete;
   SparseMap& operator=(const SparseMap&) = delete;
@@ -58,6 +62,18 @@ class SparseMap {
   /// Culls a keyframe (Keyframe::cull) and retires the landmarks it orphaned. Exclusive lock.
   void cullKeyframe(Keyframe* keyframe);
 
+  /// Replaces the content of an empty map (no keyframe ever added) by a snapshot's. The map
+  /// then continues with keyframe id max(snapshot.keyframes.size(), next_keyframe_id) and
+  /// landmark id max(snapshot.next_landmark_id, next_landmark_id); keyframe ids skipped by
+  /// that are culled placeholders without features (ids another process may have seen before
+  /// a crash are never reused; at most kMaxSkippedKeyframeIds of them). Every keyframe's
+  /// features must hold their grid (and BoW vector, for relocalization). Throws
+  /// std::invalid_argument when the map is not empty, the snapshot is inconsistent
+  /// (SparseMapSnapshot::validate(pyramid_levels)) or the floors skip too many ids, leaving
+  /// the map empty. Exclusive lock.
+  void restore(const SparseMapSnapshot& snapshot, int pyramid_levels,
+               KeyframeId next_keyframe_id = 0, LandmarkId next_landmark_id = 0);
+
   /// Shared lock for all of these.
   Keyframe* keyframe(KeyframeId id) const;
   std::shared_ptr<Landmark> landmark(LandmarkId id) const;
@@ -69,6 +85,8 @@ class SparseMap {
   std::vector<Landmark*> landmarks() const;
   size_t numKeyframes() const { return num_good_keyframes_; }
   size_t numLandmarks() const { return landmarks_.size(); }
+  /// The id the next landmark will get.
+  LandmarkId nextLandmarkId() const { return next_landmark_id_; }
 
   /// The map's "big change" counter, bumped by loop closure and global BA so the tracker
   /// knows poses jumped. Shared lock to read, exclusive to bump.

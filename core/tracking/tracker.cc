@@ -455,6 +455,15 @@ Keyframe* Tracker::createKeyframe() {
   return keyframe;
 }
 
+void Tracker::resumeLost() {
+  std::shared_lock<std::shared_mutex> lock(map_->mutex());
+  state_ = TrackingState::kLost;
+  map_change_index_ = map_->changeIndex();
+  velocity_.reset();
+  reference_keyframe_ = nullptr;
+  last_reference_ = nullptr;
+}
+
 bool Tracker::relocalize() {
   if (database_ == nullptr || current_.features->bow.empty()) return false;
   const std::vector<PlaceCandidate> candidates = database_->queryRelocalizationCandidates(

@@ -69,6 +69,10 @@ class Tracker {
                        std::shared_ptr<const FrameFeatures> features,
                        const std::optional<Transformationd>& T_C_G_initial = std::nullopt);
 
+  /// After the map was restored from a snapshot (SparseMap::restore): the tracker is lost in
+  /// that map, so the next frames relocalize against its keyframes.
+  void resumeLost();
+
   TrackingState state() const { return state_; }
   /// The last tracked frame (its pose is set when the state is kOk).
   const Frame& lastFrame() const { return last_frame_; }

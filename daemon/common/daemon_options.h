@@ -34,10 +34,19 @@ inline void addDaemonOptions(CLI::App& app, DaemonOptions* options,
 
 /// The process config: `load` (YAML root -> Config, throws ConfigError) applied to the --config
 /// file, or Config's defaults without one; then --lcm-url. Throws ConfigError for a file that
-/// cannot be read or parsed.
+/// cannot be read or parsed, and for a YAML::Exception that escapes `load` (a value of the
+/// wrong shape that a loader converts directly, e.g. a list where it reads a number).
 template <typename Config, typename Load>
 Config loadDaemonConfig(const DaemonOptions& options, Load load) {
-  Config config = options.config_file ? load(loadYamlFile(*options.config_file)) : Config{};
+  Config config{};
+  if (options.config_file) {
+    const YAML::Node root = loadYamlFile(*options.config_file);
+    try {
+      config = load(root);
+    } catch (const YAML::Exception& e) {
+      throw ConfigError(*options.config_file + ": " + e.what());
+    }
+  }
   if (options.lcm_url) config.lcm_url = *options.lcm_url;
   return config;
 }

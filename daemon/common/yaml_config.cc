@@ -28,6 +28,9 @@ void requireKnownKeys(const YAML::Node& node, const std::string& path,
   if (isAbsent(node)) return;
   if (!node.IsMap()) throw ConfigError(path + ": expected a map of settings");
   for (const auto& entry : node) {
+    // A map or list as a key ("{a: b}: 1") is no setting name: as<std::string>() would throw
+    // YAML::TypedBadConversion, not the ConfigError (exit status 2) callers rely on.
+    if (!entry.first.IsScalar()) throw ConfigError(path + ": a setting name must be plain text");
     const std::string key = entry.first.as<std::string>();
     const bool known =
         std::any_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; });

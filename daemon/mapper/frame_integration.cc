@@ -6,6 +6,7 @@
 
 #include "core/geometry/pinhole_camera.h"
 #include "daemon/common/text_format.h"
+#include "daemon/common/thread_priority.h"
 
 namespace cblox {
 namespace {
@@ -46,7 +47,8 @@ FrameIntegration::FrameIntegration(FrameIntegrationConfig config, SubmapCollecti
       problems_(std::move(problems)),
       poses_(config_.pose_buffer),
       pending_(config_.pending_capacity),
-      integration_ms_(config_.timing_window) {}
+      integration_ms_(config_.timing_window),
+      frame_age_ms_(config_.timing_window) {}
 
 FrameIntegration::~FrameIntegration() { stop(); }
 
@@ -54,7 +56,11 @@ void FrameIntegration::start() {
   std::lock_guard<std::mutex> lock(lifecycle_mutex_);
   if (started_) return;
   started_ = true;
-  thread_ = std::thread([this] { loop(); });
+  thread_ = std::thread([this] {
+    // Lowering one's own priority needs no privilege: setpriority cannot refuse it.
+    if (config_.niceness > 0) lowerThreadPriority(config_.niceness, false);
+    loop();
+  });
 }
 
 void FrameIntegration::stop() {
@@ -69,6 +75,15 @@ void FrameIntegration::push(DepthFrame frame) {
 }
 
 bool FrameIntegration::idle() const { return pending_.size() == 0 && !busy_.load(); }
+
+MemoryCapCounters FrameIntegration::memoryCapCounters() const {
+  MemoryCapCounters c;
+  c.state = cap_state_.load(std::memory_order_relaxed);
+  c.frames_near_only = frames_near_only_.load(std::memory_order_relaxed);
+  c.frames_at_cap = frames_at_cap_.load(std::memory_order_relaxed);
+  c.blocks_refused = blocks_refused_.load(std::memory_order_relaxed);
+  return c;
+}
 
 void FrameIntegration::loop() {
   const auto max_wait = std::chrono::duration_cast<Clock::duration>(
@@ -153,6 +168,10 @@ void FrameIntegration::processFrame(PendingFrame pending, const Transformationd&
       if (!(d >= frame.min_depth_m && d <= frame.max_depth_m)) d = 0.0f;
     }
   }
+  // Memory cap: the stage follows the map's bytes as of the last integrated frame.
+  const MemoryCapState cap = memoryCapState(config_.memory_cap, collection_->memoryBytes());
+  const bool near_only = cap == MemoryCapState::kNearOnly || cap == MemoryCapState::kFull;
+  if (near_only) cutDepthBeyond(&frame.depth, config_.memory_cap.near_distance_m);
   const PinholeCamera camera(frame.intrinsics);
   const ColorImage* color = frame.color.empty() ? nullptr : &frame.color;
   const Transformationd T_G_D = T_G_B * frame.T_B_D;
@@ -178,10 +197,23 @@ void FrameIntegration::processFrame(PendingFrame pending, const Transformationd&
       frame_integrator_ = std::make_unique<FrameIntegrator>(active->id(), config_.integrator_type,
                                                             config_.integrator, &lock.layer());
     }
-    const IntegrationStats stats =
-        frame_integrator_->integrate(active->T_M_C(T_G_D), frame.depth, camera, color);
-    lock.unlock();
+    const Transformation T_M_D = active->T_M_C(T_G_D);
+    if (cap == MemoryCapState::kFull) {
+      cutDepthOutsideBlocks(&frame.depth, frame.intrinsics, T_M_D, lock.layer());
+      refusal_.remember(lock.layer());
+    }
+    const IntegrationStats stats = frame_integrator_->integrate(T_M_D, frame.depth, camera, color);
+    const size_t refused =
+        cap == MemoryCapState::kFull ? refusal_.removeNewBlocks(&lock.layer()) : 0;
+    lock.unlock();  // refreshes the submap's bytes: the next frame's stage sees this one
     integration_ms_.add(secondsSince(start) * 1e3);
+    frame_age_ms_.add(std::chrono::duration<double, std::milli>(start - pending.received).count());
+    cap_state_.store(cap, std::memory_order_relaxed);
+    if (near_only) frames_near_only_.fetch_add(1, std::memory_order_relaxed);
+    if (cap == MemoryCapState::kFull) {
+      frames_at_cap_.fetch_add(1, std::memory_order_relaxed);
+      blocks_refused_.fetch_add(refused, std::memory_order_relaxed);
+    }
     frames_integrated_.fetch_add(1, std::memory_order_relaxed);
     if (stats.budget_exhausted) frames_cut_by_budget_.fetch_add(1, std::memory_order_relaxed);
     ++frames_since_keyframe_;

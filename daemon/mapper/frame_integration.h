@@ -1,7 +1,8 @@
 #pragma once
 
 // Frame integration, the mapper's first thread: the newest depth frame whose pose is known
-// is integrated into the active subvolume.
+// is integrated into the active subvolume, under the stage of the map's memory cap
+// (memory_cap.h) it is in.
 
 #include <atomic>
 #include <chrono>
@@ -24,6 +25,7 @@
 #include "daemon/mapper/map_maintenance.h"
 #include "daemon/mapper/mapper_config.h"
 #include "daemon/mapper/mapper_problems.h"
+#include "daemon/mapper/memory_cap.h"
 #include "daemon/mapper/pose_buffer.h"
 
 namespace cblox {
@@ -38,6 +40,17 @@ struct FrameIntegrationConfig {
   size_t pending_capacity = 4;
   PoseBuffer::Config pose_buffer;
   size_t timing_window = 200;
+  MemoryCapConfig memory_cap;
+  /// Niceness of the integrator thread, [0, 19] (MapperConfig::integrator_niceness).
+  int niceness = 0;
+};
+
+/// What the memory cap did so far (FrameIntegration::memoryCapCounters). Plain value type.
+struct MemoryCapCounters {
+  MemoryCapState state = MemoryCapState::kOff;  ///< the stage of the last integrated frame
+  uint64_t frames_near_only = 0;  ///< integrated with depth cut at near_distance_m (any stage)
+  uint64_t frames_at_cap = 0;     ///< of those, integrated at the cap (no new block)
+  uint64_t blocks_refused = 0;    ///< blocks allocated at the cap and taken back
 };
 
 /// The in-tray of depth frames (newest wins), the frame poses, and the integrator thread:
@@ -46,7 +59,12 @@ struct FrameIntegrationConfig {
 /// and counted by reason), applies the creation policy under the shared policy mutex
 /// (ground-truth mode: synthesises keyframes, which map maintenance applies while the frame
 /// waits) and integrates into the active subvolume under Submap::lockForIntegration() with
-/// T_M_D = T_G_M^-1 * T_G_B * T_B_D.
+/// T_M_D = T_G_M^-1 * T_G_B * T_B_D. Memory cap (memory_cap.h), decided per frame from the
+/// map's accounted bytes before it is integrated: from near_only_fraction of the cap on,
+/// depth beyond near_distance_m is cut; at the cap, also depth whose point lies in no block of
+/// the active subvolume, and every block the frame still allocates there is removed again
+/// (existing blocks are still updated), so the map
+/// exceeds the cap by at most the blocks of the one frame that crossed it.
 /// Thread-safety: every public member function is thread-safe.
 class FrameIntegration {
  public:
@@ -81,6 +99,9 @@ class FrameIntegration {
   InTrayCounters pendingCounters() const { return pending_.counters(); }
   size_t pendingFrames() const { return pending_.size(); }
   const TimingWindow& integrationMs() const { return integration_ms_; }
+  /// Age of integrated frames when their integration began (received -> start), ms.
+  const TimingWindow& frameAgeMs() const { return frame_age_ms_; }
+  MemoryCapCounters memoryCapCounters() const;
 
  private:
   struct PendingFrame {
@@ -102,12 +123,16 @@ class FrameIntegration {
   PoseBuffer poses_;
   InTray<PendingFrame> pending_;
   TimingWindow integration_ms_;
+  TimingWindow frame_age_ms_;
   // Integrator thread only.
   std::unique_ptr<FrameIntegrator> frame_integrator_;
   int frames_since_keyframe_ = 0;
+  NewBlockRefusal refusal_;
 
   std::atomic<bool> busy_{false}, stop_{false};
   std::atomic<uint64_t> frames_integrated_{0}, frames_cut_by_budget_{0};
+  std::atomic<MemoryCapState> cap_state_{MemoryCapState::kOff};
+  std::atomic<uint64_t> frames_near_only_{0}, frames_at_cap_{0}, blocks_refused_{0};
   std::mutex lifecycle_mutex_;
   bool started_ = false;
   std::thread thread_;

@@ -1,18 +1,12 @@
 #include "daemon/mapper/fusion_export_worker.h"
 
-#include <pthread.h>
-#include <sched.h>
-#include <sys/resource.h>
-#include <sys/syscall.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <exception>
 #include <utility>
 
 #include "core/submap/submap_fusion.h"
+#include "daemon/common/thread_priority.h"
 
 namespace cblox {
 
@@ -111,17 +105,9 @@ bool FusionExportWorker::idle() const {
 }
 
 void FusionExportWorker::lowerPriority() {
-  const pid_t tid = static_cast<pid_t>(::syscall(SYS_gettid));
-  if (::setpriority(PRIO_PROCESS, static_cast<id_t>(tid), config_.niceness) != 0) {
-    log_(std::string("worker: cannot set niceness ") + std::to_string(config_.niceness) +
-        ": " + std::strerror(errno));
-  }
-  if (config_.sched_idle) {
-    sched_param param{};
-    param.sched_priority = 0;
-    if (const int e = pthread_setschedparam(pthread_self(), SCHED_IDLE, &param); e != 0) {
-      log_(std::string("worker: cannot switch to SCHED_IDLE: ") + std::strerror(e));
-    }
+  if (const std::string problem = lowerThreadPriority(config_.niceness, config_.sched_idle);
+      !problem.empty()) {
+    log_("worker: " + problem);
   }
 }
 

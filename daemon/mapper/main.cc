@@ -5,6 +5,7 @@
 //   cblox-mapper --config config/mapper.yaml                       # ground-truth poses
 //   cblox-mapper --pose-source tracker --output-dir /data/maps
 //   cblox-mapper --config config/mapper.yaml --load-map /data/maps/run1   # continue a saved map
+//   cblox-mapper --checkpoint-dir /var/lib/cblox/checkpoint/mapper       # checkpoints + resume
 //
 // Subscribes: CBLOX_DEPTH (depth_frame_t); ground_truth mode: CBLOX_GT_POSE
 // (pose_stamped_t); tracker mode: CBLOX_FRAME_POSE (frame_pose_t), CBLOX_KEYFRAME
@@ -46,12 +47,14 @@ using Clock = std::chrono::steady_clock;
 struct Args {
   DaemonOptions daemon;
   std::optional<std::string> pose_source, output_dir, load_map;
+  std::optional<std::string> checkpoint_dir;  ///< --checkpoint-dir DIR over checkpoint.dir
 };
 
 MapperProcessConfig buildConfig(const Args& args) {
   MapperProcessConfig config = loadDaemonConfig<MapperProcessConfig>(args.daemon, loadMapperConfig);
   if (args.pose_source) config.mapper.pose_source = parsePoseSource(*args.pose_source);
   if (args.output_dir) config.mapper.output_dir = *args.output_dir;
+  if (args.checkpoint_dir) config.mapper.checkpoint.dir = *args.checkpoint_dir;
   if (const std::string e = config.validate(); !e.empty()) throw ConfigError(e);
   return config;
 }
@@ -179,6 +182,10 @@ int main(int argc, char** argv) {
       ->type_name("DIR");
   app.add_option("--load-map", args.load_map,
                  "load this saved map directory (cblox-ctl save-map) before serving")
+      ->type_name("DIR");
+  app.add_option("--checkpoint-dir", args.checkpoint_dir,
+                 "checkpoint directory of the map (over checkpoint.dir; the systemd unit\n"
+                 "gives /var/lib/cblox/checkpoint/mapper)")
       ->type_name("DIR");
   if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
   return cblox::runProcess("cblox-mapper", [&] { return cblox::run(args); });

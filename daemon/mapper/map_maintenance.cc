@@ -192,7 +192,9 @@ void MapMaintenance::applyKeyframe(KeyframeId id, int64_t utime, const Transform
     const bool new_map = active && epochOfKey(id) != epochOfKey(active->anchorKeyframe());
     if (policy_->onKeyframe(active.get(), new_map)) {
       // Finishes the previous submap (waits for the frame being integrated into it).
-      created = collection_->createSubmap(T_G_K, id, utime * 1000);
+      // Clamped: a keyframe time stamp from the bus beyond +-292 years overflows in ns.
+      created = collection_->createSubmap(
+          T_G_K, id, std::clamp<int64_t>(utime, INT64_MIN / 1000, INT64_MAX / 1000) * 1000);
       joined = created->id();
     } else {
       active->addKeyframe(id);
@@ -236,7 +238,9 @@ double MapMaintenance::seconds() const {
 void MapMaintenance::advanceInputClock(int64_t utime) {
   std::lock_guard<std::mutex> lock(input_clock_mutex_);
   if (last_input_utime_ != INT64_MIN && utime > last_input_utime_) {
-    input_clock_us_.fetch_add(utime - last_input_utime_);
+    // Unsigned: two time stamps from the bus may be more than INT64_MAX apart.
+    const uint64_t step = static_cast<uint64_t>(utime) - static_cast<uint64_t>(last_input_utime_);
+    input_clock_us_.fetch_add(static_cast<int64_t>(std::min<uint64_t>(step, INT64_MAX)));
   }
   // A restarted source's time stamps start a new base; small steps back keep the newest.
   if (utime > last_input_utime_ ||
@@ -245,7 +249,8 @@ void MapMaintenance::advanceInputClock(int64_t utime) {
   }
 }
 
-void MapMaintenance::adoptLoadedSubmaps(const std::vector<std::shared_ptr<Submap>>& submaps) {
+size_t MapMaintenance::adoptLoadedSubmaps(const std::vector<std::shared_ptr<Submap>>& submaps,
+                                          const FusionSchedulerState& state) {
   // *policy_mutex_ is held by the caller (keyframes_seen_).
   for (const std::shared_ptr<Submap>& submap : submaps) {
     for (const KeyframeId id : submap->keyframeIds()) {
@@ -253,11 +258,16 @@ void MapMaintenance::adoptLoadedSubmaps(const std::vector<std::shared_ptr<Submap
       max_keyframe_seen_ = std::max(max_keyframe_seen_, id);
     }
   }
-  // The covisibility graph is not restored: landmark ids are not part of the map files.
   std::lock_guard<std::mutex> lock(scheduler_mutex_);
   for (const std::shared_ptr<Submap>& submap : submaps) {
     scheduler_.addSubvolume(submap->id(), submap->anchorKeyframe());
   }
+  return scheduler_.restoreState(state, seconds());
+}
+
+FusionSchedulerState MapMaintenance::schedulerState() const {
+  std::lock_guard<std::mutex> lock(scheduler_mutex_);
+  return scheduler_.exportState(seconds());
 }
 
 void MapMaintenance::requestCovariances() {
@@ -276,6 +286,10 @@ void MapMaintenance::applyReply(const Item& item) {
   {
     std::lock_guard<std::mutex> lock(scheduler_mutex_);
     accepted = scheduler_.onReply(item.request_id, item.answers, seconds());
+  }
+  for (const FusionPair& pair : accepted) {
+    log_("fusion accepted: subvolume " + std::to_string(pair.newer) + " into " +
+         std::to_string(pair.older));
   }
   worker_->submitFusions(accepted);
 }

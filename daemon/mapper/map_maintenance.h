@@ -93,11 +93,17 @@ class MapMaintenance {
   /// Makes submaps restored from a saved map (loadMap) known as created ones are: their
   /// keyframe ids count as applied (a repeated id is a duplicate; a synthesised one gets the
   /// next unused id) and each is a subvolume of the fusion scheduler with its anchor
-  /// keyframe. Not restored: the covisibility graph (landmark ids are not saved), so a loaded
-  /// subvolume is no fusion candidate until keyframes that join it bring landmarks. Call
-  /// with `*policy_mutex` held (as passed to the constructor), right after the load, before
-  /// any keyframe is applied to the loaded map.
-  void adoptLoadedSubmaps(const std::vector<std::shared_ptr<Submap>>& submaps);
+  /// keyframe; then `state` (the saved FusionScheduler state: covisibility landmark sets,
+  /// back-offs of rejected pairs; empty for maps saved before manifest version 2) is restored
+  /// (FusionScheduler::restoreState), so loaded subvolumes are fusion candidates as they were.
+  /// Returns the number of state entries that name no loaded subvolume (ignored). Call with
+  /// `*policy_mutex` held (as passed to the constructor), right after the load, before any
+  /// keyframe is applied to the loaded map.
+  size_t adoptLoadedSubmaps(const std::vector<std::shared_ptr<Submap>>& submaps,
+                            const FusionSchedulerState& state);
+  /// The fusion scheduler's state now (FusionScheduler::exportState), for a checkpoint or a
+  /// save.
+  FusionSchedulerState schedulerState() const;
 
   /// Nothing queued and nothing in hand.
   bool idle() const;

@@ -11,7 +11,8 @@ namespace cblox {
 
 MapperReply saveMapToOutputDir(const SubmapCollection& collection,
                                const std::filesystem::path& output_dir, const std::string& dir_arg,
-                               const std::map<std::string, int64_t>& counters) {
+                               const std::map<std::string, int64_t>& counters,
+                               const MaintenanceStateSource& maintenance) {
   MapperReply reply;
   std::string error;
   const auto dir = writableOutputPath(output_dir, dir_arg, &error);
@@ -22,7 +23,7 @@ MapperReply saveMapToOutputDir(const SubmapCollection& collection,
   const auto start = std::chrono::steady_clock::now();
   MapSaveReport report;
   const std::optional<MapManifest> manifest =
-      saveMap(collection, dir->string(), counters, &report, &error);
+      saveMap(collection, dir->string(), counters, maintenance, &report, &error);
   if (!manifest) {
     reply.message = "map not saved: " + error;
     return reply;

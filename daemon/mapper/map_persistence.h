@@ -8,12 +8,14 @@
 #include <map>
 #include <string>
 
+#include "core/persistence/map_store.h"
 #include "core/submap/submap_collection.h"
 #include "daemon/mapper/mapper_command.h"
 
 namespace cblox {
 
-/// Saves `collection` (saveMap: every submap file, then the manifest with `counters`) into
+/// Saves `collection` (saveMap: every submap file, then the manifest with `counters` and the
+/// map maintenance's state from `maintenance`) into
 /// the map directory `dir`, resolved inside `output_dir` (resolveOutputPath; confined there
 /// on disk too, staysInsideOnDisk) and created if absent. Reads finished layers in place and
 /// copies an active one under its layer lock (writeSubmapFile), so call it only where
@@ -23,6 +25,7 @@ namespace cblox {
 /// or the path). Never throws for a bad path.
 MapperReply saveMapToOutputDir(const SubmapCollection& collection,
                                const std::filesystem::path& output_dir, const std::string& dir,
-                               const std::map<std::string, int64_t>& counters);
+                               const std::map<std::string, int64_t>& counters,
+                               const MaintenanceStateSource& maintenance);
 
 }  // namespace cblox

@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 #include <system_error>
@@ -18,6 +19,12 @@ namespace cblox {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+int64_t wallUtimeNow() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
 
 }  // namespace
 
@@ -77,14 +84,22 @@ Mapper::Mapper(const MapperConfig& config, LogSink log)
           FrameIntegrationConfig{config_.pose_source, config_.keyframe_every_n_frames,
                                  config_.integrator_type, config_.integrator,
                                  config_.max_pose_wait_s, config_.pending_capacity,
-                                 config_.pose_buffer, config_.timing_window},
+                                 config_.pose_buffer, config_.timing_window,
+                                 config_.memory_cap, config_.integrator_niceness},
           &collection_, &policy_, &policy_mutex_, &maintenance_,
           [this](InputProblem problem, const std::string& message, uint64_t n) {
             count(problem, message, n);
           }) {
   if (config_.checkpoint.enabled()) {
     checkpointer_ = std::make_unique<MapCheckpointer>(config_.checkpoint.dir);
-    worker_.setPeriodicTask(config_.checkpoint.period_s, [this] { runCheckpoint(); });
+    // Test only (scripts/crash_test.sh): a pause before each submap file and the manifest of
+    // a checkpoint, so that a kill lands inside a checkpoint write often.
+    if (const char* pause = std::getenv("CBLOX_TEST_CHECKPOINT_PAUSE_MS")) {
+      checkpointer_->setPauseBeforeEachFile(std::chrono::milliseconds(std::atoi(pause)));
+    }
+    if (config_.checkpoint.period_s > 0.0) {
+      worker_.setPeriodicTask(config_.checkpoint.period_s, [this] { runCheckpoint(); });
+    }
   }
 }
 
@@ -190,7 +205,8 @@ bool Mapper::onDepthFrame(DepthFrame frame) {
     if (isRestart(last_depth_utime_, frame.utime)) {
       source_restarts_.fetch_add(1, std::memory_order_relaxed);
       log(what + ": depth time stamps went back by " +
-          fixed(static_cast<double>(last_depth_utime_ - frame.utime) * 1e-6, 3) +
+          fixed((static_cast<double>(last_depth_utime_) - static_cast<double>(frame.utime)) * 1e-6,
+                3) +
           " s: source restarted, frame order starts afresh, pose buffer cleared");
       last_depth_utime_ = INT64_MIN;
       // The old stream's poses must not serve the new stream's frames (same time stamps).
@@ -226,7 +242,7 @@ bool Mapper::onFramePose(const TimedPose& pose) {
     if (result == PoseBuffer::AddResult::kOutOfOrder && isRestart(newest, pose.utime)) {
       source_restarts_.fetch_add(1, std::memory_order_relaxed);
       log(what + ": pose time stamps went back by " +
-          fixed(static_cast<double>(newest - pose.utime) * 1e-6, 3) +
+          fixed((static_cast<double>(newest) - static_cast<double>(pose.utime)) * 1e-6, 3) +
           " s: source restarted, pose buffer cleared");
       poses.clear();
       result = poses.add(stored);
@@ -314,7 +330,10 @@ void Mapper::onCommand(const MapperCommand& command, ReplyCallback reply) {
     const std::string dir = path->second;
     worker_.submitJob(
         command,
-        [this, dir] { return saveMapToOutputDir(collection_, output_dir_, dir, statusCounters()); },
+        [this, dir] {
+          return saveMapToOutputDir(collection_, output_dir_, dir, statusCounters(),
+                                    [this] { return maintenance_.schedulerState(); });
+        },
         std::move(reply));
     return;
   }
@@ -364,7 +383,7 @@ MapperReply Mapper::loadMap(const std::string& dir) {
       reply.message = "map not loaded: " + error;
       return reply;
     }
-    maintenance_.adoptLoadedSubmaps(collection_.submaps());
+    maintenance_.adoptLoadedSubmaps(collection_.submaps(), report.maintenance);
     policy_.reset();  // no decision about the loaded active subvolume is pending
     // A map loaded from the checkpoint directory itself (a resume, or --load-map of it): the
     // next checkpoint lists its files again instead of rewriting them. Checkpoints run on the
@@ -377,12 +396,14 @@ MapperReply Mapper::loadMap(const std::string& dir) {
   }
   const double seconds = secondsSince(start);
   reply.ok = true;
-  // Not restored: the covisibility graph (landmark ids are not saved) and the tracker's map,
-  // so a tracker that starts afresh numbers its keyframes from 0 again.
+  // Not restored: the tracker's map, so a tracker that starts afresh numbers its keyframes
+  // from 0 again (a new map epoch keeps them apart).
   reply.message = "loaded " + dir + ": " + std::to_string(report.submaps) + " subvolumes, " +
                   std::to_string(report.blocks) + " blocks, " + std::to_string(report.bytes_read) +
-                  " bytes in " + fixed(seconds, 3) +
-                  " s (covisibility not restored: loaded subvolumes are no fusion candidates)";
+                  " bytes in " + fixed(seconds, 3) + " s (covisibility restored: " +
+                  std::to_string(report.maintenance.subvolumes.size()) +
+                  " subvolumes with landmarks, " +
+                  std::to_string(report.maintenance.backoffs.size()) + " pair back-offs)";
   reply.values = {{"path", dir},
                   {"submaps", std::to_string(report.submaps)},
                   {"blocks", std::to_string(report.blocks)},
@@ -414,7 +435,8 @@ void Mapper::runCheckpoint() {
   std::string error;
   std::optional<MapCheckpointReport> report;
   try {
-    report = checkpointer_->checkpoint(collection_, statusCounters(), &error);
+    report = checkpointer_->checkpoint(
+        collection_, statusCounters(), [this] { return maintenance_.schedulerState(); }, &error);
   } catch (const std::exception& e) {
     error = e.what();
   }
@@ -428,6 +450,9 @@ void Mapper::runCheckpoint() {
   }
   const bool first = checkpoints_written_.fetch_add(1, std::memory_order_relaxed) == 0;
   last_checkpoint_ms_.store(static_cast<float>(report->milliseconds), std::memory_order_relaxed);
+  // checkpoint() returned: the manifest is renamed into place and the directory synced.
+  last_checkpoint_utime_.store(wallUtimeNow(), std::memory_order_relaxed);
+  checkpoint_generation_.store(report->generation, std::memory_order_release);
   if (first || !last_checkpoint_error_.empty()) {
     log(std::string(first ? "first checkpoint" : "checkpoints written again") + " into " +
         checkpointer_->dir() + ": generation " + std::to_string(report->generation) + ", " +
@@ -494,6 +519,8 @@ MapperStatus Mapper::status() const {
   s.checkpoints_written = checkpoints_written_.load(std::memory_order_relaxed);
   s.checkpoint_failures = checkpoint_failures_.load(std::memory_order_relaxed);
   s.last_checkpoint_ms = last_checkpoint_ms_.load(std::memory_order_relaxed);
+  s.checkpoint_generation = checkpoint_generation_.load(std::memory_order_acquire);
+  s.last_checkpoint_utime = last_checkpoint_utime_.load(std::memory_order_relaxed);
   s.fusion = maintenance_.schedulerStats();
   for (size_t i = 0; i < kNumInputProblems; ++i) {
     s.problems[i] = problems_[i].load(std::memory_order_relaxed);
@@ -503,6 +530,11 @@ MapperStatus Mapper::status() const {
   s.integration_ms_last = static_cast<float>(times.last());
   s.integration_ms_median = static_cast<float>(times.quantile(0.5));
   s.integration_ms_p99 = static_cast<float>(times.quantile(0.99));
+  const TimingWindow& ages = integration_.frameAgeMs();
+  s.frame_age_ms_median = static_cast<float>(ages.quantile(0.5));
+  s.frame_age_ms_p99 = static_cast<float>(ages.quantile(0.99));
+  s.memory_cap_bytes = config_.memory_cap.enabled() ? config_.memory_cap.capBytes() : 0;
+  s.memory_cap = integration_.memoryCapCounters();
   return s;
 }
 
@@ -528,7 +560,10 @@ std::vector<std::pair<std::string, uint64_t>> integerCounters(const MapperStatus
           {"rejected_by_q", s.fusion.rejected_by_q},
           {"covariance_errors", s.fusion.covariance_errors},
           {"checkpoints_written", s.checkpoints_written},
-          {"checkpoint_failures", s.checkpoint_failures}};
+          {"checkpoint_failures", s.checkpoint_failures},
+          {"frames_near_only", s.memory_cap.frames_near_only},
+          {"frames_at_memory_cap", s.memory_cap.frames_at_cap},
+          {"blocks_refused", s.memory_cap.blocks_refused}};
 }
 
 }  // namespace
@@ -560,13 +595,24 @@ MapperReply Mapper::statusReply(const MapperCommand& command) const {
                   {"subvolumes", std::to_string(s.num_submaps)},
                   {"active_subvolume", std::to_string(s.active_submap_id)},
                   {"blocks", std::to_string(s.num_blocks)},
-                  {"memory_bytes", std::to_string(s.memory_bytes)}};
+                  {"memory_bytes", std::to_string(s.memory_bytes)},
+                  {"memory_cap_bytes", std::to_string(s.memory_cap_bytes)},
+                  {"memory_cap_state", memoryCapStateName(s.memory_cap.state)}};
   for (const auto& [name, value] : integerCounters(s)) {
     reply.values.emplace_back(name, std::to_string(value));
   }
   reply.values.emplace_back("integration_ms_median", fixed(s.integration_ms_median, 2));
   reply.values.emplace_back("integration_ms_p99", fixed(s.integration_ms_p99, 2));
+  reply.values.emplace_back("frame_age_ms_median", fixed(s.frame_age_ms_median, 2));
+  reply.values.emplace_back("frame_age_ms_p99", fixed(s.frame_age_ms_p99, 2));
   reply.values.emplace_back("last_checkpoint_ms", fixed(s.last_checkpoint_ms, 1));
+  reply.values.emplace_back("checkpoint_dir", config_.checkpoint.dir);
+  reply.values.emplace_back("checkpoint_generation", std::to_string(s.checkpoint_generation));
+  reply.values.emplace_back(
+      "last_checkpoint_age_s",
+      s.last_checkpoint_utime == 0
+          ? std::string("-")
+          : fixed(static_cast<double>(wallUtimeNow() - s.last_checkpoint_utime) * 1e-6, 1));
   for (size_t i = 0; i < kNumInputProblems; ++i) {
     if (s.problems[i] > 0) {
       reply.values.emplace_back(

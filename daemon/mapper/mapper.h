@@ -73,6 +73,8 @@ struct MapperStatus {
   uint64_t checkpoints_written = 0;   ///< periodic checkpoints committed (checkpoint.dir)
   uint64_t checkpoint_failures = 0;   ///< periodic checkpoints that failed (map unchanged)
   float last_checkpoint_ms = 0.0f;    ///< wall time of the last committed checkpoint; 0: none
+  uint64_t checkpoint_generation = 0;  ///< generation of the last committed checkpoint; 0: none
+  int64_t last_checkpoint_utime = 0;   ///< when it committed, us since the Unix epoch; 0: none
   /// Map maintenance (FusionSchedulerStats): candidate pairs, pairs whose covariance was
   /// requested, accepted for fusion, rejected by q, answered with an error; fusions done and
   /// failed; requests timed out.
@@ -80,6 +82,12 @@ struct MapperStatus {
   float integration_ms_last = 0.0f;
   float integration_ms_median = 0.0f;
   float integration_ms_p99 = 0.0f;
+  /// Age of integrated frames when their integration began (received -> start), ms.
+  float frame_age_ms_median = 0.0f;
+  float frame_age_ms_p99 = 0.0f;
+  size_t memory_cap_bytes = 0;  ///< memory.cap_mb in bytes; 0 = no cap
+  /// The memory cap's stage and what it did (memory_cap.h).
+  MemoryCapCounters memory_cap;
   std::array<uint64_t, kNumInputProblems> problems{};  ///< indexed by InputProblem
   uint64_t problem(InputProblem p) const { return problems[static_cast<size_t>(p)]; }
 };
@@ -271,6 +279,9 @@ class Mapper {
   std::string last_checkpoint_error_;
   std::atomic<uint64_t> checkpoints_written_{0}, checkpoint_failures_{0};
   std::atomic<float> last_checkpoint_ms_{0.0f};
+  // Set only after the manifest's rename and directory fsync (a committed checkpoint).
+  std::atomic<uint64_t> checkpoint_generation_{0};
+  std::atomic<int64_t> last_checkpoint_utime_{0};
 
   // Exports and accepted fusions, on its own low-priority thread; reports fusions to
   // maintenance_.

@@ -17,13 +17,6 @@ IntegratorConfig MapperConfig::defaultIntegratorConfig() {
   return config;
 }
 
-std::string MapperCheckpointConfig::validate() const {
-  if (!(period_s >= 0.0) || !std::isfinite(period_s)) {
-    return "period_s must be finite and >= 0, got " + std::to_string(period_s);
-  }
-  return {};
-}
-
 std::string MapperConfig::validate() const {
   if (std::string e = layer.validate(); !e.empty()) return "layer." + e;
   if (std::string e = integrator.validate(layer.voxel_size); !e.empty()) return "integrator." + e;
@@ -47,6 +40,9 @@ std::string MapperConfig::validate() const {
   if (command_queue_capacity < 1) return "command_queue_capacity must be >= 1";
   if (timing_window < 1) return "timing_window must be >= 1";
   if (output_dir.empty()) return "output_dir must not be empty";
+  if (integrator_niceness < 0 || integrator_niceness > 19) {
+    return "integrator_niceness must be in [0, 19], got " + std::to_string(integrator_niceness);
+  }
   if (worker_niceness < 0 || worker_niceness > 19) {
     return "worker_niceness must be in [0, 19], got " + std::to_string(worker_niceness);
   }
@@ -54,6 +50,7 @@ std::string MapperConfig::validate() const {
     return "log_interval_s must be finite and > 0, got " + std::to_string(log_interval_s);
   }
   if (std::string e = checkpoint.validate(); !e.empty()) return "checkpoint." + e;
+  if (std::string e = memory_cap.validate(); !e.empty()) return "memory." + e;
   return {};
 }
 

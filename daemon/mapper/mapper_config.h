@@ -5,6 +5,7 @@
 // mapper_config_loader.h.
 
 #include <cstddef>
+#include <climits>
 #include <cstdint>
 #include <string>
 
@@ -15,7 +16,9 @@
 #include "core/submap/submap_creation_policy.h"
 #include "core/submap/submap_fusion.h"
 #include "core/tsdf/layer_config.h"
+#include "daemon/common/checkpoint_config.h"
 #include "daemon/common/input_silence.h"
+#include "daemon/mapper/memory_cap.h"
 #include "daemon/mapper/pose_buffer.h"
 
 namespace cblox {
@@ -50,27 +53,14 @@ enum class MaintenanceClock {
 /// Thread-safe (pure).
 inline bool isTimeRestart(int64_t newest_utime, int64_t utime, double restart_after_backwards_s) {
   if (restart_after_backwards_s <= 0.0 || newest_utime == INT64_MIN) return false;
-  return static_cast<double>(newest_utime - utime) * 1e-6 > restart_after_backwards_s;
+  // In double: two time stamps from the bus may be 2^63 apart (int64_t would overflow).
+  return (static_cast<double>(newest_utime) - static_cast<double>(utime)) * 1e-6 >
+         restart_after_backwards_s;
 }
 
 /// Periodic incremental checkpoints of the map and resume at start (the `checkpoint` part of
-/// config/mapper.yaml; README "Map file format"). Plain value type.
-struct MapperCheckpointConfig {
-  /// The checkpoint map directory (any path, not confined to output_dir; created by the first
-  /// checkpoint). Empty = no checkpoints and no resume.
-  std::string dir;
-  /// A checkpoint every this many seconds, on the fusion/export worker (finite, >= 0);
-  /// 0 = no checkpoints.
-  double period_s = 0.0;
-  /// At start, load the checkpoint in `dir` when it has a manifest (unless --load-map names
-  /// a map); a checkpoint that cannot be loaded is a configuration error.
-  bool resume = true;
-
-  /// Checkpoints are written (dir set and period_s > 0).
-  bool enabled() const { return !dir.empty() && period_s > 0.0; }
-  /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
-  std::string validate() const;
-};
+/// config/mapper.yaml; README "Map file format"): daemon/common/checkpoint_config.h.
+using MapperCheckpointConfig = CheckpointConfig;
 
 /// Settings of a Mapper (the `mapper` part of config/mapper.yaml). Plain value type.
 /// Defaults are sized for 752x480 depth at 10-20 Hz on a 2-core computer that also tracks.
@@ -114,6 +104,10 @@ struct MapperConfig {
   size_t timing_window = 200;
   /// Exports are confined to this directory (created at start).
   std::string output_dir = "out";
+  /// Niceness of the integrator thread (setpriority on its thread id), [0, 19]. Above 0, an
+  /// overloaded mapper (frames integrated back to back) yields the CPU to the tracker's
+  /// threads (nice 0) when both want it; with idle CPU it changes nothing.
+  int integrator_niceness = 5;
   /// Niceness of the fusion/export worker thread (setpriority on its thread id), [0, 19].
   int worker_niceness = 10;
   /// Also put the worker thread in SCHED_IDLE (runs only when a core is otherwise idle).
@@ -122,6 +116,8 @@ struct MapperConfig {
   double log_interval_s = 10.0;
   /// Periodic checkpoints into checkpoint.dir and resume from them (off by default).
   MapperCheckpointConfig checkpoint;
+  /// The cap on the map's memory and its policy (the `memory` part of config/mapper.yaml).
+  MemoryCapConfig memory_cap;
   /// The clock of map maintenance (kInput for deterministic replay; not a YAML key).
   MaintenanceClock maintenance_clock = MaintenanceClock::kSteady;
 

@@ -22,9 +22,13 @@ LayerConfig loadMapperLayer(const YAML::Node& node, const LayerConfig& defaults)
 }
 
 IntegratorConfig loadMapperIntegrator(const YAML::Node& node, float voxel_size,
-                                      const IntegratorConfig& defaults, IntegratorType* type) {
+                                      const IntegratorConfig& defaults, IntegratorType* type,
+                                      int* niceness) {
   // Validate against the mapper's defaults for the absent keys, not the generic ones.
   YAML::Node merged = isAbsent(node) ? YAML::Node(YAML::NodeType::Map) : YAML::Clone(node);
+  // The integrator thread's niceness is the mapper's, not the integrator's.
+  readOptional(merged, "integrator", "niceness", niceness);
+  merged.remove("niceness");
   if (!merged["truncation_distance_m"])
     merged["truncation_distance_m"] = defaults.truncation_distance_m;
   if (!merged["max_ray_length_m"]) merged["max_ray_length_m"] = defaults.max_ray_length_m;
@@ -88,7 +92,7 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
       root, top,
       {"pose_source", "lcm_url", "output_dir", "input_silence_s", "channels", "layer",
        "integrator", "mesh", "fusion", "maintenance", "subvolumes", "poses", "queues", "worker",
-       "status", "checkpoint"});
+       "status", "checkpoint", "memory"});
   if (isAbsent(root)) return config;
 
   if (root["pose_source"]) {
@@ -128,7 +132,7 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
 
   m.layer = loadMapperLayer(root["layer"], m.layer);
   m.integrator = loadMapperIntegrator(root["integrator"], m.layer.voxel_size, m.integrator,
-                                      &m.integrator_type);
+                                      &m.integrator_type, &m.integrator_niceness);
   m.mesh = loadMeshConfig(root["mesh"], "mesh");
   m.fusion = loadFusion(root["fusion"]);
   m.maintenance = loadMaintenance(root["maintenance"]);
@@ -183,6 +187,14 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
     readOptional(checkpoint, "checkpoint", "dir", &m.checkpoint.dir);
     readOptional(checkpoint, "checkpoint", "period_s", &m.checkpoint.period_s);
     readOptional(checkpoint, "checkpoint", "resume", &m.checkpoint.resume);
+  }
+
+  const YAML::Node memory = root["memory"];
+  requireKnownKeys(memory, "memory", {"cap_mb", "near_only_fraction", "near_distance_m"});
+  if (!isAbsent(memory)) {
+    readOptional(memory, "memory", "cap_mb", &m.memory_cap.cap_mb);
+    readOptional(memory, "memory", "near_only_fraction", &m.memory_cap.near_only_fraction);
+    readOptional(memory, "memory", "near_distance_m", &m.memory_cap.near_distance_m);
   }
 
   if (const std::string e = config.validate(); !e.empty()) throw ConfigError(top + ": " + e);

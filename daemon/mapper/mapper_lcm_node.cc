@@ -75,6 +75,12 @@ void MapperNode::publishStatus(const MapperStatus& s) {
   msg.covariance_requested = static_cast<int64_t>(s.fusion.requested);
   msg.subvolumes_fused = static_cast<int64_t>(s.fusion.fused);
   msg.rejected_by_q = static_cast<int64_t>(s.fusion.rejected_by_q);
+  msg.checkpoint_generation = static_cast<int64_t>(s.checkpoint_generation);
+  msg.checkpoints_written = static_cast<int64_t>(s.checkpoints_written);
+  msg.checkpoint_failures = static_cast<int64_t>(s.checkpoint_failures);
+  msg.last_checkpoint_utime = s.last_checkpoint_utime;
+  msg.last_checkpoint_ms = s.last_checkpoint_ms;
+  msg.checkpoint_dir = config_.mapper.checkpoint.dir;
   std::lock_guard<std::mutex> lock(publish_mutex_);
   lcm_->publish(config_.map_status_channel, &msg);
 }
@@ -93,6 +99,7 @@ void MapperNode::publishHeartbeat(const MapperStatus& s, const char* state) {
       .add("exports_failed", s.exports_failed)
       .add("checkpoints_written", s.checkpoints_written)
       .add("checkpoint_failures", s.checkpoint_failures)
+      .add("checkpoint_generation", s.checkpoint_generation)
       .add("last_checkpoint_ms", static_cast<uint64_t>(std::lround(s.last_checkpoint_ms)))
       .add("source_restarts", s.source_restarts);
   for (size_t i = 0; i < kNumInputProblems; ++i) {

@@ -312,6 +312,20 @@ int runStatusAll(lcm::LCM& lcm, const std::string& heartbeat_channel,
                 r.state.c_str());
     if (is_expected && saysEnded(it->second->last)) not_alive.push_back(name);
   }
+  // Processes that checkpoint without a map status of their own (the tracker): one line each.
+  for (const std::string& name : order) {
+    const auto it = by_name.find(name);
+    if (it == by_name.end() || name == "mapper") continue;
+    const cblox::heartbeat_t& hb = it->second->last;
+    const auto generation = counter(hb, "checkpoint_generation");
+    const int64_t written = counter(hb, "checkpoints_written").value_or(0);
+    const int64_t failed = counter(hb, "checkpoint_failures").value_or(0);
+    if (generation && (*generation > 0 || written > 0 || failed > 0)) {
+      std::printf("%s checkpoints: generation %lld, %lld written, %lld failed\n", name.c_str(),
+                  static_cast<long long>(*generation), static_cast<long long>(written),
+                  static_cast<long long>(failed));
+    }
+  }
   if (listener.map_status) {
     const cblox::map_status_t& m = *listener.map_status;
     std::printf(
@@ -322,6 +336,17 @@ int runStatusAll(lcm::LCM& lcm, const std::string& heartbeat_channel,
         static_cast<long long>(m.frames_integrated), static_cast<long long>(m.frames_dropped),
         static_cast<long long>(m.frames_rejected), static_cast<double>(m.integration_ms_median),
         static_cast<double>(m.integration_ms_p99), static_cast<long long>(m.subvolumes_fused));
+    if (!m.checkpoint_dir.empty()) {
+      const std::string age =
+          m.last_checkpoint_utime > 0
+              ? format("%.1f s ago", static_cast<double>(now - m.last_checkpoint_utime) * 1e-6)
+              : std::string("none yet");
+      std::printf(
+          "checkpoints: %s generation %lld (%s, %.1f ms), %lld written, %lld failed\n",
+          m.checkpoint_dir.c_str(), static_cast<long long>(m.checkpoint_generation), age.c_str(),
+          static_cast<double>(m.last_checkpoint_ms), static_cast<long long>(m.checkpoints_written),
+          static_cast<long long>(m.checkpoint_failures));
+    }
   } else {
     std::printf("map: no %s in %.1f s\n", map_status_channel.c_str(), listen_s);
   }

@@ -6,6 +6,7 @@
 //   cblox-tracker --initial-pose-from-gt                 # simulator: G = the simulator's frame
 //   cblox-tracker --calibration config/calibration/sim_rig.yaml     # camera from a file
 //   cblox-tracker --mode rgbd                            # depth + registered colour
+//   cblox-tracker --checkpoint-dir /var/lib/cblox/checkpoint/tracker   # save and resume
 //
 // Subscribes: stereo mode CBLOX_STEREO (stereo_pair_t), RGB-D mode CBLOX_DEPTH
 // (depth_frame_t with registered colour); initial_pose ground_truth: CBLOX_GT_POSE
@@ -17,6 +18,9 @@
 // CBLOX_COV_REPLY (covariance_reply_t) for every request (computed on the covariance
 // service's own low-priority thread).
 // Frame poses are of the tracked camera (the rectified left camera, or the RGB-D camera).
+// checkpoint.dir: the sparse map is checkpointed there (every checkpoint.period_s and at a
+// clean stop) and, with checkpoint.resume, continued at start: the tracker relocalizes in it
+// (README "Tracker map format"); a checkpoint that cannot be read is a configuration error.
 // Exit status: 0 stopped by SIGINT/SIGTERM, 1 runtime error, 2 usage or configuration error.
 
 #include <chrono>
@@ -47,11 +51,13 @@ using Clock = std::chrono::steady_clock;
 struct Args {
   DaemonOptions daemon;
   TrackerOptions tracker;
+  std::optional<std::string> checkpoint_dir;  ///< --checkpoint-dir DIR over checkpoint.dir
 };
 
 TrackerProcessConfig buildConfig(const Args& args) {
   TrackerProcessConfig config =
       loadDaemonConfig<TrackerProcessConfig>(args.daemon, loadTrackerConfig);
+  if (args.checkpoint_dir) config.tracker.checkpoint.dir = *args.checkpoint_dir;
   applyTrackerOptions(args.tracker, &config);
   return config;
 }
@@ -89,6 +95,14 @@ int run(const Args& args) {
         vocabulary && t.slam.loop_closing_enabled ? "on" : "off");
     std::fflush(stdout);
   }
+  if (!t.checkpoint.dir.empty() && t.checkpoint.resume) {
+    // An unreadable checkpoint stops the start (repair or move it, or set checkpoint.resume:
+    // false): silently starting a new map would orphan the mapper's subvolumes.
+    std::string error;
+    std::optional<TrackerResume> resume = loadTrackerResume(t.checkpoint.dir, &error);
+    if (!error.empty()) throw ConfigError("checkpoint: cannot resume: " + error);
+    if (resume) node.resumeFrom(std::move(*resume));
+  }
   lcm_node.subscribe(&node);
   node.start();
 
@@ -101,17 +115,18 @@ int run(const Args& args) {
     last_processed = s.frames_processed;
     last_progress = Clock::now();
     std::printf(
-        "tracker: %s%llu frames (%.1f/s): %llu tracked, %llu lost, %llu dropped, %llu "
-        "rejected; %llu keyframes, %llu landmarks, %llu loops; tracking median %.1f ms, frame "
-        "median %.1f ms p95 %.1f ms; %s\n",
+        "tracker: %s%llu frames (%.1f/s): %llu tracked, %llu lost, %llu relocalized, %llu "
+        "dropped, %llu rejected; %llu keyframes, %llu landmarks, %llu loops; tracking median "
+        "%.1f ms, frame median %.1f ms p95 %.1f ms; %llu checkpoints; %s\n",
         prefix, static_cast<unsigned long long>(s.frames_processed), rate,
         static_cast<unsigned long long>(s.frames_tracked),
         static_cast<unsigned long long>(s.frames_lost),
+        static_cast<unsigned long long>(s.relocalizations),
         static_cast<unsigned long long>(s.frames_dropped),
         static_cast<unsigned long long>(s.frames_rejected),
         static_cast<unsigned long long>(s.keyframes), static_cast<unsigned long long>(s.landmarks),
         static_cast<unsigned long long>(s.loops_closed), s.tracking_ms_median, s.frame_ms_median,
-        s.frame_ms_p95, s.state.c_str());
+        s.frame_ms_p95, static_cast<unsigned long long>(s.checkpoints_written), s.state.c_str());
     std::fflush(stdout);
   };
 
@@ -149,6 +164,10 @@ int main(int argc, char** argv) {
       "cblox-tracker"};
   cblox::addDaemonOptions(app, &args.daemon, "config/tracker.yaml");
   cblox::addTrackerOptions(app, &args.tracker);
+  app.add_option("--checkpoint-dir", args.checkpoint_dir,
+                 "checkpoint directory of the sparse map (over checkpoint.dir; the systemd\n"
+                 "unit gives /var/lib/cblox/checkpoint/tracker)")
+      ->type_name("DIR");
   if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
   return cblox::runProcess("cblox-tracker", [&] { return cblox::run(args); });
 }

@@ -236,7 +236,7 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
            {"vocabulary", &config.vocabulary},
            {"input_silence_s", &config.input_silence_s}},
           {"mode", "initial_pose", "channels", "camera", "frames", "tracker", "local_mapping",
-           "loop_closing", "covariance", "input", "image_check", "status"})) {
+           "loop_closing", "covariance", "input", "image_check", "status", "checkpoint"})) {
     finishTrackerConfig(&config);
     return config;
   }
@@ -285,6 +285,11 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
                 &t.covariance.max_queued_requests);
     readInteger(covariance, "covariance", "niceness", 0, 19, &t.covariance.niceness);
   }
+
+  readSection(root["checkpoint"], "checkpoint",
+              {{"dir", &t.checkpoint.dir},
+               {"period_s", &t.checkpoint.period_s},
+               {"resume", &t.checkpoint.resume}});
 
   const YAML::Node input = root["input"];
   if (readSection(input, "input",

@@ -1,5 +1,6 @@
 #include "daemon/tracker/tracker_lcm_node.h"
 
+#include <cmath>
 #include <optional>
 #include <type_traits>
 #include <utility>
@@ -137,6 +138,12 @@ void TrackerLcmNode::publishHeartbeat(const TrackerStatus& s, const std::string&
   hb.add("frames_dropped", s.frames_dropped);
   hb.add("frames_rejected", s.frames_rejected);
   hb.add("relocalizations", s.relocalizations);
+  hb.add("resumed_keyframes", s.resumed_keyframes);
+  hb.add("checkpoints_written", s.checkpoints_written);
+  hb.add("checkpoint_failures", s.checkpoint_failures);
+  hb.add("checkpoint_generation", s.checkpoint_generation);
+  hb.add("last_checkpoint_ms", static_cast<uint64_t>(std::lround(s.last_checkpoint_ms)));
+  hb.add("id_lease_failures", s.id_lease_failures);
   hb.add("loop_corrected_frames", s.loop_corrected_frames);
   hb.add("keyframes", s.keyframes);
   hb.add("landmarks", s.landmarks);

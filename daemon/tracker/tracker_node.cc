@@ -1,7 +1,11 @@
 #include "daemon/tracker/tracker_node.h"
 
+#include <algorithm>
+#include <climits>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <shared_mutex>
 #include <stdexcept>
 #include <utility>
@@ -78,6 +82,7 @@ std::string TrackerNodeConfig::validate() const {
     return "log_interval_s must be finite and > 0";
   }
   if (std::string e = covariance.validate(); !e.empty()) return "covariance." + e;
+  if (std::string e = checkpoint.validate(); !e.empty()) return "checkpoint." + e;
   return {};
 }
 
@@ -96,10 +101,36 @@ TrackerNode::TrackerNode(const TrackerNodeConfig& config, const BinaryVocabulary
 
 TrackerNode::~TrackerNode() { stop(); }
 
+void TrackerNode::resumeFrom(TrackerResume resume) {
+  std::lock_guard<std::mutex> lock(lifecycle_mutex_);
+  if (started_) return;
+  map_epoch_ = resume.map_epoch;
+  log(resume.description);
+  resume_ = std::move(resume);
+}
+
 void TrackerNode::start() {
   std::lock_guard<std::mutex> lock(lifecycle_mutex_);
   if (started_ || stopped_) return;
   started_ = true;
+  if (!config_.checkpoint.dir.empty()) {
+    std::optional<IdLease> lease;
+    TrackerMapCheckpointer checkpointer(config_.checkpoint.dir);
+    if (resume_) {
+      lease = IdLease{resume_->map_epoch, resume_->keyframe_floor, resume_->landmark_floor};
+      if (resume_->map) checkpointer.adoptLoaded(resume_->index);
+    }
+    // Test only (scripts/crash_test.sh): a pause before each file of a checkpoint, so that a
+    // kill lands inside a checkpoint write often.
+    if (const char* pause = std::getenv("CBLOX_TEST_CHECKPOINT_PAUSE_MS")) {
+      checkpointer.setPauseBeforeEachFile(std::chrono::milliseconds(std::atoi(pause)));
+    }
+    id_lease_ = std::make_unique<IdLeaseKeeper>(config_.checkpoint.dir, lease);
+    checkpoints_ = std::make_unique<TrackerCheckpointWorker>(
+        std::move(checkpointer), config_.checkpoint.period_s,
+        [this] { return mapForCheckpoint(); }, [this](const std::string& line) { log(line); });
+    checkpoints_->start();
+  }
   tracking_thread_ = std::thread([this] { trackingLoop(); });
 }
 
@@ -122,7 +153,71 @@ void TrackerNode::stop() {
   // Kept (not destroyed) so that status() still reads the final map; callbacks may still
   // report the last pose batches while it stops.
   if (system != nullptr) system->stop();
+  if (checkpoints_) checkpoints_->stop();  // the last checkpoint, of the settled map
 }
+
+std::optional<TrackerMapState> TrackerNode::mapForCheckpoint() const {
+  std::lock_guard<std::mutex> lock(system_mutex_);
+  if (!system_) return std::nullopt;
+  TrackerMapState state;
+  state.map = system_->snapshot();
+  if (state.map.keyframes.empty()) return std::nullopt;
+  state.map_epoch = map_epoch_.load();
+  state.camera.intrinsics = tracking_camera_.intrinsics;
+  state.camera.baseline_m = tracking_camera_.baseline_m;
+  return state;
+}
+
+bool TrackerNode::checkpointNow() { return checkpoints_ && checkpoints_->checkpointNow(); }
+
+void TrackerNode::coverIds(const KeyframeInfo& info) {
+  if (!id_lease_) return;
+  std::string error;
+  const uint64_t newest_landmark = info.landmark_ids.empty() ? 0 : info.landmark_ids.back();
+  if (!id_lease_->cover(map_epoch_.load(), info.id, newest_landmark, &error)) {
+    id_lease_failures_.fetch_add(1, std::memory_order_relaxed);
+    log("cannot extend the id lease (ids may repeat after a crash): " + error);
+  }
+}
+
+namespace {
+bool sameCamera(const TrackingCamera& camera, const TrackerMapCamera& saved) {
+  const PinholeIntrinsics& a = camera.intrinsics;
+  const PinholeIntrinsics& b = saved.intrinsics;
+  const auto close = [](double x, double y) { return std::abs(x - y) <= 1e-9 * std::abs(y); };
+  return a.width == b.width && a.height == b.height && close(a.fx, b.fx) && close(a.fy, b.fy) &&
+         close(a.cx, b.cx) && close(a.cy, b.cy) && close(camera.baseline_m, saved.baseline_m);
+}
+}  // namespace
+
+void TrackerNode::restorePending(SlamSystem* system, const TrackingCamera& camera) {
+  std::optional<TrackerResume> resume = std::move(resume_);
+  resume_.reset();
+  if (!resume || !resume->map) return;
+  std::string why;
+  if (!sameCamera(camera, resume->map->camera)) {
+    why = "its camera (" + describeCamera(resume->map->camera.intrinsics) + ", baseline " +
+          std::to_string(resume->map->camera.baseline_m) + " m) is not the one in use";
+  } else {
+    try {
+      system->restore(resume->map->map, resume->keyframe_floor, resume->landmark_floor);
+      size_t good = 0;
+      for (const KeyframeSnapshot& k : resume->map->map.keyframes) good += k.bad ? 0 : 1;
+      resumed_keyframes_ = good;
+      map_started_ = true;
+      setState("lost: relocalizing in the resumed map");
+      log("resumed map restored: " + std::to_string(good) +
+          " keyframes; relocalizing in it");
+      return;
+    } catch (const std::exception& e) {
+      why = e.what();
+    }
+  }
+  map_epoch_ = resume->map_epoch + 1;
+  log("the saved map cannot be continued (" + why + "): starting a new map in epoch " +
+      std::to_string(map_epoch_.load()));
+}
+
 
 bool TrackerNode::onFrame(TrackerFrame frame) {
   frames_received_.fetch_add(1, std::memory_order_relaxed);
@@ -206,6 +301,11 @@ void TrackerNode::setState(std::string state) {
 }
 
 void TrackerNode::trackingLoop() {
+  if (config_.calibration && resume_) {
+    // The camera is known: the saved map is restored now, not on the first frame.
+    std::string error;
+    if (!ensureSystem(*config_.calibration, &error)) log(error);
+  }
   while (!stop_) {
     queue_.waitForWork(std::chrono::milliseconds(100));
     if (stop_) break;
@@ -239,6 +339,7 @@ bool TrackerNode::ensureSystem(const RectifiedStereoCalibration& calibration, st
     return false;
   }
   system->setKeyframeCallback([this](const KeyframeInfo& info) {
+    coverIds(info);  // before the ids leave the process
     keyframes_.fetch_add(1, std::memory_order_relaxed);
     if (outputs_.keyframe) outputs_.keyframe(info);
   });
@@ -265,10 +366,12 @@ bool TrackerNode::ensureSystem(const RectifiedStereoCalibration& calibration, st
       [this](const KeyframeCovarianceReply& reply) {
         if (outputs_.covariance_reply) outputs_.covariance_reply(reply);
       });
+  restorePending(system.get(), camera);
   covariance->start();
   std::lock_guard<std::mutex> lock(system_mutex_);
   system_ = std::move(system);
   covariance_ = std::move(covariance);
+  tracking_camera_ = camera;
   return true;
 }
 
@@ -376,7 +479,9 @@ void TrackerNode::processFrame(TrackerFrame& frame) {
   TrackingResult result;
   const Clock::time_point start = Clock::now();
   try {
-    const int64_t timestamp_ns = frame.utime * 1000;
+    // Clamped: a time stamp from the bus beyond +-292 years would overflow in nanoseconds.
+    const int64_t timestamp_ns =
+        std::clamp<int64_t>(frame.utime, INT64_MIN / 1000, INT64_MAX / 1000) * 1000;
     const uint64_t id = static_cast<uint64_t>(frame.frame_id);
     result = stereo ? system.trackStereo(id, timestamp_ns, frame.image, frame.right, T_C_G_initial)
                     : system.trackRgbd(id, timestamp_ns, frame.image, frame.depth, T_C_G_initial);
@@ -433,6 +538,15 @@ TrackerStatus TrackerNode::status() const {
   s.keyframes = keyframes_.load();
   s.pose_batches = pose_batches_.load();
   s.source_restarts = source_restarts_.load();
+  if (checkpoints_) {
+    const TrackerCheckpointStats c = checkpoints_->stats();
+    s.checkpoints_written = c.written;
+    s.checkpoint_failures = c.failures;
+    s.checkpoint_generation = c.generation;
+    s.last_checkpoint_ms = c.last_ms;
+  }
+  s.id_lease_failures = id_lease_failures_.load();
+  s.resumed_keyframes = resumed_keyframes_.load();
   s.map_epoch = map_epoch_.load();
   for (size_t i = 0; i < kNumTrackerProblems; ++i) {
     s.problems[i] = problems_[i].load(std::memory_order_relaxed);

@@ -23,12 +23,15 @@
 #include "core/tracking/keyframe_covariance_service.h"
 #include "core/tracking/slam_system.h"
 #include "core/vocabulary/binary_vocabulary.h"
+#include "daemon/common/checkpoint_config.h"
 #include "daemon/common/in_tray.h"
 #include "daemon/common/rate_limited_log.h"
 #include "daemon/tracker/ground_truth_buffer.h"
 #include "daemon/tracker/image_check.h"
 #include "daemon/common/timing_window.h"
+#include "daemon/tracker/tracker_checkpoint_worker.h"
 #include "daemon/tracker/tracker_input.h"
+#include "daemon/tracker/tracker_resume.h"
 
 namespace cblox {
 
@@ -81,6 +84,11 @@ struct TrackerNodeConfig {
   double log_interval_s = 10.0;
   /// The covariance service (CBLOX_COV_REQUEST -> CBLOX_COV_REPLY) for the mapper.
   KeyframeCovarianceServiceConfig covariance;
+  /// Checkpoints of the sparse map (README "Tracker map format"): with a directory, the map
+  /// is saved every period_s seconds and when the node stops, and the keyframe / landmark
+  /// ids published are covered by the directory's id lease. Resume is the caller's
+  /// (loadTrackerResume, then TrackerNode::resumeFrom).
+  CheckpointConfig checkpoint;
 
   /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
   std::string validate() const;
@@ -144,6 +152,12 @@ struct TrackerStatus {
   /// stereo matching and tracking), milliseconds, over the last timing_window frames.
   double tracking_ms_median = 0.0, tracking_ms_p95 = 0.0;
   double frame_ms_median = 0.0, frame_ms_p95 = 0.0;
+  /// Checkpoints of the sparse map: written, failed, the generation last committed (0: none),
+  /// the last one's wall time; id lease writes; keyframes restored at start (0: a new map).
+  uint64_t checkpoints_written = 0, checkpoint_failures = 0, checkpoint_generation = 0;
+  double last_checkpoint_ms = 0.0;
+  uint64_t id_lease_renewals = 0, id_lease_failures = 0;
+  uint64_t resumed_keyframes = 0;
   std::array<uint64_t, kNumTrackerProblems> problems{};  ///< indexed by TrackerProblem
   /// "waiting for frames", "tracking", "lost: <why>", "not initialized: <why>".
   std::string state = "waiting for frames";
@@ -188,11 +202,18 @@ class TrackerNode {
   TrackerNode(const TrackerNode&) = delete;
   TrackerNode& operator=(const TrackerNode&) = delete;
 
-  /// Starts the tracking thread. Call once.
+  /// Continue a saved map (loadTrackerResume) instead of starting a new one: the map is
+  /// restored when the camera is known (the first frame, or the configured calibration) and
+  /// the tracker then relocalizes in it; published ids continue above the resume's floors.
+  /// When the saved map's camera is not the one in use, or the map does not restore, a new
+  /// map starts in the epoch after it (logged). Call before start().
+  void resumeFrom(TrackerResume resume);
+  /// Starts the tracking thread (and the checkpoint worker when configured). Call once.
   void start();
   /// The tracking thread finishes the frame in hand (waiting frames are dropped), then the
   /// SlamSystem stops (local mapping and loop closing finish what they hold; their last pose
-  /// batches are still reported). Idempotent; not from a callback.
+  /// batches are still reported), then a last checkpoint is written when configured.
+  /// Idempotent; not from a callback.
   void stop();
 
   /// A decoded frame arrived: checks its calibration against the one in use (or the
@@ -227,9 +248,19 @@ class TrackerNode {
   /// while no other thread hands frames over.
   bool waitUntilSettled(std::chrono::milliseconds timeout) const;
 
+  /// The map as it is now, for a checkpoint (std::nullopt before the map has a keyframe).
+  /// Thread-safe (takes the map's shared lock briefly; features are shared, not copied).
+  std::optional<TrackerMapState> mapForCheckpoint() const;
+  /// Writes a checkpoint now (false: none configured, or it failed). For tests.
+  bool checkpointNow();
+
   const TrackerNodeConfig& config() const { return config_; }
 
  private:
+  // Tracking thread: restores the pending resume into the new `system` (camera `camera`).
+  void restorePending(SlamSystem* system, const TrackingCamera& camera);
+  // Tracking thread: extends the id lease over a keyframe about to be published.
+  void coverIds(const KeyframeInfo& info);
   void trackingLoop();
   void processFrame(TrackerFrame& frame);
   // Tracking thread: the SlamSystem for the camera in use (created on first use).
@@ -265,6 +296,13 @@ class TrackerNode {
   std::unique_ptr<SlamSystem> system_;
   // Created with the system (reads its map); stopped first, destroyed first.
   std::unique_ptr<KeyframeCovarianceService> covariance_;
+  TrackingCamera tracking_camera_;  // of system_ (system_mutex_)
+  // Persistence: the resume waiting for the camera (tracking thread after start), the id
+  // lease (tracking thread), the checkpoint writer.
+  std::optional<TrackerResume> resume_;
+  std::unique_ptr<IdLeaseKeeper> id_lease_;
+  std::unique_ptr<TrackerCheckpointWorker> checkpoints_;
+  std::atomic<uint64_t> id_lease_failures_{0}, resumed_keyframes_{0};
   // Tracking thread only.
   bool pose_published_ = false;  // the last published frame had a pose
   bool map_started_ = false;     // the tracker has initialised its map

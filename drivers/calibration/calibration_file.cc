@@ -1,6 +1,7 @@
 #include "drivers/calibration/calibration_file.h"
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -157,6 +158,16 @@ cv::Mat readMat(const cv::FileStorage& fs, std::initializer_list<const char*> na
   for (const char* name : names) {
     const cv::FileNode node = fs[name];
     if (node.empty()) continue;
+    // OpenCV allocates rows x cols before it counts the data: a matrix declaring more elements
+    // than it lists would allocate up to 2^64 bytes. Refused here (readOpenCvChecked names
+    // the file).
+    if (node.isMap() && !node["rows"].empty() && !node["cols"].empty()) {
+      const int64_t rows = static_cast<int>(node["rows"]);
+      const int64_t cols = static_cast<int>(node["cols"]);
+      if (rows < 0 || cols < 0 || rows * cols > static_cast<int64_t>(node["data"].size())) {
+        CV_Error(cv::Error::StsBadSize, std::string(name) + ": rows x cols exceeds its data");
+      }
+    }
     cv::Mat m;
     node >> m;
     *found = name;
@@ -290,6 +301,21 @@ StereoCameraCalibration readOpenCv(const std::string& path, bool stereo) {
   return calibration;
 }
 
+// readOpenCv, with what FileStorage throws on malformed content as a CalibrationError: a
+// cv::Exception (a matrix whose data does not fill rows x cols, a node of the wrong type) or a
+// standard exception from its parser (std::length_error on some broken YAML).
+StereoCameraCalibration readOpenCvChecked(const std::string& path, bool stereo) {
+  try {
+    return readOpenCv(path, stereo);
+  } catch (const CalibrationError&) {
+    throw;
+  } catch (const cv::Exception& e) {
+    fail(path + ": cannot read as OpenCV YAML/XML: " + e.msg);
+  } catch (const std::exception& e) {
+    fail(path + ": cannot read as OpenCV YAML/XML: " + e.what());
+  }
+}
+
 }  // namespace
 
 StereoCameraCalibration parseCamchain(const YAML::Node& root, const std::string& where,
@@ -324,7 +350,7 @@ StereoCameraCalibration loadStereoCalibration(const std::string& path, bool ster
   std::stringstream buffer;
   buffer << in.rdbuf();
   const std::string text = buffer.str();
-  if (text.rfind("<?xml", 0) == 0) return readOpenCv(path, stereo);
+  if (text.rfind("<?xml", 0) == 0) return readOpenCvChecked(path, stereo);
   if (text.rfind("%YAML:", 0) == 0) {
     // OpenCV's FileStorage YAML, unless it is a camchain saved with OpenCV's header (EuRoC).
     YAML::Node root;
@@ -333,10 +359,10 @@ StereoCameraCalibration loadStereoCalibration(const std::string& path, bool ster
       rest.replace(0, std::min(rest.find('\n'), rest.size()), 1, '#');  // keeps line numbers
       root = YAML::Load(rest);
     } catch (const YAML::Exception&) {
-      return readOpenCv(path, stereo);  // !!opencv-matrix tags: OpenCV's own
+      return readOpenCvChecked(path, stereo);  // !!opencv-matrix tags: OpenCV's own
     }
     if (root.IsMap() && root["cam0"]) return parseCamchain(root, path, stereo);
-    return readOpenCv(path, stereo);
+    return readOpenCvChecked(path, stereo);
   }
   YAML::Node root;
   try {

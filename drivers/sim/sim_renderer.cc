@@ -98,7 +98,8 @@ void SimRenderer::renderView(const Transformationd& T_G_C, const PinholeIntrinsi
 
 // Cloned for x86-64-v3 (AVX2, FMA) with a baseline fallback, chosen at load time. Not under
 // ThreadSanitizer: the clone's resolver runs before TSan's runtime is up and crashes at load.
-#if defined(__x86_64__) && !defined(__SANITIZE_THREAD__)
+// Not under clang (the fuzz build): it refuses to clone a function already used above.
+#if defined(__x86_64__) && !defined(__SANITIZE_THREAD__) && !defined(__clang__)
 #define CBLOX_RENDER_CLONES [[gnu::target_clones("arch=x86-64-v3", "default")]]
 #else
 #define CBLOX_RENDER_CLONES

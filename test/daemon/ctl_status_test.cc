@@ -124,6 +124,12 @@ struct Bus {
     status.integration_ms_median = 5.5f;
     status.integration_ms_p99 = 9.0f;
     status.subvolumes_fused = 1;
+    status.checkpoint_dir = "/data/ckpt";
+    status.checkpoint_generation = 42;
+    status.checkpoints_written = 40;
+    status.checkpoint_failures = 1;
+    status.last_checkpoint_utime = utime - 2'000'000;
+    status.last_checkpoint_ms = 12.5f;
     lcm.publish("CBLOX_MAP_STATUS", &status);
     const uint8_t garbage[] = {1, 2, 3, 4, 5, 6, 7, 8, 0x7f, 0xff, 0xff, 0xff, 0};
     lcm.publish("CBLOX_HEARTBEAT", garbage, sizeof(garbage));
@@ -228,6 +234,9 @@ TEST_F(CtlStatusTest, OneRowPerProcessAndExitFourWhenAnExpectedOneIsNotHeard) {
                        "integrated, 2 dropped, 1 rejected; integration median 5.5 ms, p99 9.0 "
                        "ms; 1 fused"))
       << out;
+  // The checkpoint line: the generation committed and how long ago (2 s before the status).
+  EXPECT_TRUE(contains(out, "\ncheckpoints: /data/ckpt generation 42 (2.")) << out;
+  EXPECT_TRUE(contains(out, " s ago, 12.5 ms), 40 written, 1 failed\n")) << out;
   EXPECT_TRUE(contains(out, "malformed messages ignored")) << out;
   EXPECT_TRUE(contains(out, "NOT ALIVE: mapper (expected: capture, tracker, mapper)")) << out;
   // Expected processes first, in order, then the others.

@@ -76,7 +76,26 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.checkpoint.period_s, b.checkpoint.period_s);
   EXPECT_EQ(a.checkpoint.resume, b.checkpoint.resume);
   EXPECT_FALSE(b.checkpoint.enabled());  // off unless configured
+  EXPECT_EQ(a.integrator_niceness, b.integrator_niceness);
+  EXPECT_EQ(a.memory_cap.cap_mb, b.memory_cap.cap_mb);
+  EXPECT_EQ(a.memory_cap.near_only_fraction, b.memory_cap.near_only_fraction);
+  EXPECT_EQ(a.memory_cap.near_distance_m, b.memory_cap.near_distance_m);
+  EXPECT_TRUE(b.memory_cap.enabled());  // shipped on: never an OOM kill
   EXPECT_TRUE(defaults.validate().empty()) << defaults.validate();
+}
+
+TEST(MapperConfigTest, IntegratorNicenessAndMemoryCapAreRead) {
+  const MapperProcessConfig config = loadMapperConfig(YAML::Load(
+      "integrator: {niceness: 7}\nmemory: {cap_mb: 0, near_only_fraction: 0.5, "
+      "near_distance_m: 3.0}\n"));
+  EXPECT_EQ(config.mapper.integrator_niceness, 7);
+  EXPECT_EQ(config.mapper.integrator.truncation_distance_m, 0.12f);  // the rest as before
+  EXPECT_FALSE(config.mapper.memory_cap.enabled());
+  EXPECT_EQ(config.mapper.memory_cap.near_only_fraction, 0.5);
+  EXPECT_EQ(config.mapper.memory_cap.near_distance_m, 3.0f);
+  EXPECT_THROW(loadMapperConfig(YAML::Load("integrator: {niceness: 25}\n")), ConfigError);
+  EXPECT_THROW(loadMapperConfig(YAML::Load("memory: {near_only_fraction: 1.5}\n")), ConfigError);
+  EXPECT_THROW(loadMapperConfig(YAML::Load("memory: {cap: 5}\n")), ConfigError);
 }
 
 TEST(MapperConfigTest, AbsentKeysKeepTheMapperDefaultsNotTheGenericOnes) {
@@ -103,7 +122,7 @@ TEST(MapperConfigTest, ReadsOverrides) {
       "queues: {pending_frames: 2, maintenance: 8, commands: 1}\n"
       "worker: {niceness: 19, sched_idle: false}\n"
       "status: {period_s: 0.5, progress_period_s: 2, timing_window: 10, log_interval_s: 1}\n"
-      "checkpoint: {dir: /data/ckpt, period_s: 30, resume: false}\n"
+      "checkpoint: {dir: /data/ckpt, period_s: 45, resume: false}\n"
       "fusion: {num_threads: 1}\nmesh: {use_color: false}\n"
       "maintenance: {enabled: false, min_shared_landmarks: 50, min_shared_ratio: 0.5, q_min: "
       "2500, max_pairs_per_request: 3, reply_timeout_s: 1, retry_after_s: 9, "
@@ -133,7 +152,7 @@ TEST(MapperConfigTest, ReadsOverrides) {
   EXPECT_EQ(m.timing_window, 10u);
   EXPECT_EQ(m.log_interval_s, 1.0);
   EXPECT_EQ(m.checkpoint.dir, "/data/ckpt");
-  EXPECT_EQ(m.checkpoint.period_s, 30.0);
+  EXPECT_EQ(m.checkpoint.period_s, 45.0);
   EXPECT_FALSE(m.checkpoint.resume);
   EXPECT_TRUE(m.checkpoint.enabled());
   EXPECT_EQ(m.fusion.num_threads, 1);

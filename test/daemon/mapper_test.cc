@@ -652,21 +652,26 @@ std::vector<std::pair<int, int>> threadSchedules() {
   return result;
 }
 
-TEST(MapperTest, WorkerThreadRunsAtIdlePriority) {
+TEST(MapperTest, WorkerThreadRunsAtIdlePriorityAndTheIntegratorAtItsNiceness) {
   test::TempDir dir("mapper");
   MapperConfig config = testConfig(dir.path());
   config.worker_niceness = 7;
   config.worker_sched_idle = true;
+  config.integrator_niceness = 3;
   LogLines lines;
   Mapper mapper(config, lines.sink());
   std::string error;
   ASSERT_TRUE(mapper.start(&error)) << error;
   const std::pair<int, int> expected{SCHED_IDLE, 7};
+  const std::pair<int, int> integrator{SCHED_OTHER, 3};
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
   std::vector<std::pair<int, int>> schedules;
-  do {  // the worker lowers its own priority as it starts
+  do {  // the worker and the integrator lower their own priority as they start
     schedules = threadSchedules();
-    if (std::count(schedules.begin(), schedules.end(), expected) == 1) break;
+    if (std::count(schedules.begin(), schedules.end(), expected) == 1 &&
+        std::count(schedules.begin(), schedules.end(), integrator) == 1) {
+      break;
+    }
     std::this_thread::sleep_for(milliseconds(5));
   } while (std::chrono::steady_clock::now() < deadline);
   EXPECT_EQ(std::count(schedules.begin(), schedules.end(), expected), 1) << [&] {
@@ -677,9 +682,11 @@ TEST(MapperTest, WorkerThreadRunsAtIdlePriority) {
     for (const auto& l : lines.lines) s += "\n" + l;
     return s;
   }();
-  // The integrator and maintenance threads keep the process's normal priority.
+  // The integrator runs at integrator_niceness (it yields to the tracker under overload);
+  // the maintenance thread keeps the process's normal priority.
+  EXPECT_EQ(std::count(schedules.begin(), schedules.end(), integrator), 1);
   const std::pair<int, int> normal{SCHED_OTHER, getpriority(PRIO_PROCESS, 0)};
-  EXPECT_GE(std::count(schedules.begin(), schedules.end(), normal), 3);  // main + 2 mapper
+  EXPECT_GE(std::count(schedules.begin(), schedules.end(), normal), 2);  // main + maintenance
   mapper.stop();
 }
 
@@ -799,7 +806,7 @@ TEST(MapperTest, SavedMapLoadsIntoAFreshMapperWithTheSameMesh) {
     ASSERT_TRUE(loader.start(&error)) << error;
     const MapperReply loaded = runCommand(&loader, "load_map", map_dir.string());
     ASSERT_TRUE(loaded.ok) << loaded.message;
-    EXPECT_NE(loaded.message.find("covisibility not restored"), std::string::npos);
+    EXPECT_NE(loaded.message.find("covisibility restored"), std::string::npos);
     EXPECT_EQ(loaded.value("submaps"), saved.value("submaps"));
     EXPECT_EQ(loaded.value("blocks"), saved.value("blocks"));
     const MapperStatus s = loader.status();
@@ -1001,6 +1008,84 @@ TEST(MapperTest, CleanStopWritesALastCheckpoint) {
   EXPECT_EQ(resumed.status().num_blocks, saved_status.num_blocks);
   ASSERT_TRUE(runCommand(&resumed, "export_mesh", "resumed.ply").ok);
   EXPECT_TRUE(test::readFile((dir.path() / "b" / "resumed.ply").string()) == saved_mesh);
+}
+
+// Map maintenance survives a restart: the covisibility graph (landmark sets) and the back-off
+// of a pair rejected by q are in the checkpoint (manifest version 2), so the resumed mapper
+// has the same edges and waits before asking for the rejected pair again. The status says
+// which generation is committed.
+TEST(MapperTest, ResumeRestoresTheCovisibilityGraphAndPairBackoffs) {
+  test::TempDir dir("mapper_checkpoint_maintenance");
+  const std::filesystem::path checkpoint_dir = dir.path() / "ckpt";
+  MapperConfig config = checkpointConfig(dir.path() / "a", checkpoint_dir);
+  config.checkpoint.period_s = 3600.0;  // the stop's checkpoint only
+  config.pose_source = PoseSource::kTracker;
+  config.creation.max_keyframes_per_subvolume = 2;
+  config.maintenance.retry_after_s = 2.0;
+  const auto& frames = roomFrames();
+  std::vector<CovisibilityCandidate> edges;
+  {
+    Mapper first(config);
+    RequestLog requests;
+    first.setCovarianceRequester(requests.requester());
+    std::string error;
+    ASSERT_TRUE(first.start(&error)) << error;
+    // Subvolumes 0 (keyframes 100, 101), 1 (102, 103) and 2 (104, active); 0 and 1 share 50.
+    const std::vector<std::pair<KeyframeId, std::pair<uint64_t, uint64_t>>> keyframes = {
+        {100, {0, 100}}, {101, {0, 100}}, {102, {50, 150}}, {103, {50, 150}}, {104, {90, 1100}}};
+    for (const auto& [id, landmarks] : keyframes) {
+      ASSERT_TRUE(first.onKeyframe(id, utimeOf(frames[0]), frames[0].T_G_C,
+                                   landmarkRange(landmarks.first, landmarks.second)));
+    }
+    const std::optional<FusionCovarianceRequest> request = requests.waitFor(0);
+    ASSERT_TRUE(request.has_value());
+    ASSERT_EQ(request->pairs.size(), 1u);
+    first.onCovarianceReply(request->request_id, {FusionCovarianceAnswer{true, "", 1.0}});
+    ASSERT_TRUE(first.waitUntilIdle(milliseconds(10000)));
+    ASSERT_EQ(first.status().fusion.rejected_by_q, 1u);
+    edges = first.covisibilityEdges();
+    ASSERT_EQ(edges.size(), 3u);  // (0, 1) 50, (0, 2) 10, (1, 2) 60
+    EXPECT_EQ(first.status().checkpoint_generation, 0u);
+    first.stop();
+    const MapperStatus s = first.status();
+    EXPECT_EQ(s.checkpoint_generation, readManifest(checkpoint_dir.string(), nullptr)->generation);
+    EXPECT_GT(s.last_checkpoint_utime, 0);
+    const MapperReply status = runCommand(&first, "status");
+    EXPECT_EQ(status.value("checkpoint_generation"), std::to_string(s.checkpoint_generation));
+    EXPECT_EQ(status.value("checkpoint_dir"), checkpoint_dir.string());
+    EXPECT_NE(status.value("last_checkpoint_age_s"), "-");
+  }
+  config.output_dir = (dir.path() / "b").string();
+  Mapper resumed(config);
+  RequestLog requests;
+  resumed.setCovarianceRequester(requests.requester());
+  const std::optional<MapperReply> reply = resumed.resumeFromCheckpoint();
+  ASSERT_TRUE(reply && reply->ok) << (reply ? reply->message : "no reply");
+  EXPECT_NE(reply->message.find("covisibility restored: 3 subvolumes with landmarks, 1 pair "
+                                "back-offs"),
+            std::string::npos)
+      << reply->message;
+  const std::vector<CovisibilityCandidate> resumed_edges = resumed.covisibilityEdges();
+  ASSERT_EQ(resumed_edges.size(), edges.size());
+  for (size_t i = 0; i < edges.size(); ++i) {
+    EXPECT_EQ(resumed_edges[i].a, edges[i].a);
+    EXPECT_EQ(resumed_edges[i].b, edges[i].b);
+    EXPECT_EQ(resumed_edges[i].shared, edges[i].shared);
+    EXPECT_EQ(resumed_edges[i].landmarks_a, edges[i].landmarks_a);
+    EXPECT_EQ(resumed_edges[i].landmarks_b, edges[i].landmarks_b);
+  }
+  std::string error;
+  ASSERT_TRUE(resumed.start(&error)) << error;
+  // The rejected pair waits out the rest of its 2 s (counted from the load), then is asked.
+  std::this_thread::sleep_for(milliseconds(500));
+  {
+    std::lock_guard<std::mutex> lock(requests.mutex);
+    EXPECT_TRUE(requests.requests.empty());
+  }
+  const std::optional<FusionCovarianceRequest> again = requests.waitFor(0);
+  ASSERT_TRUE(again.has_value());
+  EXPECT_EQ(again->pairs[0].older, 0);
+  EXPECT_EQ(again->pairs[0].newer, 1);
 }
 
 // Resume is skipped when off or on a first run; an unreadable checkpoint is refused with the

@@ -46,6 +46,9 @@ TEST(TrackerConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.covariance.max_queued_requests, b.covariance.max_queued_requests);
   EXPECT_EQ(a.covariance.niceness, b.covariance.niceness);
   EXPECT_EQ(a.covariance.max_linearization_age_s, b.covariance.max_linearization_age_s);
+  EXPECT_EQ(a.checkpoint.dir, b.checkpoint.dir);
+  EXPECT_EQ(a.checkpoint.period_s, b.checkpoint.period_s);
+  EXPECT_EQ(a.checkpoint.resume, b.checkpoint.resume);
   EXPECT_EQ(shipped.calibration_source, defaults.calibration_source);
   EXPECT_EQ(shipped.calibration_file, defaults.calibration_file);
   EXPECT_FALSE(a.calibration.has_value());
@@ -163,7 +166,8 @@ TEST(TrackerConfigTest, ReadsOverrides) {
       "input: {queue_capacity: 2, ground_truth_wait_s: 0.5}\n"
       "image_check: {enabled: false, dark_level: 5, bright_level: 250, max_fraction: 0.9,\n"
       "              min_mean_gradient: 0.5}\n"
-      "status: {period_s: 0.5, progress_period_s: 2, timing_window: 10, log_interval_s: 1}\n"));
+      "status: {period_s: 0.5, progress_period_s: 2, timing_window: 10, log_interval_s: 1}\n"
+      "checkpoint: {dir: /var/lib/cblox/tracker, period_s: 30, resume: false}\n"));
   const TrackerNodeConfig& t = config.tracker;
   EXPECT_EQ(t.mode, TrackerMode::kRgbd);
   EXPECT_EQ(config.lcm_url, "udpm://x");
@@ -182,6 +186,9 @@ TEST(TrackerConfigTest, ReadsOverrides) {
   EXPECT_EQ(t.covariance.max_queued_requests, 2u);
   EXPECT_EQ(t.covariance.niceness, 0);
   EXPECT_EQ(t.covariance.max_linearization_age_s, 1.5);
+  EXPECT_EQ(t.checkpoint.dir, "/var/lib/cblox/tracker");
+  EXPECT_EQ(t.checkpoint.period_s, 30.0);
+  EXPECT_FALSE(t.checkpoint.resume);
   EXPECT_EQ(t.close_depth_baselines, 35.0);
   EXPECT_EQ(t.rgbd_baseline_m, 0.07);
   EXPECT_EQ(t.slam.frames.orb.num_features, 1500);
@@ -252,6 +259,8 @@ TEST(TrackerConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"status: {period_s: 0}\n", "period_s"},
       {"status: {timing_window: 0}\n", "status.timing_window"},
       {"status: {log_interval_s: 0}\n", "log_interval_s"},
+      {"checkpoint: {period_s: -1}\n", "checkpoint.period_s"},
+      {"checkpoint: {every: 3}\n", "checkpoint.every"},
   };
   for (const Case& c : cases) {
     try {

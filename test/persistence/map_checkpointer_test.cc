@@ -24,7 +24,7 @@ MapCheckpointReport checkpointOk(MapCheckpointer* checkpointer,
                                  const SubmapCollection& collection) {
   std::string error;
   const std::optional<MapCheckpointReport> report =
-      checkpointer->checkpoint(collection, kCounters, &error);
+      checkpointer->checkpoint(collection, kCounters, {}, &error);
   EXPECT_TRUE(report) << error;
   return report.value_or(MapCheckpointReport{});
 }
@@ -125,7 +125,7 @@ TEST(MapCheckpointer, AFailedCheckpointIsRetriedInFull) {
   { std::ofstream(blocked) << "x"; }
   MapCheckpointer failing(blocked);
   std::string error;
-  EXPECT_FALSE(failing.checkpoint(*collection, kCounters, &error));
+  EXPECT_FALSE(failing.checkpoint(*collection, kCounters, {}, &error));
   EXPECT_NE(error.find("blocked"), std::string::npos) << error;
   EXPECT_FALSE(failing.lastManifest());
   std::filesystem::remove(blocked);

@@ -356,32 +356,8 @@ TEST_F(SubmapFileForged, RandomCorruptionNeverCrashes) {
   EXPECT_GT(refused, 0);
 }
 
-MapManifest smallManifest() {
-  MapManifest m;
-  m.generation = 3;
-  m.config = test::mapTestConfig();
-  m.next_submap_id = 9;
-  m.active_submap_id = 8;
-  SubmapRecord a;
-  a.id = 2;
-  a.anchor_keyframe = 20;
-  a.creation_time_ns = -5;
-  a.T_G_M = test::mapTestPose(0.4, {1, 1, 0}, {1e-300, -2.5, 1e300});
-  a.finished = true;
-  a.keyframe_ids = {3, 20, 21};
-  a.file = {submapFileName(2, 1), 1234, 0xdeadbeefcafef00dull, 17};
-  SubmapRecord b;
-  b.id = 8;
-  b.anchor_keyframe = -1;
-  b.keyframe_ids = {-1};
-  b.file = {submapFileName(8, 3), 40, 1, 0};
-  m.submaps = {a, b};
-  m.counters = {{"frames_integrated", 123456789012345}, {"fusions", -1}, {"x", 0}};
-  return m;
-}
-
 TEST_F(MapFileFormat, ManifestRoundTrip) {
-  const MapManifest m = smallManifest();
+  const MapManifest m = test::smallManifest();
   ASSERT_EQ(m.validate(), "");
   std::string error;
   ASSERT_TRUE(writeManifest(m, dir_.path().string(), &error)) << error;
@@ -420,34 +396,34 @@ TEST_F(MapFileFormat, InconsistentManifestsAreNotWrittenOrRead) {
     EXPECT_FALSE(readManifest(dir_.path().string(), &error));
     expectError(error, {dir_.file(kManifestFileName), "inconsistent", fragment});
   };
-  MapManifest m = smallManifest();
+  MapManifest m = test::smallManifest();
   m.submaps[1].id = 2;
   expectInvalid(m, "ids do not strictly increase");
-  m = smallManifest();
+  m = test::smallManifest();
   m.next_submap_id = 8;
   expectInvalid(m, "next submap id 8");
-  m = smallManifest();
+  m = test::smallManifest();
   m.submaps[0].file.file_name = "../../etc/passwd";
   expectInvalid(m, "file name \"../../etc/passwd\"");
-  m = smallManifest();
+  m = test::smallManifest();
   m.submaps[0].file.file_name = submapFileName(2, 4);  // newer than the manifest
   expectInvalid(m, "file name");
-  m = smallManifest();
+  m = test::smallManifest();
   m.submaps[0].finished = false;
   expectInvalid(m, "more than one unfinished submap");
-  m = smallManifest();
+  m = test::smallManifest();
   m.active_submap_id.reset();
   expectInvalid(m, "unfinished but no submap is active");
-  m = smallManifest();
+  m = test::smallManifest();
   m.active_submap_id = 2;
   expectInvalid(m, "the active submap 2 is not the one unfinished");
-  m = smallManifest();
+  m = test::smallManifest();
   m.submaps[0].keyframe_ids = {3, 21};
   expectInvalid(m, "lack the anchor");
-  m = smallManifest();
+  m = test::smallManifest();
   m.counters[""] = 1;
   expectInvalid(m, "counter name");
-  m = smallManifest();
+  m = test::smallManifest();
   m.config.layer.voxels_per_side = 5;
   expectInvalid(m, "voxels_per_side");
 }
@@ -465,34 +441,35 @@ TEST_F(MapFileFormat, HostileManifestCountsAreRefusedBeforeAllocating) {
   w.u8(0);
   w.i64(0);
   w.u32(0xffffffffu);
-  dir_.write(kManifestFileName, sealMapFile(kManifestFileMagic, 1, payload));
+  dir_.write(kManifestFileName, sealMapFile(kManifestFileMagic, kManifestVersion, payload));
   EXPECT_FALSE(readManifest(dir_.path().string(), &error));
   expectError(error, {path, "submap count 4294967295 out of bounds"});
 
   // Every truncation of a valid manifest payload (resealed) is refused cleanly.
-  const std::string full = encodeManifest(smallManifest()).substr(kMapFileHeaderBytes);
+  const std::string full = encodeManifest(test::smallManifest()).substr(kMapFileHeaderBytes);
   for (size_t n = 0; n < full.size(); ++n) {
-    dir_.write(kManifestFileName, sealMapFile(kManifestFileMagic, 1, full.substr(0, n)));
+    dir_.write(kManifestFileName, sealMapFile(kManifestFileMagic, kManifestVersion,
+                                                   full.substr(0, n)));
     EXPECT_FALSE(readManifest(dir_.path().string(), &error)) << n;
     EXPECT_NE(error.find(path), std::string::npos) << error;
   }
   // Huge keyframe count, huge file name length, huge counter count: patch the real bytes.
-  const std::string good = encodeManifest(smallManifest());
+  const std::string good = encodeManifest(test::smallManifest());
   const size_t keyframe_count = kMapFileHeaderBytes + 37 + 24 + 56 + 1;
   dir_.write(kManifestFileName, good);
   std::string forged = full;
   forged.replace(keyframe_count - kMapFileHeaderBytes, 4, le32(0x7fffffff));
-  dir_.write(kManifestFileName, sealMapFile(kManifestFileMagic, 1, forged));
+  dir_.write(kManifestFileName, sealMapFile(kManifestFileMagic, kManifestVersion, forged));
   EXPECT_FALSE(readManifest(dir_.path().string(), &error));
   expectError(error, {path, "keyframe count 2147483647 out of bounds"});
   forged = full;
   forged.replace(keyframe_count - kMapFileHeaderBytes + 4 + 3 * 8, 4, le32(0x7fffffff));
-  dir_.write(kManifestFileName, sealMapFile(kManifestFileMagic, 1, forged));
+  dir_.write(kManifestFileName, sealMapFile(kManifestFileMagic, kManifestVersion, forged));
   EXPECT_FALSE(readManifest(dir_.path().string(), &error));
   expectError(error, {path, "file name length out of bounds"});
   forged = full;
   forged.append("junk");
-  dir_.write(kManifestFileName, sealMapFile(kManifestFileMagic, 1, forged));
+  dir_.write(kManifestFileName, sealMapFile(kManifestFileMagic, kManifestVersion, forged));
   EXPECT_FALSE(readManifest(dir_.path().string(), &error));
   expectError(error, {path, "4 unexpected bytes"});
 }

@@ -53,7 +53,7 @@ class MapStore : public ::testing::Test {
   MapManifest saveTestMap(const SubmapCollection& collection) {
     std::string error;
     MapSaveReport report;
-    const auto manifest = saveMap(collection, dir(), kCounters, &report, &error);
+    const auto manifest = saveMap(collection, dir(), kCounters, {}, &report, &error);
     EXPECT_TRUE(manifest) << error;
     EXPECT_EQ(report.files_written, collection.size());
     EXPECT_EQ(report.files_reused, 0u);
@@ -97,7 +97,7 @@ TEST_F(MapStore, RoundTripRestoresEverythingBitExact) {
   const auto original_again = load();
   std::string error;
   const auto manifest2 =
-      saveMap(*original_again, again.path().string(), kCounters, nullptr, &error);
+      saveMap(*original_again, again.path().string(), kCounters, {}, nullptr, &error);
   ASSERT_TRUE(manifest2) << error;
   for (size_t i = 0; i < manifest.submaps.size(); ++i) {
     EXPECT_EQ(manifest2->submaps[i].file, manifest.submaps[i].file);
@@ -108,7 +108,7 @@ TEST_F(MapStore, NoActiveSubmapAndEmptyCollection) {
   SubmapCollection empty(test::mapTestConfig());
   empty.reserveSubmapIds(3);
   std::string error;
-  ASSERT_TRUE(saveMap(empty, dir(), {}, nullptr, &error)) << error;
+  ASSERT_TRUE(saveMap(empty, dir(), {}, {}, nullptr, &error)) << error;
   auto loaded = load();
   ASSERT_TRUE(loaded);
   EXPECT_TRUE(loaded->empty());
@@ -116,7 +116,7 @@ TEST_F(MapStore, NoActiveSubmapAndEmptyCollection) {
 
   const auto original = test::buildTestCollection();
   original->finishActiveSubmap();
-  ASSERT_TRUE(saveMap(*original, dir(), {}, nullptr, &error)) << error;
+  ASSERT_TRUE(saveMap(*original, dir(), {}, {}, nullptr, &error)) << error;
   loaded = load();
   ASSERT_TRUE(loaded);
   EXPECT_EQ(loaded->activeSubmap(), nullptr);
@@ -143,7 +143,7 @@ TEST_F(MapStore, IncrementalCheckpointRewritesOnlyTheListedSubmaps) {
   std::string error;
   MapSaveReport report;
   const auto second =
-      writeMapCheckpoint(*collection, dir(), &first, {1}, {{"checkpoints", 2}}, &report, &error);
+      writeMapCheckpoint(*collection, dir(), &first, {1}, {{"checkpoints", 2}}, {}, &report, &error);
   ASSERT_TRUE(second) << error;
   EXPECT_EQ(second->generation, 2u);
   EXPECT_EQ(report.files_written, 1u);
@@ -163,7 +163,7 @@ TEST_F(MapStore, IncrementalCheckpointRewritesOnlyTheListedSubmaps) {
   // written even though it is not listed (it has no file yet).
   collection->removeSubmap(3);
   collection->createSubmap(Transformationd(), 70, 7000);
-  const auto third = writeMapCheckpoint(*collection, dir(), &*second, {}, {}, &report, &error);
+  const auto third = writeMapCheckpoint(*collection, dir(), &*second, {}, {}, {}, &report, &error);
   ASSERT_TRUE(third) << error;
   EXPECT_EQ(report.files_written, 1u);  // submap 5
   EXPECT_EQ(report.files_reused, 3u);
@@ -199,7 +199,7 @@ TEST_F(MapStore, InterruptedCheckpointLeavesThePreviousMap) {
   EXPECT_EQ(report.unlisted_files, 3u);
 
   MapSaveReport save;
-  const auto second = writeMapCheckpoint(*collection, dir(), &first, {4}, {}, &save, &error);
+  const auto second = writeMapCheckpoint(*collection, dir(), &first, {4}, {}, {}, &save, &error);
   ASSERT_TRUE(second) << error;
   EXPECT_EQ(second->generation, 3u);  // above the orphan's generation 2
   EXPECT_EQ(save.files_removed, 4u);  // the orphan, two temporaries, submap_4_g1
@@ -253,7 +253,7 @@ TEST_F(MapStore, CorruptOrIncompleteMapsAreRefusedWithTheFileNamed) {
   ASSERT_TRUE(writeFileAtomically(manifest_path, newer, nullptr));
   expectLoadError({manifest_path,
                    "map manifest format version 999 is newer than this reader "
-                   "supports (1)"});
+                   "supports (2)"});
   ASSERT_TRUE(writeFileAtomically(manifest_path, manifest_bytes.substr(0, 40), nullptr));
   expectLoadError({manifest_path, "truncated"});
   restore();
@@ -285,14 +285,14 @@ TEST_F(MapStore, SaveErrorsNameThePath) {
   const auto collection = test::buildTestCollection();
   dir_.write("not_a_dir", "x");
   std::string error;
-  EXPECT_FALSE(saveMap(*collection, file("not_a_dir"), {}, nullptr, &error));
+  EXPECT_FALSE(saveMap(*collection, file("not_a_dir"), {}, {}, nullptr, &error));
   EXPECT_NE(error.find(file("not_a_dir")), std::string::npos) << error;
   std::printf("  rejected: %s\n", error.c_str());
-  EXPECT_FALSE(saveMap(*collection, file("not_a_dir/sub"), {}, nullptr, &error));
+  EXPECT_FALSE(saveMap(*collection, file("not_a_dir/sub"), {}, {}, nullptr, &error));
   EXPECT_NE(error.find(file("not_a_dir/sub")), std::string::npos) << error;
   std::printf("  rejected: %s\n", error.c_str());
   // A counter name the format cannot hold: nothing is committed.
-  EXPECT_FALSE(saveMap(*collection, file("map"), {{std::string(300, 'c'), 1}}, nullptr, &error));
+  EXPECT_FALSE(saveMap(*collection, file("map"), {{std::string(300, 'c'), 1}}, {}, nullptr, &error));
   EXPECT_NE(error.find("counter name"), std::string::npos) << error;
   EXPECT_FALSE(fs::exists(file("map/manifest.cbmap")));
 }

@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include "core/persistence/map_manifest.h"
+#include "core/persistence/submap_file.h"
 #include "core/submap/submap_collection.h"
 #include "test/submap/submap_test_scene.h"
 
@@ -98,6 +100,32 @@ inline void expectSameCollection(const SubmapCollection& a, const SubmapCollecti
         1e-15);
     EXPECT_TRUE(sameVoxels(layerVoxels(sa->layer()), layerVoxels(sb->layer())));
   }
+}
+
+/// A consistent manifest (no submap files behind it): generation 3, submaps 2 (finished,
+/// extreme pose) and 8 (active), three counters, no maintenance section content.
+inline MapManifest smallManifest() {
+  MapManifest m;
+  m.generation = 3;
+  m.config = mapTestConfig();
+  m.next_submap_id = 9;
+  m.active_submap_id = 8;
+  SubmapRecord a;
+  a.id = 2;
+  a.anchor_keyframe = 20;
+  a.creation_time_ns = -5;
+  a.T_G_M = mapTestPose(0.4, {1, 1, 0}, {1e-300, -2.5, 1e300});
+  a.finished = true;
+  a.keyframe_ids = {3, 20, 21};
+  a.file = {submapFileName(2, 1), 1234, 0xdeadbeefcafef00dull, 17};
+  SubmapRecord b;
+  b.id = 8;
+  b.anchor_keyframe = -1;
+  b.keyframe_ids = {-1};
+  b.file = {submapFileName(8, 3), 40, 1, 0};
+  m.submaps = {a, b};
+  m.counters = {{"frames_integrated", 123456789012345}, {"fusions", -1}, {"x", 0}};
+  return m;
 }
 
 }  // namespace cblox::test

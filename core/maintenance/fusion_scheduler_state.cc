@@ -1,0 +1,38 @@
+#include "core/maintenance/fusion_scheduler_state.h"
+
+#include <cmath>
+#include <utility>
+
+namespace cblox {
+
+std::string FusionSchedulerState::validate() const {
+  for (size_t i = 0; i < subvolumes.size(); ++i) {
+    const SubvolumeLandmarks& s = subvolumes[i];
+    const std::string at = "subvolume " + std::to_string(s.subvolume) + ": ";
+    if (i > 0 && s.subvolume <= subvolumes[i - 1].subvolume) {
+      return at + "subvolume ids do not strictly increase";
+    }
+    for (size_t k = 1; k < s.landmark_ids.size(); ++k) {
+      if (s.landmark_ids[k] <= s.landmark_ids[k - 1]) {
+        return at + "landmark ids do not strictly increase";
+      }
+    }
+  }
+  for (size_t i = 0; i < backoffs.size(); ++i) {
+    const FusionPairBackoff& b = backoffs[i];
+    const std::string at =
+        "back-off of pair (" + std::to_string(b.older) + ", " + std::to_string(b.newer) + "): ";
+    if (b.older >= b.newer) return at + "older is not below newer";
+    if (i > 0 &&
+        std::pair{b.older, b.newer} <= std::pair{backoffs[i - 1].older, backoffs[i - 1].newer}) {
+      return at + "pairs do not strictly increase";
+    }
+    if (b.rejections < 0) return at + "negative rejection count";
+    if (!std::isfinite(b.retry_in_s) || b.retry_in_s < 0.0) {
+      return at + "retry_in_s is not finite and >= 0";
+    }
+  }
+  return "";
+}
+
+}  // namespace cblox

@@ -1,0 +1,21 @@
+// Fuzz target: readObj (core/io/obj_io.h) on any bytes. A mesh it accepts must be valid.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "core/io/obj_io.h"
+#include "test/fuzz/support/fuzz_check.h"
+#include "test/fuzz/support/fuzz_files.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string& dir = cblox::fuzz::freshScratchDir();
+  cblox::fuzz::writeScratchFile(dir, "in.obj", {reinterpret_cast<const char*>(data), size});
+  cblox::Mesh mesh;
+  std::string error;
+  cblox::ObjReadStats stats;
+  if (cblox::readObj(dir + "/in.obj", &mesh, &error, &stats)) {
+    FUZZ_CHECK(mesh.validate().empty(), mesh.validate());
+  }
+  return 0;
+}

@@ -101,7 +101,13 @@ void MapperNode::publishHeartbeat(const MapperStatus& s, const char* state) {
       .add("checkpoint_failures", s.checkpoint_failures)
       .add("checkpoint_generation", s.checkpoint_generation)
       .add("last_checkpoint_ms", static_cast<uint64_t>(std::lround(s.last_checkpoint_ms)))
-      .add("source_restarts", s.source_restarts);
+      .add("source_restarts", s.source_restarts)
+      .add("map_bytes", static_cast<uint64_t>(s.memory_bytes))
+      .add("memory_cap_bytes", static_cast<uint64_t>(s.memory_cap_bytes))
+      .add("memory_cap_stage", static_cast<uint64_t>(s.memory_cap.state))
+      .add("frames_near_only", s.memory_cap.frames_near_only)
+      .add("frames_at_memory_cap", s.memory_cap.frames_at_cap)
+      .add("blocks_refused", s.memory_cap.blocks_refused);
   for (size_t i = 0; i < kNumInputProblems; ++i) {
     hb.add(std::string("rejected_") + inputProblemName(static_cast<InputProblem>(i)),
            s.problems[i]);

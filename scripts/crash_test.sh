@@ -106,6 +106,38 @@ rand_ms() { echo $(( $1 + RANDOM % ($2 - $1 + 1) )); }  # uniform in [$1, $2]
 sleep_ms() { sleep "$(printf '%d.%03d' $(( $1 / 1000 )) $(( $1 % 1000 )))"; }
 problem() { echo "PROBLEM (kill $k): $*" | tee -a "$problems" >&2; }
 ctl() { "$bin/cblox-ctl" --lcm-url "$url" --timeout "${CTL_TIMEOUT:-3}" "$@"; }
+# record_ack G [VERIFY ARGS...]: the victim reported committed generation G; reads the checkpoint
+# (cblox-map-verify --json) and, when it is generation G, keeps it as the acknowledged state
+# (ack.json). A newer generation committed meanwhile is acknowledged by the next poll.
+record_ack() {
+  local g=$1 m
+  shift
+  "$bin/cblox-map-verify" "$ckpt" "$@" --json > "$work/ack_try.json" 2> /dev/null || {
+    problem "generation $g acknowledged, but the checkpoint in $ckpt does not verify"
+    return 0
+  }
+  m=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["generation"])' \
+    "$work/ack_try.json")
+  if (( m < g )); then
+    problem "generation $g acknowledged, but the checkpoint in $ckpt is generation $m"
+  elif (( m == g )); then
+    mv "$work/ack_try.json" "$work/ack.json"
+    ack_gen=$g
+  fi
+}
+# wait_for_new_file GLOB: returns when a file matching GLOB appears in the checkpoint directory
+# that was not there when it was called (a checkpoint is being written), or after 8 s.
+wait_for_new_file() {
+  local f found=0 deadline=$(( $(now_ms) + 8000 ))
+  declare -A seen=()
+  for f in "$ckpt"/*; do seen[$f]=1; done
+  while (( ! found && $(now_ms) < deadline )); do
+    for f in "$ckpt"/$1; do
+      [[ -e $f && -z ${seen[$f]:-} ]] && { found=1; break; }
+    done
+    (( found )) || sleep 0.005
+  done
+}
 # value KEY FILE: from `cblox-ctl status` output ("  key: value").
 value() { awk -v k="$1:" '$1 == k {print $2; exit}' "$2"; }
 
@@ -194,19 +226,7 @@ victim_mapper_ack() {
   local g
   g=$(value checkpoint_generation "$work/status.txt")
   [[ -n $g ]] && (( g > ack_gen )) || return 0
-  "$bin/cblox-map-verify" "$ckpt" --manifest-only --json > "$work/ack_try.json" 2> /dev/null || {
-    problem "generation $g acknowledged, but its manifest does not verify"
-    return 0
-  }
-  local m
-  m=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["generation"])' \
-    "$work/ack_try.json")
-  if (( m < g )); then
-    problem "generation $g acknowledged, but the manifest in $ckpt is generation $m"
-  elif (( m == g )); then
-    mv "$work/ack_try.json" "$work/ack.json"
-    ack_gen=$g
-  fi  # m > g: a newer one committed meanwhile; the next poll acknowledges it
+  record_ack "$g" --manifest-only
 }
 ack_if_due() { (( $(now_ms) - last_ack_check_ms >= 400 )) && victim_mapper_ack; return 0; }
 
@@ -256,16 +276,7 @@ victim_mapper_arm() {
       ;;
     checkpoint)
       ack_if_due
-      declare -A seen=()
-      local f
-      for f in "$ckpt"/*; do seen[$f]=1; done
-      local deadline=$(( $(now_ms) + 8000 )) found=0
-      while (( ! found && $(now_ms) < deadline )); do
-        for f in "$ckpt"/submap_*; do
-          [[ -e $f && -z ${seen[$f]:-} ]] && { found=1; break; }
-        done
-        (( found )) || sleep 0.005
-      done
+      wait_for_new_file "submap_*"
       sleep_ms "$(rand_ms 0 "$pause_ms")"
       ;;
   esac
@@ -420,19 +431,7 @@ victim_tracker_ack() {
   local g
   g=$(tracker_acked_generation)
   [[ -n $g ]] && (( g > ack_gen )) || return 0
-  "$bin/cblox-map-verify" "$ckpt" --json > "$work/ack_try.json" 2> /dev/null || {
-    problem "generation $g acknowledged, but the tracker map does not verify"
-    return 0
-  }
-  local m
-  m=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["generation"])' \
-    "$work/ack_try.json")
-  if (( m < g )); then
-    problem "generation $g acknowledged, but the tracker map in $ckpt is generation $m"
-  elif (( m == g )); then
-    mv "$work/ack_try.json" "$work/ack.json"
-    ack_gen=$g
-  fi
+  record_ack "$g"
 }
 
 # Returns when it is time to kill for PHASE (tracking | checkpoint).
@@ -445,16 +444,7 @@ victim_tracker_arm() {
       sleep_ms "$(rand_ms 200 1500)"
       ;;
     checkpoint)
-      declare -A seen=()
-      local f
-      for f in "$ckpt"/*; do seen[$f]=1; done
-      local deadline=$(( $(now_ms) + 8000 )) found=0
-      while (( ! found && $(now_ms) < deadline )); do
-        for f in "$ckpt"/*; do
-          [[ -e $f && -z ${seen[$f]:-} ]] && { found=1; break; }
-        done
-        (( found )) || sleep 0.005
-      done
+      wait_for_new_file "*"
       sleep_ms "$(rand_ms 0 "$pause_ms")"
       ;;
   esac

@@ -64,7 +64,9 @@ bool TrackerCheckpointWorker::checkpointNow() {
 }
 
 void TrackerCheckpointWorker::loop() {
-  if (const std::string problem = lowerThreadPriority(10, true); !problem.empty()) {
+  // Nice 10, not SCHED_IDLE: on a loaded machine SCHED_IDLE can starve the thread for
+  // minutes, and every minute without a checkpoint is what a kill would lose.
+  if (const std::string problem = lowerThreadPriority(10, false); !problem.empty()) {
     log_("checkpoint worker: " + problem);
   }
   auto due = std::chrono::steady_clock::now() +

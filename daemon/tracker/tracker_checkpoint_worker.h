@@ -41,7 +41,7 @@ class TrackerCheckpointWorker {
   TrackerCheckpointWorker(const TrackerCheckpointWorker&) = delete;
   TrackerCheckpointWorker& operator=(const TrackerCheckpointWorker&) = delete;
 
-  /// Starts the thread (niceness 10, SCHED_IDLE).
+  /// Starts the thread (niceness 10).
   void start();
   /// Stops the thread and writes a last checkpoint (on the caller's thread). Idempotent.
   void stop();

@@ -26,7 +26,7 @@ cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCBLOX_BUILD_VOCABULARY=OFF -DCBLOX_VOCABULARY_FILE="$PWD/$RELEASE_DIR/vocabulary/cblox_orb.vocab" \
   >/dev/null
 cmake --build "$BUILD_DIR" --target test_integrator test_mesh test_submap test_mapper test_tracking \
-  test_stereo_depth_worker -j"$(nproc)"
+  test_stereo_depth_worker test_tracker_node -j"$(nproc)"
 export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/scripts/tsan.supp"
 "$BUILD_DIR/test/integrator/test_integrator" --gtest_brief=1
 "$BUILD_DIR/test/mesh/test_mesh" --gtest_brief=1
@@ -35,4 +35,7 @@ export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/s
 "$BUILD_DIR/test/tracking/test_tracking" --gtest_brief=1 \
   --gtest_filter='RgbdTrackingTest.*:SparseMapTest.*:KeyframeTriangulationTest.*'
 "$BUILD_DIR/test/daemon/test_stereo_depth_worker" --gtest_brief=1
+# The tracker's checkpoint writer and id lease beside its tracking and SLAM threads.
+"$BUILD_DIR/test/daemon/test_tracker_node" --gtest_brief=1 \
+  --gtest_filter='TrackerResumeTest.*:IdLeaseKeeperTest.*'
 echo "tsan: no data race reported"

@@ -81,6 +81,11 @@ for t in "${targets[@]}"; do
   artifacts="$BUILD_DIR/artifacts/$t"
   log="$BUILD_DIR/logs/$t.log"
   mkdir -p "$corpus" "$artifacts" "$(dirname "$log")"
+  if [[ ! -d "test/fuzz/corpus/$t" ]]; then
+    echo "fuzz.sh: $t has no seed corpus test/fuzz/corpus/$t (is it committed?)" >&2
+    failed=1
+    continue
+  fi
   inputs=("$corpus" "test/fuzz/corpus/$t")
   if [[ -d "test/fuzz/regressions/$t" ]]; then inputs+=("test/fuzz/regressions/$t"); fi
   before=$(find "$corpus" -type f | wc -l)
@@ -94,12 +99,15 @@ for t in "${targets[@]}"; do
   after=$(find "$corpus" -type f | wc -l)
   crashes=$(( status == 0 ? 0 : 1 ))
   if (( crashes )); then failed=1; fi
-  edges=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
+  edges=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2 || true)
   rows+=("$(printf '%-26s %12s %8s %8.1f %7s %6s %7s %8s' "$t" "$(final_stat number_of_executed_units "$log")" \
     "$(final_stat average_exec_per_sec "$log")" "$elapsed" "${edges:-?}" "$(( after - before ))" \
     "$(( after + $(find "test/fuzz/corpus/$t" -type f | wc -l) ))" "$crashes")")
   echo "${rows[-1]}"
-  if (( crashes )); then echo "fuzz: $t failed (exit $status), see $log and $artifacts/" >&2; fi
+  if (( crashes )); then
+    echo "fuzz: $t failed (exit $status), see $log and $artifacts/; its last lines:" >&2
+    tail -n 30 "$log" >&2
+  fi
 done
 echo
 printf '%-26s %12s %8s %8s %7s %6s %7s %8s\n' target executions exec/s seconds edges new corpus crashes

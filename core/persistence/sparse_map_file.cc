@@ -387,13 +387,12 @@ std::optional<TrackerMapState> loadTrackerMap(const std::string& dir, std::strin
     if (!features) return failed<TrackerMapState>(error, path + ": " + problem);
     chunks.push_back(std::move(*features));
   }
-  static const auto kNoFeatures = std::make_shared<const FrameFeatures>();
   TrackerMapState state = std::move(index->state);
   for (size_t i = 0; i < state.map.keyframes.size(); ++i) {
     KeyframeSnapshot& k = state.map.keyframes[i];
     const uint32_t c = index->keyframe_chunk[i];
     if (c == kNoKeyframeChunk) {
-      k.features = kNoFeatures;
+      k.features = emptyFrameFeatures();
       continue;
     }
     const auto it = chunks[c].find(k.id);

@@ -124,11 +124,10 @@ void SparseMap::restore(const SparseMapSnapshot& snapshot, int pyramid_levels,
     keyframes_.push_back(
         std::make_unique<Keyframe>(k.id, k.frame_id, k.timestamp_ns, k.features, k.T_C_G));
   }
-  static const auto kNoFeatures = std::make_shared<const FrameFeatures>();
   while (static_cast<KeyframeId>(keyframes_.size()) < next_keyframe_id) {
     const auto id = static_cast<KeyframeId>(keyframes_.size());
     keyframes_.push_back(
-        std::make_unique<Keyframe>(id, 0, 0, kNoFeatures, Transformationd::Identity()));
+        std::make_unique<Keyframe>(id, 0, 0, emptyFrameFeatures(), Transformationd::Identity()));
     keyframes_.back()->restoreGraph({}, nullptr, {}, false, true, Transformationd::Identity());
   }
   num_good_keyframes_ = 0;

@@ -30,7 +30,7 @@ namespace cblox {
 /// and may keep one alive after it is retired (they check bad()).
 class SparseMap {
  public:
-  /// Most keyframe ids restore() skips above a snapshot (each costs a placeholder keyframe).
+  /// Most keyframe ids restore() skips above a snapshot (each costs a stand-in keyframe).
   static constexpr KeyframeId kMaxSkippedKeyframeIds = KeyframeId{1} << 16;
 
   SparseMap() = default;
@@ -65,7 +65,7 @@ class SparseMap {
   /// Replaces the content of an empty map (no keyframe ever added) by a snapshot's. The map
   /// then continues with keyframe id max(snapshot.keyframes.size(), next_keyframe_id) and
   /// landmark id max(snapshot.next_landmark_id, next_landmark_id); keyframe ids skipped by
-  /// that are culled placeholders without features (ids another process may have seen before
+  /// that are culled stand-ins without features (ids another process may have seen before
   /// a crash are never reused; at most kMaxSkippedKeyframeIds of them). Every keyframe's
   /// features must hold their grid (and BoW vector, for relocalization). Throws
   /// std::invalid_argument when the map is not empty, the snapshot is inconsistent

@@ -120,11 +120,15 @@ std::string SparseMapSnapshot::validate(int pyramid_levels) const {
   return {};
 }
 
+const std::shared_ptr<const FrameFeatures>& emptyFrameFeatures() {
+  static const auto kNone = std::make_shared<const FrameFeatures>();
+  return kNone;
+}
+
 SparseMapSnapshot takeSparseMapSnapshot(const SparseMap& map) {
   SparseMapSnapshot s;
   s.next_landmark_id = map.nextLandmarkId();
   s.change_index = map.changeIndex();
-  static const auto kNoFeatures = std::make_shared<const FrameFeatures>();
   s.keyframes.reserve(map.allKeyframes().size());
   for (const auto& k : map.allKeyframes()) {
     KeyframeSnapshot ks;
@@ -138,7 +142,7 @@ SparseMapSnapshot takeSparseMapSnapshot(const SparseMap& map) {
     ks.T_parent_this = k->T_parent_this();
     for (const auto& [other, w] : k->connections()) ks.connections.emplace_back(other->id, w);
     for (const Keyframe* other : k->loopEdges()) ks.loop_edges.push_back(other->id);
-    ks.features = k->bad() ? kNoFeatures : k->sharedFeatures();
+    ks.features = k->bad() ? emptyFrameFeatures() : k->sharedFeatures();
     s.keyframes.push_back(std::move(ks));
   }
   const std::vector<Landmark*> landmarks = map.landmarks();

@@ -77,6 +77,9 @@ struct SparseMapSnapshot {
   std::string validate(int pyramid_levels) const;
 };
 
+/// The features of a keyframe that has none (culled, or an id stand-in): one shared empty set.
+const std::shared_ptr<const FrameFeatures>& emptyFrameFeatures();
+
 /// Copies `map` into a snapshot. The features are shared, not copied. The caller holds the
 /// map's shared lock.
 SparseMapSnapshot takeSparseMapSnapshot(const SparseMap& map);

@@ -19,7 +19,7 @@ std::optional<TrackerResume> loadTrackerResume(const std::string& dir, std::stri
   if (!resume.map && !lease) return std::nullopt;
   // Ids are keyed by the mapper below 2^40 (daemon/mapper/map_epoch_key.h); a lease far above
   // the saved map (many keyframes published after it: checkpoints failing for long) is not
-  // continued either, since every skipped id would cost a placeholder keyframe.
+  // continued either, since every skipped id would cost a stand-in keyframe.
   const bool lease_fits =
       !lease || !resume.map ||
       (lease->map_epoch == resume.map->map_epoch &&

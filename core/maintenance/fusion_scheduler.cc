@@ -6,12 +6,55 @@
 #include <stdexcept>
 
 namespace cblox {
+namespace {
+
+// Adds `ids` (any order) to the ascending set `into`.
+void mergeInto(std::vector<uint64_t>* into, std::span<const uint64_t> ids) {
+  const size_t old_size = into->size();
+  into->insert(into->end(), ids.begin(), ids.end());
+  std::sort(into->begin() + static_cast<std::ptrdiff_t>(old_size), into->end());
+  std::inplace_merge(into->begin(), into->begin() + static_cast<std::ptrdiff_t>(old_size),
+                     into->end());
+  into->erase(std::unique(into->begin(), into->end()), into->end());
+}
+
+// Adds one keyframe's landmarks to a subvolume's ascending keyframe list.
+void addToKeyframes(std::vector<KeyframeLandmarks>* keyframes, int64_t keyframe,
+                    std::span<const uint64_t> ids) {
+  auto it = std::lower_bound(
+      keyframes->begin(), keyframes->end(), keyframe,
+      [](const KeyframeLandmarks& k, int64_t id) { return k.keyframe < id; });
+  if (it == keyframes->end() || it->keyframe != keyframe) {
+    it = keyframes->insert(it, KeyframeLandmarks{keyframe, {}});
+  }
+  mergeInto(&it->landmark_ids, ids);
+}
+
+}  // namespace
+
+const char* pairKeyframesName(PairKeyframes choice) {
+  return choice == PairKeyframes::kAnchors ? "anchors" : "most_shared";
+}
+
+bool parsePairKeyframes(const std::string& name, PairKeyframes* choice) {
+  if (name == "anchors") {
+    *choice = PairKeyframes::kAnchors;
+  } else if (name == "most_shared") {
+    *choice = PairKeyframes::kMostShared;
+  } else {
+    return false;
+  }
+  return true;
+}
 
 std::string FusionSchedulerConfig::validate() const {
   if (const std::string e = candidates.validate(); !e.empty()) return "candidates." + e;
   std::ostringstream error;
   if (!(q_min > 0.0) || !std::isfinite(q_min)) {
     error << "q_min must be finite and > 0, got " << q_min;
+  } else if (pair_keyframes != PairKeyframes::kAnchors &&
+             pair_keyframes != PairKeyframes::kMostShared) {
+    error << "pair_keyframes is not a PairKeyframes value";
   } else if (max_pairs_per_request < 1) {
     error << "max_pairs_per_request must be >= 1, got " << max_pairs_per_request;
   } else if (!(reply_timeout_s > 0.0) || !std::isfinite(reply_timeout_s)) {
@@ -32,19 +75,50 @@ FusionScheduler::FusionScheduler(const FusionSchedulerConfig& config) : config_(
 
 void FusionScheduler::addSubvolume(int64_t subvolume, int64_t anchor_keyframe) {
   anchors_[subvolume] = anchor_keyframe;
+  keyframes_[subvolume];
   graph_.addSubvolume(subvolume);
 }
 
-bool FusionScheduler::addKeyframeLandmarks(int64_t subvolume,
+bool FusionScheduler::addKeyframeLandmarks(int64_t subvolume, int64_t keyframe,
                                            std::span<const uint64_t> landmark_ids) {
   if (!anchors_.contains(subvolume)) return false;
   graph_.addLandmarks(subvolume, landmark_ids);
+  addToKeyframes(&keyframes_[subvolume], keyframe, landmark_ids);
   return true;
 }
 
 void FusionScheduler::removeSubvolume(int64_t subvolume) {
   anchors_.erase(subvolume);
+  keyframes_.erase(subvolume);
   graph_.removeSubvolume(subvolume);
+}
+
+std::tuple<int64_t, int64_t, int> FusionScheduler::mostSharedKeyframes(int64_t older,
+                                                                        int64_t newer) const {
+  const std::vector<KeyframeLandmarks>& a = keyframes_.at(older);
+  const std::vector<KeyframeLandmarks>& b = keyframes_.at(newer);
+  // landmark -> indices (ascending) of older's keyframes that observed it
+  absl::flat_hash_map<uint64_t, std::vector<uint32_t>> observers;
+  for (uint32_t i = 0; i < a.size(); ++i) {
+    if (a[i].keyframe == KeyframeLandmarks::kUnknownKeyframe) continue;
+    for (const uint64_t l : a[i].landmark_ids) observers[l].push_back(i);
+  }
+  std::tuple<int64_t, int64_t, int> best{anchors_.at(older), anchors_.at(newer), 0};
+  std::vector<int> counts(a.size());
+  for (const KeyframeLandmarks& k : b) {
+    if (k.keyframe == KeyframeLandmarks::kUnknownKeyframe) continue;
+    std::fill(counts.begin(), counts.end(), 0);
+    for (const uint64_t l : k.landmark_ids) {
+      const auto it = observers.find(l);
+      if (it == observers.end()) continue;
+      for (const uint32_t i : it->second) ++counts[i];
+    }
+    for (size_t i = 0; i < a.size(); ++i) {
+      // Strictly more: ties keep the lower ids (both lists ascend).
+      if (counts[i] > std::get<2>(best)) best = {a[i].keyframe, k.keyframe, counts[i]};
+    }
+  }
+  return best;
 }
 
 std::optional<FusionCovarianceRequest> FusionScheduler::nextRequest(int64_t active_subvolume,
@@ -70,8 +144,13 @@ std::optional<FusionCovarianceRequest> FusionScheduler::nextRequest(int64_t acti
     FusionPair pair;
     pair.older = older;
     pair.newer = newer;
-    pair.older_keyframe = anchors_.at(older);
-    pair.newer_keyframe = anchors_.at(newer);
+    if (config_.pair_keyframes == PairKeyframes::kMostShared) {
+      std::tie(pair.older_keyframe, pair.newer_keyframe, pair.keyframe_shared_landmarks) =
+          mostSharedKeyframes(older, newer);
+    } else {
+      pair.older_keyframe = anchors_.at(older);
+      pair.newer_keyframe = anchors_.at(newer);
+    }
     pair.shared_landmarks = c.shared;
     request.pairs.push_back(pair);
     used.insert(older);
@@ -134,6 +213,15 @@ void FusionScheduler::onFused(const FusionPair& pair) {
   }
   graph_.merge(pair.older, pair.newer);
   anchors_.erase(pair.newer);
+  if (const auto it = keyframes_.find(pair.newer); it != keyframes_.end()) {
+    if (anchors_.contains(pair.older)) {
+      std::vector<KeyframeLandmarks>& kept = keyframes_[pair.older];
+      for (const KeyframeLandmarks& k : it->second) {
+        addToKeyframes(&kept, k.keyframe, k.landmark_ids);
+      }
+    }
+    keyframes_.erase(it);
+  }
   ++stats_.fused;
 }
 
@@ -147,10 +235,11 @@ void FusionScheduler::onFusionFailed(const FusionPair& pair, double now_s) {
 
 FusionSchedulerState FusionScheduler::exportState(double now_s) const {
   FusionSchedulerState state;
-  for (auto& [subvolume, landmarks] : graph_.landmarkSets()) {
-    if (!anchors_.contains(subvolume)) continue;
-    state.subvolumes.push_back(SubvolumeLandmarks{subvolume, std::move(landmarks)});
+  for (const auto& [subvolume, keyframes] : keyframes_) {
+    state.subvolumes.push_back(SubvolumeLandmarks{subvolume, keyframes});
   }
+  std::sort(state.subvolumes.begin(), state.subvolumes.end(),
+            [](const auto& x, const auto& y) { return x.subvolume < y.subvolume; });
   absl::flat_hash_set<PairKey> keys;
   for (const auto& [key, at] : retry_at_) keys.insert(key);
   for (const auto& [key, times] : rejections_) keys.insert(key);
@@ -174,7 +263,13 @@ FusionSchedulerState FusionScheduler::exportState(double now_s) const {
 size_t FusionScheduler::restoreState(const FusionSchedulerState& state, double now_s) {
   size_t ignored = 0;
   for (const SubvolumeLandmarks& s : state.subvolumes) {
-    if (!addKeyframeLandmarks(s.subvolume, s.landmark_ids)) ++ignored;
+    if (!anchors_.contains(s.subvolume)) {
+      ++ignored;
+      continue;
+    }
+    for (const KeyframeLandmarks& k : s.keyframes) {
+      addKeyframeLandmarks(s.subvolume, k.keyframe, k.landmark_ids);
+    }
   }
   for (const FusionPairBackoff& b : state.backoffs) {
     if (!anchors_.contains(b.older) || !anchors_.contains(b.newer)) {

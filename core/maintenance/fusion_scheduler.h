@@ -5,6 +5,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -15,6 +16,22 @@
 #include "core/maintenance/fusion_scheduler_state.h"
 
 namespace cblox {
+
+/// Which keyframe of each subvolume a candidate pair's covariance is asked about.
+enum class PairKeyframes {
+  /// The two subvolumes' anchor keyframes (the paper's choice).
+  kAnchors,
+  /// The pair of keyframes, one of each subvolume, that observed the most landmarks in
+  /// common: the place where the two subvolumes overlap, so the certainty of the relative
+  /// pose the fusion gives the overlapping voxels (README, "Map maintenance"). The anchors
+  /// when no two keyframes share a landmark.
+  kMostShared,
+};
+
+/// "anchors" | "most_shared" (config files, logs).
+const char* pairKeyframesName(PairKeyframes choice);
+/// Parses pairKeyframesName's names; false for anything else.
+bool parsePairKeyframes(const std::string& name, PairKeyframes* choice);
 
 /// Settings of the map maintenance's fusion decisions (FusionScheduler).
 struct FusionSchedulerConfig {
@@ -27,6 +44,8 @@ struct FusionSchedulerConfig {
   /// and radians): 1e4 means no direction is less certain than 1 cm or 0.01 rad (0.57 deg)
   /// of standard deviation. > 0.
   double q_min = 1e4;
+  /// Which keyframes q is computed for (see PairKeyframes).
+  PairKeyframes pair_keyframes = PairKeyframes::kMostShared;
   /// At most this many pairs per covariance request (>= 1).
   int max_pairs_per_request = 8;
   /// A request without a reply is abandoned after this long, seconds (> 0); its pairs may be
@@ -48,14 +67,17 @@ struct FusionSchedulerConfig {
 
 /// A pair chosen for fusion: `newer` (the later-created subvolume) is to be fused into
 /// `older`. The covariance asked for is Sigma_{newer_keyframe | older_keyframe}: the
-/// uncertainty of the newer subvolume's anchor keyframe with the older one's held fixed, i.e.
-/// of the relative pose the fusion bakes into the voxels.
+/// uncertainty of a keyframe of the newer subvolume with one of the older held fixed
+/// (FusionSchedulerConfig::pair_keyframes says which), i.e. of the relative pose the fusion
+/// bakes into the voxels.
 struct FusionPair {
   int64_t older = 0;
   int64_t newer = 0;
   int64_t older_keyframe = 0;
   int64_t newer_keyframe = 0;
-  int shared_landmarks = 0;
+  int shared_landmarks = 0;  ///< W between the two subvolumes
+  /// Landmarks both chosen keyframes observed (0 when the anchors were chosen by config).
+  int keyframe_shared_landmarks = 0;
 };
 
 /// One covariance request to send: its id and pairs (in reply order).
@@ -109,9 +131,11 @@ class FusionScheduler {
   /// A new subvolume anchored at `anchor_keyframe`. Ids must increase with creation time
   /// (SubmapCollection's ids do); a known id only updates the anchor.
   void addSubvolume(int64_t subvolume, int64_t anchor_keyframe);
-  /// A keyframe that contributed to `subvolume` observed these landmarks. Unknown
-  /// subvolumes are ignored (returns false).
-  bool addKeyframeLandmarks(int64_t subvolume, std::span<const uint64_t> landmark_ids);
+  /// Keyframe `keyframe` (>= 0, or KeyframeLandmarks::kUnknownKeyframe) contributed to
+  /// `subvolume` and observed these landmarks (any order; duplicates, and ones already held
+  /// for the keyframe, are ignored). Unknown subvolumes are ignored (returns false).
+  bool addKeyframeLandmarks(int64_t subvolume, int64_t keyframe,
+                            std::span<const uint64_t> landmark_ids);
   /// The subvolume left the map by other means (e.g. removed); pairs in flight that name it
   /// are dropped when answered.
   void removeSubvolume(int64_t subvolume);
@@ -131,8 +155,15 @@ class FusionScheduler {
   /// the pair waits retry_after_s.
   void onFusionFailed(const FusionPair& pair, double now_s);
 
+  /// The keyframe pair (older's, newer's) that observed the most landmarks in common, with
+  /// that count; the anchors and 0 when no two keyframes of theirs share one. Keyframes whose
+  /// id is unknown are not candidates. Both subvolumes must be known. Ties go to the lowest
+  /// older keyframe id, then the lowest newer one. Cost: O(sum of the two subvolumes'
+  /// keyframe landmark set sizes x keyframes observing a landmark).
+  std::tuple<int64_t, int64_t, int> mostSharedKeyframes(int64_t older, int64_t newer) const;
+
   /// What a resumed scheduler needs (fusion_scheduler_state.h): every known subvolume's
-  /// landmark set and every pair's back-off, its wait as seconds left after `now_s` (0 when
+  /// keyframe landmark sets and every pair's back-off, its wait as seconds left after `now_s` (0 when
   /// over). Requests in flight and fusions in progress are not included.
   FusionSchedulerState exportState(double now_s) const;
   /// Restores a state exported by exportState (maybe by another process, whose clock is not
@@ -162,6 +193,8 @@ class FusionScheduler {
   FusionSchedulerConfig config_;
   SubvolumeCovisibilityGraph graph_;
   absl::flat_hash_map<int64_t, int64_t> anchors_;  // subvolume -> anchor keyframe
+  // subvolume -> its keyframes' landmark sets, ascending keyframe ids, sets ascending
+  absl::flat_hash_map<int64_t, std::vector<KeyframeLandmarks>> keyframes_;
   absl::flat_hash_set<int64_t> fusing_;            // subvolumes in an accepted pair
   absl::flat_hash_map<PairKey, double> retry_at_;  // pair -> earliest next request
   absl::flat_hash_map<PairKey, int> rejections_;   // pair -> rejections by q in a row

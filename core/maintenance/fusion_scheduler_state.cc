@@ -12,9 +12,19 @@ std::string FusionSchedulerState::validate() const {
     if (i > 0 && s.subvolume <= subvolumes[i - 1].subvolume) {
       return at + "subvolume ids do not strictly increase";
     }
-    for (size_t k = 1; k < s.landmark_ids.size(); ++k) {
-      if (s.landmark_ids[k] <= s.landmark_ids[k - 1]) {
-        return at + "landmark ids do not strictly increase";
+    for (size_t f = 0; f < s.keyframes.size(); ++f) {
+      const KeyframeLandmarks& k = s.keyframes[f];
+      const std::string in = at + "keyframe " + std::to_string(k.keyframe) + ": ";
+      if (k.keyframe < 0 && k.keyframe != KeyframeLandmarks::kUnknownKeyframe) {
+        return in + "keyframe id is negative";
+      }
+      if (f > 0 && k.keyframe <= s.keyframes[f - 1].keyframe) {
+        return in + "keyframe ids do not strictly increase";
+      }
+      for (size_t l = 1; l < k.landmark_ids.size(); ++l) {
+        if (k.landmark_ids[l] <= k.landmark_ids[l - 1]) {
+          return in + "landmark ids do not strictly increase";
+        }
       }
     }
   }

@@ -23,7 +23,8 @@ constexpr size_t kMaxFileNameBytes = 256;
 // Smallest encodings, for bounding counts by the bytes that remain.
 constexpr size_t kMinSubmapRecordBytes = 3 * 8 + 7 * 8 + 1 + 4 + 4 + 8 + 8 + 8;
 constexpr size_t kMinCounterBytes = 4 + 8;
-constexpr size_t kMinLandmarkSetBytes = 8 + 4;
+constexpr size_t kMinLandmarkSetBytes = 8 + 4;       // a subvolume record
+constexpr size_t kMinKeyframeLandmarksBytes = 8 + 4;  // a keyframe's set
 constexpr size_t kBackoffBytes = 8 + 8 + 4 + 8;
 
 std::string manifestPath(const std::string& dir) {
@@ -36,16 +37,24 @@ std::optional<MapManifest> fail(std::string* error, const std::string& path,
   return std::nullopt;
 }
 
-// The version 2 maintenance section (map_manifest.h).
+void encodeLandmarkIds(const std::vector<uint64_t>& ids, ByteWriter* w) {
+  w->u32(static_cast<uint32_t>(ids.size()));
+  uint64_t previous = 0;
+  for (size_t k = 0; k < ids.size(); ++k) {
+    w->uvarint(k == 0 ? ids[k] : ids[k] - previous);
+    previous = ids[k];
+  }
+}
+
+// The version 3 maintenance section (map_manifest.h).
 void encodeMaintenance(const FusionSchedulerState& state, ByteWriter* w) {
   w->u32(static_cast<uint32_t>(state.subvolumes.size()));
   for (const SubvolumeLandmarks& s : state.subvolumes) {
     w->i64(s.subvolume);
-    w->u32(static_cast<uint32_t>(s.landmark_ids.size()));
-    uint64_t previous = 0;
-    for (size_t k = 0; k < s.landmark_ids.size(); ++k) {
-      w->uvarint(k == 0 ? s.landmark_ids[k] : s.landmark_ids[k] - previous);
-      previous = s.landmark_ids[k];
+    w->u32(static_cast<uint32_t>(s.keyframes.size()));
+    for (const KeyframeLandmarks& k : s.keyframes) {
+      w->i64(k.keyframe);
+      encodeLandmarkIds(k.landmark_ids, w);
     }
   }
   w->u32(static_cast<uint32_t>(state.backoffs.size()));
@@ -57,43 +66,70 @@ void encodeMaintenance(const FusionSchedulerState& state, ByteWriter* w) {
   }
 }
 
-// Reads the maintenance section into *state; empty when fine, else what is wrong. Every count
-// is bounded by the bytes that remain before anything is allocated.
-std::string decodeMaintenance(ByteReader* r, FusionSchedulerState* state) {
-  const auto out_of_bounds = [r](const std::string& what, uint64_t n) {
-    return what + " " + std::to_string(n) + " out of bounds for the " +
-           std::to_string(r->remaining()) + " bytes that remain";
-  };
+std::string outOfBounds(const ByteReader& r, const std::string& what, uint64_t n) {
+  return what + " " + std::to_string(n) + " out of bounds for the " +
+         std::to_string(r.remaining()) + " bytes that remain";
+}
+
+// Reads a landmark id set (count, then ascending uvarint differences); empty when fine.
+std::string decodeLandmarkIds(ByteReader* r, const std::string& at, std::vector<uint64_t>* ids) {
+  uint32_t num_landmarks = 0;
+  if (!r->u32(&num_landmarks)) return "truncated: the payload ends inside " + at;
+  if (num_landmarks > r->remaining()) {  // at least one byte each
+    return at + ": " + outOfBounds(*r, "landmark count", num_landmarks);
+  }
+  ids->resize(num_landmarks);
+  uint64_t previous = 0;
+  for (size_t k = 0; k < num_landmarks; ++k) {
+    uint64_t v = 0;
+    if (!r->uvarint(&v)) return at + ": truncated or malformed landmark id " + std::to_string(k);
+    if (k > 0 && (v == 0 || v > UINT64_MAX - previous)) {
+      return at + ": landmark id " + std::to_string(k) + " does not increase (difference " +
+             std::to_string(v) + ")";
+    }
+    previous = (*ids)[k] = k == 0 ? v : previous + v;
+  }
+  return "";
+}
+
+// Reads the maintenance section of a version 2 or 3 manifest into *state; empty when fine,
+// else what is wrong. Version 2 kept one landmark set per subvolume: it is read as the set of
+// a keyframe not known (KeyframeLandmarks::kUnknownKeyframe). Every count is bounded by the
+// bytes that remain before anything is allocated.
+std::string decodeMaintenance(ByteReader* r, uint32_t version, FusionSchedulerState* state) {
   uint32_t num_subvolumes = 0;
   if (!r->u32(&num_subvolumes)) return "truncated: the payload ends inside the maintenance count";
   if (num_subvolumes > r->remaining() / kMinLandmarkSetBytes) {
-    return out_of_bounds("maintenance subvolume count", num_subvolumes);
+    return outOfBounds(*r, "maintenance subvolume count", num_subvolumes);
   }
   state->subvolumes.resize(num_subvolumes);
   for (SubvolumeLandmarks& s : state->subvolumes) {
     const std::string at = "maintenance record " + std::to_string(&s - state->subvolumes.data());
-    uint32_t num_landmarks = 0;
-    r->i64(&s.subvolume);
-    if (!r->u32(&num_landmarks)) return "truncated: the payload ends inside " + at;
-    if (num_landmarks > r->remaining()) {  // at least one byte each
-      return at + ": " + out_of_bounds("landmark count", num_landmarks);
-    }
-    s.landmark_ids.resize(num_landmarks);
-    uint64_t previous = 0;
-    for (size_t k = 0; k < num_landmarks; ++k) {
-      uint64_t v = 0;
-      if (!r->uvarint(&v)) return at + ": truncated or malformed landmark id " + std::to_string(k);
-      if (k > 0 && (v == 0 || v > UINT64_MAX - previous)) {
-        return at + ": landmark id " + std::to_string(k) + " does not increase (difference " +
-               std::to_string(v) + ")";
+    if (!r->i64(&s.subvolume)) return "truncated: the payload ends inside " + at;
+    if (version == 2) {
+      s.keyframes.resize(1);
+      s.keyframes[0].keyframe = KeyframeLandmarks::kUnknownKeyframe;
+      if (std::string e = decodeLandmarkIds(r, at, &s.keyframes[0].landmark_ids); !e.empty()) {
+        return e;
       }
-      previous = s.landmark_ids[k] = k == 0 ? v : previous + v;
+      continue;
+    }
+    uint32_t num_keyframes = 0;
+    if (!r->u32(&num_keyframes)) return "truncated: the payload ends inside " + at;
+    if (num_keyframes > r->remaining() / kMinKeyframeLandmarksBytes) {
+      return at + ": " + outOfBounds(*r, "keyframe count", num_keyframes);
+    }
+    s.keyframes.resize(num_keyframes);
+    for (KeyframeLandmarks& k : s.keyframes) {
+      const std::string in = at + " keyframe " + std::to_string(&k - s.keyframes.data());
+      if (!r->i64(&k.keyframe)) return "truncated: the payload ends inside " + in;
+      if (std::string e = decodeLandmarkIds(r, in, &k.landmark_ids); !e.empty()) return e;
     }
   }
   uint32_t num_backoffs = 0;
   if (!r->u32(&num_backoffs)) return "truncated: the payload ends inside the back-off count";
   if (num_backoffs > r->remaining() / kBackoffBytes) {
-    return out_of_bounds("back-off count", num_backoffs);
+    return outOfBounds(*r, "back-off count", num_backoffs);
   }
   state->backoffs.resize(num_backoffs);
   for (FusionPairBackoff& b : state->backoffs) {
@@ -291,7 +327,7 @@ std::optional<MapManifest> readManifest(const std::string& dir, std::string* err
     }
   }
   if (file->version >= 2) {
-    if (const std::string e = decodeMaintenance(&r, &m.maintenance); !e.empty()) {
+    if (const std::string e = decodeMaintenance(&r, file->version, &m.maintenance); !e.empty()) {
       return fail(error, path, e);
     }
   }

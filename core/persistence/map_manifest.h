@@ -14,10 +14,12 @@
 
 namespace cblox {
 
-/// Newest manifest format version this build writes; it reads 1 and 2. Version 2 appends the
+/// Newest manifest format version this build writes; it reads 1 to 3. Version 2 appends the
 /// map maintenance section (covisibility landmark sets, pair back-offs); a version 1 manifest
-/// reads as one with an empty maintenance section.
-inline constexpr uint32_t kManifestVersion = 2;
+/// reads as one with an empty maintenance section. Version 3 keeps the landmark sets per
+/// keyframe; a version 2 subvolume's one set reads as that of KeyframeLandmarks::
+/// kUnknownKeyframe.
+inline constexpr uint32_t kManifestVersion = 3;
 /// File name of the manifest inside a map directory.
 inline constexpr char kManifestFileName[] = "manifest.cbmap";
 
@@ -44,8 +46,9 @@ struct MapManifest {
   std::vector<SubmapRecord> submaps;         ///< ascending ids
   /// Free-form counters of the caller (e.g. frames integrated, fusions), saved verbatim.
   std::map<std::string, int64_t> counters;
-  /// The map maintenance's state (version 2; empty when read from version 1): the landmark
-  /// sets of the covisibility graph and the back-off of rejected pairs, for listed submaps.
+  /// The map maintenance's state (version 2 and later; empty when read from version 1): the
+  /// keyframes' landmark sets of the covisibility graph and the back-off of rejected pairs,
+  /// for listed submaps.
   FusionSchedulerState maintenance;
 
   /// Empty when consistent, otherwise what is wrong: invalid config, ids not strictly
@@ -70,12 +73,14 @@ struct MapManifest {
 ///       uint32 length + file name bytes  uint64 file size  uint64 payload XXH64
 ///       uint64 block count
 ///     uint32 counter count, then per counter: uint32 length + name bytes, int64 value
-///   version 2 appends the maintenance section:
+///   version 3 appends the maintenance section:
 ///     uint32 subvolume count, then per subvolume (ascending ids, each a listed submap):
-///       int64 id  uint32 landmark count
-///       landmark ids ascending as uvarints (LEB128): the first as is, then differences (>= 1)
+///       int64 id  uint32 keyframe count, then per keyframe (ascending ids; -1: not known):
+///         int64 keyframe id  uint32 landmark count
+///         landmark ids ascending as uvarints (LEB128): the first as is, then differences (>= 1)
 ///     uint32 back-off count, then per pair (ascending (older, newer), both listed):
 ///       int64 older  int64 newer  int32 rejections by q in a row  f64 seconds left to wait
+///   (version 2 had, per subvolume, int64 id and one landmark set, in place of the keyframes)
 ///
 /// Precondition: manifest.validate() is empty. Thread-safe (pure).
 std::string encodeManifest(const MapManifest& manifest);
@@ -85,7 +90,7 @@ std::string encodeManifest(const MapManifest& manifest);
 /// cannot be written. Thread-safe (no shared state); one writer per directory at a time.
 bool writeManifest(const MapManifest& manifest, const std::string& dir, std::string* error);
 
-/// Reads and verifies <dir>/manifest.cbmap (format version 1 or 2): header (readMapFile), every
+/// Reads and verifies <dir>/manifest.cbmap (format version 1, 2 or 3): header (readMapFile), every
 /// count and length bounded by the bytes that remain before anything is allocated, no bytes left
 /// over, and validate(). Returns std::nullopt with "<path>: <what is wrong>" in *error (if
 /// non-null) otherwise. Does not open the submap files (loadMap does). Thread-safe (no shared

@@ -204,7 +204,7 @@ void MapMaintenance::applyKeyframe(KeyframeId id, int64_t utime, const Transform
   {
     std::lock_guard<std::mutex> lock(scheduler_mutex_);
     if (created) scheduler_.addSubvolume(created->id(), id);
-    scheduler_.addKeyframeLandmarks(joined, landmark_ids);
+    scheduler_.addKeyframeLandmarks(joined, id, landmark_ids);
   }
   keyframes_applied_.fetch_add(1, std::memory_order_relaxed);
   if (created) {
@@ -289,7 +289,9 @@ void MapMaintenance::applyReply(const Item& item) {
   }
   for (const FusionPair& pair : accepted) {
     log_("fusion accepted: subvolume " + std::to_string(pair.newer) + " into " +
-         std::to_string(pair.older));
+         std::to_string(pair.older) + " (keyframe " + std::to_string(idOfKey(pair.newer_keyframe)) +
+         " given " + std::to_string(idOfKey(pair.older_keyframe)) + ", " +
+         std::to_string(pair.keyframe_shared_landmarks) + " landmarks in common)");
   }
   worker_->submitFusions(accepted);
 }

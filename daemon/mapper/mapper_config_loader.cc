@@ -59,14 +59,20 @@ FusionSchedulerConfig loadMaintenance(const YAML::Node& node) {
   const std::string path = "maintenance";
   requireKnownKeys(
       node, path,
-      {"enabled", "min_shared_landmarks", "min_shared_ratio", "q_min", "max_pairs_per_request",
-       "reply_timeout_s", "retry_after_s", "max_retry_after_s"});
+      {"enabled", "min_shared_landmarks", "min_shared_ratio", "q_min", "pair_keyframes",
+       "max_pairs_per_request", "reply_timeout_s", "retry_after_s", "max_retry_after_s"});
   FusionSchedulerConfig m;
   if (!isAbsent(node)) {
     readOptional(node, path, "enabled", &m.enabled);
     readOptional(node, path, "min_shared_landmarks", &m.candidates.min_shared_landmarks);
     readOptional(node, path, "min_shared_ratio", &m.candidates.min_shared_ratio);
     readOptional(node, path, "q_min", &m.q_min);
+    std::string pair_keyframes = pairKeyframesName(m.pair_keyframes);
+    readOptional(node, path, "pair_keyframes", &pair_keyframes);
+    if (!parsePairKeyframes(pair_keyframes, &m.pair_keyframes)) {
+      throw ConfigError(path + ".pair_keyframes must be anchors or most_shared, got '" +
+                        pair_keyframes + "'");
+    }
     readOptional(node, path, "max_pairs_per_request", &m.max_pairs_per_request);
     readOptional(node, path, "reply_timeout_s", &m.reply_timeout_s);
     readOptional(node, path, "retry_after_s", &m.retry_after_s);

@@ -77,12 +77,14 @@ nlohmann::json describe(const std::string& dir, bool manifest_only,
   out["voxel_size"] = manifest->config.layer.voxel_size;
   out["voxels_per_side"] = manifest->config.layer.voxels_per_side;
   out["counters"] = manifest->counters;
-  size_t landmarks = 0;
+  size_t keyframes = 0, landmarks = 0;
   for (const SubvolumeLandmarks& s : manifest->maintenance.subvolumes) {
-    landmarks += s.landmark_ids.size();
+    keyframes += s.keyframes.size();
+    for (const KeyframeLandmarks& k : s.keyframes) landmarks += k.landmark_ids.size();
   }
   out["maintenance"] = {{"subvolumes", manifest->maintenance.subvolumes.size()},
-                        {"landmark_memberships", landmarks},
+                        {"keyframes", keyframes},
+                        {"landmark_observations", landmarks},
                         {"backoffs", manifest->maintenance.backoffs.size()}};
   out["unlisted_files"] = unlistedFiles(dir, *manifest);
 
@@ -138,10 +140,12 @@ void printText(const nlohmann::json& m) {
               m["dir"].get<std::string>().c_str(), m["generation"].dump().c_str(),
               m["submaps"].size(), m["blocks"].dump().c_str(),
               m["verified"].get<std::string>().c_str());
-  std::printf("maintenance: %s subvolumes with landmarks (%s memberships), %s pair back-offs\n",
-              m["maintenance"]["subvolumes"].dump().c_str(),
-              m["maintenance"]["landmark_memberships"].dump().c_str(),
-              m["maintenance"]["backoffs"].dump().c_str());
+  std::printf(
+      "maintenance: %s subvolumes with landmarks (%s keyframes, %s landmark observations), %s "
+      "pair back-offs\n",
+      m["maintenance"]["subvolumes"].dump().c_str(), m["maintenance"]["keyframes"].dump().c_str(),
+      m["maintenance"]["landmark_observations"].dump().c_str(),
+      m["maintenance"]["backoffs"].dump().c_str());
   std::printf("%6s %6s %-28s %10s %-16s %8s %s\n", "id", "gen", "file", "bytes", "xxh64", "blocks",
               "state");
   for (const nlohmann::json& s : m["submaps"]) {

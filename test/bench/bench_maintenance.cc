@@ -6,7 +6,9 @@
 //   (c) off    subvolumes moved by every keyframe pose correction, no fusion,
 //   (d) on     the same with map maintenance: covisible subvolumes whose conditional
 //              covariance q = 1/||Sigma_{i|j}||_2 reaches q_min are fused (one mapper per
-//              q_min of the sweep, each with its own covariance service on the live map).
+//              q_min of the sweep, each with its own covariance service on the live map),
+//              q asked of the keyframes that share the most landmarks (the default); and
+//              for each q_min of --anchors-q-min, q asked of the two anchors (the paper's).
 // At the end every map is meshed (the projection of its subvolumes into one volume) and
 // compared with the scene's exact surface: vertex RMSE and median, and the map's size in
 // TSDF blocks (over all subvolumes). Maps made with the tracker's poses are first aligned
@@ -16,11 +18,13 @@
 //   cblox-bench-maintenance [--scene room|hall|town] [--laps 2] [--frames N]
 //                           [--voxel 0.05] [--keyframes-per-subvolume 10] [--depth-noise K]
 //                           [--min-shared-landmarks 30] [--min-shared-ratio 0.05]
-//                           [--q-min 3e3,1e4,3e4,1e5] [--out DIR]
+//                           [--q-min 3e3,1e4,3e4,1e5] [--anchors-q-min 1e4] [--out DIR]
 //
 // Mappers integrate every frame (no time budget, waited for) so the comparison does not
 // depend on the machine's load. --out writes DIR/maintenance_<scene>.json and
-// DIR/maintenance_<scene>_sweep.png (map size against RMSE for every variant).
+// DIR/maintenance_<scene>_sweep.png (map size against RMSE for every variant). For every
+// fusion variant it also prints the answered pairs: q (median, share >= q_min) and the
+// distance between the two keyframes asked about, so the reason for rejections is visible.
 
 #include <algorithm>
 #include <chrono>
@@ -58,10 +62,22 @@ using Clock = std::chrono::steady_clock;
 
 enum class Kind { kGroundTruth, kNaive, kOff, kOn };
 
+// One answered pair of a fusion variant.
+struct PairAnswer {
+  bool ok = false;
+  double q = 0.0;
+  double distance_m = 0.0;  ///< between the two keyframes asked about, when they were made
+  int keyframe_shared = 0;
+};
+
 struct Variant {
   std::string name;
   Kind kind = Kind::kOff;
   double q_min = 0.0;
+  PairKeyframes pair_keyframes = PairKeyframes::kMostShared;
+  std::mutex pairs_mutex;
+  std::map<int64_t, std::vector<FusionPair>> requested;  // by request id, until answered
+  std::vector<PairAnswer> answers;
   std::unique_ptr<Mapper> mapper;
   std::unique_ptr<KeyframeCovarianceService> covariance;
   // Results.
@@ -92,6 +108,7 @@ int run(int argc, char** argv) {
   double depth_noise = 0.0;
   CovisibilityGraphConfig candidates;
   std::vector<double> sweep = {3e3, 1e4, 3e4, 1e5};
+  std::vector<double> anchors_sweep = {1e4};
 #ifdef CBLOX_DEFAULT_VOCABULARY
   vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
 #endif
@@ -119,6 +136,13 @@ int run(int argc, char** argv) {
   app.add_option("--q-min", sweep, "the q_min sweep, comma-separated")
       ->delimiter(',')
       ->allow_extra_args(false)
+      ->type_name("Q[,Q...]");
+  app.add_option("--anchors-q-min", anchors_sweep,
+                 "also these q_min with q asked of the anchor keyframes (comma-separated; "
+                 "empty: none)")
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->expected(0, 1 << 20)
       ->type_name("Q[,Q...]");
   app.add_option("--out", out_dir, "writes DIR/maintenance_<scene>.json and the sweep picture")
       ->type_name("DIR");
@@ -162,11 +186,16 @@ int run(int argc, char** argv) {
   std::map<std::string, int> errors;
   std::vector<double> build_ms;
   size_t reused = 0;  // replies from a kept linearization
-  auto add = [&](std::string name, Kind kind, double q_min) {
+  // Keyframe positions when they were made (for the distance of the pairs asked about).
+  std::mutex positions_mutex;
+  std::map<int64_t, Eigen::Vector3d> keyframe_positions;
+  auto add = [&](std::string name, Kind kind, double q_min,
+                 PairKeyframes pair_keyframes = PairKeyframes::kMostShared) {
     auto v = std::make_unique<Variant>();
     v->name = std::move(name);
     v->kind = kind;
     v->q_min = q_min;
+    v->pair_keyframes = pair_keyframes;
     MapperConfig config = baseConfig(voxel, work);
     if (kind == Kind::kGroundTruth || kind == Kind::kNaive) {
       config.pose_source = PoseSource::kGroundTruth;          // poses fed as given, never corrected
@@ -177,14 +206,35 @@ int run(int argc, char** argv) {
       config.maintenance.enabled = kind == Kind::kOn;
       config.maintenance.candidates = candidates;
       if (kind == Kind::kOn) config.maintenance.q_min = q_min;
+      config.maintenance.pair_keyframes = pair_keyframes;
     }
     v->mapper = std::make_unique<Mapper>(config, [](const std::string&) {});
     if (kind == Kind::kOn) {
       Mapper* mapper = v->mapper.get();
+      Variant* variant = v.get();
       v->covariance = std::make_unique<KeyframeCovarianceService>(
           slam.map(), camera, slam.pyramid(), KeyframeCovarianceServiceConfig{},
-          [mapper, &errors_mutex, &errors, &build_ms,
-           &reused](const KeyframeCovarianceReply& reply) {
+          [mapper, variant, &errors_mutex, &errors, &build_ms, &reused, &positions_mutex,
+           &keyframe_positions](const KeyframeCovarianceReply& reply) {
+            {
+              std::lock_guard<std::mutex> lock(variant->pairs_mutex);
+              const auto it = variant->requested.find(reply.request_id);
+              if (it != variant->requested.end() && it->second.size() == reply.results.size()) {
+                std::lock_guard<std::mutex> positions_lock(positions_mutex);
+                for (size_t k = 0; k < reply.results.size(); ++k) {
+                  const FusionPair& p = it->second[k];
+                  PairAnswer a{reply.results[k].ok, reply.results[k].q, 0.0,
+                               p.keyframe_shared_landmarks};
+                  const auto i = keyframe_positions.find(p.newer_keyframe);
+                  const auto j = keyframe_positions.find(p.older_keyframe);
+                  if (i != keyframe_positions.end() && j != keyframe_positions.end()) {
+                    a.distance_m = (i->second - j->second).norm();
+                  }
+                  variant->answers.push_back(a);
+                }
+              }
+              if (it != variant->requested.end()) variant->requested.erase(it);
+            }
             std::vector<FusionCovarianceAnswer> answers;
             {
               std::lock_guard<std::mutex> lock(errors_mutex);
@@ -200,7 +250,11 @@ int run(int argc, char** argv) {
             mapper->onCovarianceReply(reply.request_id, std::move(answers));
           });
       KeyframeCovarianceService* service = v->covariance.get();
-      mapper->setCovarianceRequester([service](const FusionCovarianceRequest& request) {
+      mapper->setCovarianceRequester([service, variant](const FusionCovarianceRequest& request) {
+        {
+          std::lock_guard<std::mutex> lock(variant->pairs_mutex);
+          variant->requested[request.request_id] = request.pairs;
+        }
         KeyframeCovarianceRequest r;
         r.request_id = request.request_id;
         for (const FusionPair& p : request.pairs) {
@@ -226,6 +280,11 @@ int run(int argc, char** argv) {
     std::snprintf(name, sizeof(name), "on q>=%.0g", q);
     add(name, Kind::kOn, q);
   }
+  for (const double q : anchors_sweep) {
+    char name[40];
+    std::snprintf(name, sizeof(name), "on q>=%.0g anchors", q);
+    add(name, Kind::kOn, q, PairKeyframes::kAnchors);
+  }
 
   std::map<uint64_t, Transformationd> truth_by_frame;  // for the trajectory alignment
 
@@ -234,6 +293,10 @@ int run(int argc, char** argv) {
   std::vector<KeyframeInfo> keyframes;
   std::vector<KeyframePoseBatch> batches;
   slam.setKeyframeCallback([&](const KeyframeInfo& k) {
+    {
+      std::lock_guard<std::mutex> lock(positions_mutex);
+      keyframe_positions[static_cast<int64_t>(k.id)] = k.T_G_K.translation();
+    }
     std::lock_guard<std::mutex> lock(mutex);
     keyframes.push_back(k);
   });
@@ -398,6 +461,31 @@ int run(int argc, char** argv) {
       std::printf("covariance error x%d: %s\n", count, message.c_str());
     }
   }
+  for (const auto& v : variants) {
+    if (v->kind != Kind::kOn) continue;
+    std::lock_guard<std::mutex> lock(v->pairs_mutex);
+    std::vector<double> q, distance, shared;
+    size_t certain = 0;
+    for (const PairAnswer& a : v->answers) {
+      if (!a.ok) continue;
+      q.push_back(a.q);
+      distance.push_back(a.distance_m);
+      shared.push_back(a.keyframe_shared);
+      if (a.q >= v->q_min) ++certain;
+    }
+    const auto median = [](std::vector<double> x) {
+      if (x.empty()) return 0.0;
+      std::nth_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2),
+                       x.end());
+      return x[x.size() / 2];
+    };
+    std::printf(
+        "%s: %zu pairs answered (%s keyframes): q median %.3g, %zu (%.0f %%) >= q_min; "
+        "distance between the keyframes median %.2f m; landmarks both saw median %.0f\n",
+        v->name.c_str(), q.size(), pairKeyframesName(v->pair_keyframes), median(q), certain,
+        q.empty() ? 0.0 : 100.0 * static_cast<double>(certain) / static_cast<double>(q.size()),
+        median(distance), median(shared));
+  }
   const Variant& gt = *variants[0];
   const Variant& off = *variants[2];
   std::printf(
@@ -438,6 +526,7 @@ int run(int argc, char** argv) {
     for (const auto& v : variants) {
       json["maps"].push_back({{"name", v->name},
                               {"q_min", v->q_min},
+                              {"pair_keyframes", pairKeyframesName(v->pair_keyframes)},
                               {"subvolumes", v->subvolumes},
                               {"blocks", v->blocks},
                               {"rmse_m", v->rmse_m},

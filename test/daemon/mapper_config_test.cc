@@ -53,6 +53,7 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
             b.maintenance.candidates.min_shared_landmarks);
   EXPECT_EQ(a.maintenance.candidates.min_shared_ratio, b.maintenance.candidates.min_shared_ratio);
   EXPECT_EQ(a.maintenance.q_min, b.maintenance.q_min);
+  EXPECT_EQ(a.maintenance.pair_keyframes, b.maintenance.pair_keyframes);
   EXPECT_EQ(a.maintenance.max_pairs_per_request, b.maintenance.max_pairs_per_request);
   EXPECT_EQ(a.maintenance.reply_timeout_s, b.maintenance.reply_timeout_s);
   EXPECT_EQ(a.maintenance.retry_after_s, b.maintenance.retry_after_s);
@@ -125,7 +126,8 @@ TEST(MapperConfigTest, ReadsOverrides) {
       "checkpoint: {dir: /data/ckpt, period_s: 45, resume: false}\n"
       "fusion: {num_threads: 1}\nmesh: {use_color: false}\n"
       "maintenance: {enabled: false, min_shared_landmarks: 50, min_shared_ratio: 0.5, q_min: "
-      "2500, max_pairs_per_request: 3, reply_timeout_s: 1, retry_after_s: 9, "
+      "2500, pair_keyframes: anchors, max_pairs_per_request: 3, reply_timeout_s: 1, "
+      "retry_after_s: 9, "
       "max_retry_after_s: 30}\n"));
   const MapperConfig& m = config.mapper;
   EXPECT_EQ(m.pose_source, PoseSource::kTracker);
@@ -161,6 +163,7 @@ TEST(MapperConfigTest, ReadsOverrides) {
   EXPECT_EQ(m.maintenance.candidates.min_shared_landmarks, 50);
   EXPECT_EQ(m.maintenance.candidates.min_shared_ratio, 0.5);
   EXPECT_EQ(m.maintenance.q_min, 2500.0);
+  EXPECT_EQ(m.maintenance.pair_keyframes, PairKeyframes::kAnchors);
   EXPECT_EQ(m.maintenance.max_pairs_per_request, 3);
   EXPECT_EQ(m.maintenance.reply_timeout_s, 1.0);
   EXPECT_EQ(m.maintenance.retry_after_s, 9.0);
@@ -181,6 +184,8 @@ TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"maintenance: {q_min: 0}\n", "maintenance.q_min"},
       {"maintenance: {min_shared_ratio: 1.5}\n", "maintenance.candidates.min_shared_ratio"},
       {"maintenance: {qmin: 5}\n", "qmin"},
+      {"maintenance: {pair_keyframes: nearest}\n",
+       "maintenance.pair_keyframes must be anchors or most_shared, got 'nearest'"},
       {"maintenance: {max_retry_after_s: 1}\n", "maintenance.max_retry_after_s"},
       {"layer: {voxel_size: -1}\n", "voxel_size"},
       {"integrator: {truncation_distance_m: 0.01}\n", "truncation"},  // < one 4 cm voxel

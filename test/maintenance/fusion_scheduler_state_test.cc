@@ -1,5 +1,5 @@
 // FusionScheduler::exportState / restoreState: what a resumed mapper restores of its map
-// maintenance (the covisibility landmark sets, the back-off of rejected pairs).
+// maintenance (the keyframes' covisibility landmark sets, the back-off of rejected pairs).
 
 #include <cmath>
 #include <limits>
@@ -40,10 +40,10 @@ void addThree(FusionScheduler* s) {
 FusionScheduler withHistory() {
   FusionScheduler s(testConfig());
   addThree(&s);
-  s.addKeyframeLandmarks(0, range(0, 100));
-  s.addKeyframeLandmarks(1, range(40, 140));
-  s.addKeyframeLandmarks(2, range(100, 200));
-  s.addKeyframeLandmarks(2, std::vector<uint64_t>{1u << 20, 3, 1, 2, 4, 0, uint64_t{1} << 63});
+  s.addKeyframeLandmarks(0, 10, range(0, 100));
+  s.addKeyframeLandmarks(1, 20, range(40, 140));
+  s.addKeyframeLandmarks(2, 31, range(100, 200));
+  s.addKeyframeLandmarks(2, 30, std::vector<uint64_t>{1u << 20, 3, 1, 2, 4, 0, uint64_t{1} << 63});
   const auto first = s.nextRequest(-1, 0.0);
   EXPECT_TRUE(first && first->pairs.size() == 1 && first->pairs[0].newer == 1);
   const FusionCovarianceAnswer low{true, "", 1.0};
@@ -61,13 +61,14 @@ TEST(FusionSchedulerStateTest, ExportHoldsSortedLandmarkSetsAndBackoffs) {
   EXPECT_EQ(state.validate(), "");
   ASSERT_EQ(state.subvolumes.size(), 3u);
   EXPECT_EQ(state.subvolumes[0].subvolume, 0);
-  EXPECT_EQ(state.subvolumes[0].landmark_ids, range(0, 100));
-  EXPECT_EQ(state.subvolumes[1].landmark_ids, range(40, 140));
-  std::vector<uint64_t> third = range(0, 5);
-  for (const uint64_t l : range(100, 200)) third.push_back(l);
-  third.push_back(1u << 20);
-  third.push_back(uint64_t{1} << 63);
-  EXPECT_EQ(state.subvolumes[2].landmark_ids, third);
+  EXPECT_EQ(state.subvolumes[0].keyframes, (std::vector<KeyframeLandmarks>{{10, range(0, 100)}}));
+  EXPECT_EQ(state.subvolumes[1].keyframes, (std::vector<KeyframeLandmarks>{{20, range(40, 140)}}));
+  // Keyframes ascending, each set sorted.
+  std::vector<uint64_t> first = range(0, 5);
+  first.push_back(1u << 20);
+  first.push_back(uint64_t{1} << 63);
+  EXPECT_EQ(state.subvolumes[2].keyframes,
+            (std::vector<KeyframeLandmarks>{{30, first}, {31, range(100, 200)}}));
   ASSERT_EQ(state.backoffs.size(), 2u);
   EXPECT_EQ(state.backoffs[0], (FusionPairBackoff{0, 1, 1, 3.0}));
   EXPECT_EQ(state.backoffs[1], (FusionPairBackoff{1, 2, 0, 3.0}));
@@ -109,15 +110,15 @@ TEST(FusionSchedulerStateTest, RestoreRebuildsTheSameGraphAndWaitsOnAnotherClock
 
 TEST(FusionSchedulerStateTest, EntriesOfUnknownSubvolumesAreIgnoredAndCounted) {
   FusionSchedulerState state;
-  state.subvolumes = {{0, {1, 2, 3}}, {7, {1, 2}}};
+  state.subvolumes = {{0, {{10, {1, 2, 3}}}}, {7, {{70, {1, 2}}}}};
   state.backoffs = {{0, 7, 2, 1.0}, {1, 2, 1, 0.0}};
   FusionScheduler s(testConfig());
   addThree(&s);
   EXPECT_EQ(s.restoreState(state, 0.0), 2u);
   const FusionSchedulerState restored = s.exportState(0.0);
   ASSERT_EQ(restored.subvolumes.size(), 3u);  // 0 with its landmarks, 1 and 2 empty
-  EXPECT_EQ(restored.subvolumes[0], (SubvolumeLandmarks{0, {1, 2, 3}}));
-  EXPECT_TRUE(restored.subvolumes[1].landmark_ids.empty());
+  EXPECT_EQ(restored.subvolumes[0], (SubvolumeLandmarks{0, {{10, {1, 2, 3}}}}));
+  EXPECT_TRUE(restored.subvolumes[1].keyframes.empty());
   ASSERT_EQ(restored.backoffs.size(), 1u);
   EXPECT_EQ(restored.backoffs[0], (FusionPairBackoff{1, 2, 1, 0.0}));
 }
@@ -127,8 +128,13 @@ TEST(FusionSchedulerStateTest, ValidateNamesWhatIsWrong) {
   EXPECT_EQ(message({}), "");
   EXPECT_NE(message({{{1, {}}, {1, {}}}, {}}).find("subvolume ids do not strictly increase"),
             std::string::npos);
-  EXPECT_NE(message({{{1, {5, 5}}}, {}}).find("landmark ids do not strictly increase"),
+  EXPECT_NE(message({{{1, {{3, {5, 5}}}}}, {}}).find("keyframe 3: landmark ids do not strictly"),
             std::string::npos);
+  EXPECT_NE(message({{{1, {{3, {}}, {3, {}}}}}, {}}).find("keyframe ids do not strictly increase"),
+            std::string::npos);
+  EXPECT_NE(message({{{1, {{-7, {}}}}}, {}}).find("keyframe -7: keyframe id is negative"),
+            std::string::npos);
+  EXPECT_EQ(message({{{1, {{KeyframeLandmarks::kUnknownKeyframe, {1}}, {0, {1}}}}}, {}}), "");
   EXPECT_NE(message({{}, {{2, 1, 0, 0.0}}}).find("older is not below newer"), std::string::npos);
   EXPECT_NE(message({{}, {{1, 3, 0, 1.0}, {1, 2, 0, 1.0}}}).find("pairs do not strictly increase"),
             std::string::npos);

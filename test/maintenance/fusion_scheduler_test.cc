@@ -1,6 +1,7 @@
 #include "core/maintenance/fusion_scheduler.h"
 
 #include <stdexcept>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -26,17 +27,17 @@ FusionSchedulerConfig testConfig() {
 
 FusionCovarianceAnswer answer(double q) { return FusionCovarianceAnswer{true, "", q}; }
 
-// Subvolumes 0, 1, 2 anchored at keyframes 10, 20, 30: 0 and 1 share 60 of 100 landmarks,
-// 1 and 2 share 40, 0 and 2 share 5 (below both bounds).
+// Subvolumes 0, 1, 2 anchored at keyframes 10, 20, 30 (2 also holds keyframe 31): 0 and 1
+// share 60 of 100 landmarks, 1 and 2 share 40, 0 and 2 share 5 (below both bounds).
 FusionScheduler threeSubvolumes(const FusionSchedulerConfig& config = testConfig()) {
   FusionScheduler s(config);
   s.addSubvolume(0, 10);
   s.addSubvolume(1, 20);
   s.addSubvolume(2, 30);
-  s.addKeyframeLandmarks(0, range(0, 100));
-  s.addKeyframeLandmarks(1, range(40, 140));
-  s.addKeyframeLandmarks(2, range(100, 200));
-  s.addKeyframeLandmarks(2, range(0, 5));
+  s.addKeyframeLandmarks(0, 10, range(0, 100));
+  s.addKeyframeLandmarks(1, 20, range(40, 140));
+  s.addKeyframeLandmarks(2, 30, range(100, 200));
+  s.addKeyframeLandmarks(2, 31, range(0, 5));
   return s;
 }
 
@@ -115,8 +116,94 @@ TEST(FusionSchedulerTest, AcceptsPairsAtOrAboveQMinAndLocksThemUntilFused) {
   ASSERT_EQ(next->pairs.size(), 1u);
   EXPECT_EQ(next->pairs[0].older, 0);
   EXPECT_EQ(next->pairs[0].newer, 2);
-  EXPECT_EQ(next->pairs[0].older_keyframe, 10);
   EXPECT_EQ(next->pairs[0].shared_landmarks, 45);
+  // 0 also took 1's keyframe 20, which shares [100, 140) with 2's keyframe 30: that pair is
+  // asked about, not the anchors 10 and 30 (which share nothing).
+  EXPECT_EQ(next->pairs[0].older_keyframe, 20);
+  EXPECT_EQ(next->pairs[0].newer_keyframe, 30);
+  EXPECT_EQ(next->pairs[0].keyframe_shared_landmarks, 40);
+}
+
+// Subvolume 0: keyframes 10 (anchor), 11, 12 along a corridor; subvolume 1 revisits it:
+// keyframes 20 (anchor, far away), 21 (sees 12's landmarks), 22 (sees 11's, fewer of them).
+FusionScheduler revisit(PairKeyframes choice) {
+  FusionSchedulerConfig config = testConfig();
+  config.pair_keyframes = choice;
+  FusionScheduler s(config);
+  s.addSubvolume(0, 10);
+  s.addSubvolume(1, 20);
+  s.addKeyframeLandmarks(0, 10, range(0, 50));
+  s.addKeyframeLandmarks(0, 11, range(50, 100));
+  s.addKeyframeLandmarks(0, 12, range(100, 150));
+  s.addKeyframeLandmarks(1, 20, range(500, 540));
+  s.addKeyframeLandmarks(1, 21, range(110, 150));
+  s.addKeyframeLandmarks(1, 22, range(80, 100));
+  return s;
+}
+
+TEST(FusionSchedulerTest, MostSharedAsksAboutTheKeyframesWhereTheSubvolumesOverlap) {
+  FusionScheduler s = revisit(PairKeyframes::kMostShared);
+  ASSERT_EQ(s.graph().weight(0, 1), 60);
+  EXPECT_EQ(s.mostSharedKeyframes(0, 1), std::make_tuple(int64_t{12}, int64_t{21}, 40));
+  const auto request = s.nextRequest(-1, 0.0);
+  ASSERT_TRUE(request.has_value());
+  ASSERT_EQ(request->pairs.size(), 1u);
+  EXPECT_EQ(request->pairs[0].older_keyframe, 12);
+  EXPECT_EQ(request->pairs[0].newer_keyframe, 21);
+  EXPECT_EQ(request->pairs[0].keyframe_shared_landmarks, 40);
+  EXPECT_EQ(request->pairs[0].shared_landmarks, 60);
+
+  FusionScheduler anchors = revisit(PairKeyframes::kAnchors);
+  const auto by_anchor = anchors.nextRequest(-1, 0.0);
+  ASSERT_TRUE(by_anchor.has_value());
+  EXPECT_EQ(by_anchor->pairs[0].older_keyframe, 10);
+  EXPECT_EQ(by_anchor->pairs[0].newer_keyframe, 20);
+  EXPECT_EQ(by_anchor->pairs[0].keyframe_shared_landmarks, 0);
+}
+
+TEST(FusionSchedulerTest, MostSharedTiesGoToTheLowestIdsAndUnknownKeyframesAreNeverChosen) {
+  FusionScheduler s(testConfig());
+  s.addSubvolume(0, 10);
+  s.addSubvolume(1, 20);
+  // Keyframes 11 and 12 of 0 each share 30 with 1's keyframes 21 and 22.
+  s.addKeyframeLandmarks(0, 12, range(0, 30));
+  s.addKeyframeLandmarks(0, 11, range(0, 30));
+  s.addKeyframeLandmarks(1, 22, range(0, 30));
+  s.addKeyframeLandmarks(1, 21, range(0, 30));
+  EXPECT_EQ(s.mostSharedKeyframes(0, 1), std::make_tuple(int64_t{11}, int64_t{21}, 30));
+  // A set whose keyframe is not known (read from a version 2 manifest) shares more, but a
+  // covariance cannot be asked for it.
+  constexpr int64_t kUnknown = KeyframeLandmarks::kUnknownKeyframe;
+  s.addKeyframeLandmarks(0, kUnknown, range(0, 100));
+  s.addKeyframeLandmarks(1, kUnknown, range(0, 100));
+  EXPECT_EQ(s.mostSharedKeyframes(0, 1), std::make_tuple(int64_t{11}, int64_t{21}, 30));
+  // Only sets of unknown keyframes share anything: the anchors.
+  FusionScheduler old(testConfig());
+  old.addSubvolume(0, 10);
+  old.addSubvolume(1, 20);
+  old.addKeyframeLandmarks(0, kUnknown, range(0, 100));
+  old.addKeyframeLandmarks(1, kUnknown, range(0, 100));
+  old.addKeyframeLandmarks(1, 21, range(200, 300));
+  EXPECT_EQ(old.mostSharedKeyframes(0, 1), std::make_tuple(int64_t{10}, int64_t{20}, 0));
+  const auto request = old.nextRequest(-1, 0.0);
+  ASSERT_TRUE(request.has_value());
+  EXPECT_EQ(request->pairs[0].older_keyframe, 10);
+  EXPECT_EQ(request->pairs[0].newer_keyframe, 20);
+}
+
+TEST(FusionSchedulerTest, PairKeyframesNamesRoundTrip) {
+  for (const PairKeyframes c : {PairKeyframes::kAnchors, PairKeyframes::kMostShared}) {
+    PairKeyframes back = c == PairKeyframes::kAnchors ? PairKeyframes::kMostShared
+                                                      : PairKeyframes::kAnchors;
+    ASSERT_TRUE(parsePairKeyframes(pairKeyframesName(c), &back));
+    EXPECT_EQ(back, c);
+  }
+  PairKeyframes untouched = PairKeyframes::kAnchors;
+  EXPECT_FALSE(parsePairKeyframes("nearest", &untouched));
+  EXPECT_EQ(untouched, PairKeyframes::kAnchors);
+  FusionSchedulerConfig bad;
+  bad.pair_keyframes = static_cast<PairKeyframes>(7);
+  EXPECT_NE(bad.validate().find("pair_keyframes"), std::string::npos);
 }
 
 TEST(FusionSchedulerTest, RejectedAndFailedPairsWaitBeforeTheyAreAskedAgain) {
@@ -211,7 +298,7 @@ TEST(FusionSchedulerTest, DisabledProposesNothingButKeepsTheGraph) {
   FusionScheduler s = threeSubvolumes(config);
   EXPECT_EQ(s.graph().weight(0, 1), 60);
   EXPECT_FALSE(s.nextRequest(-1, 0.0).has_value());
-  EXPECT_FALSE(s.addKeyframeLandmarks(7, range(0, 3)));  // unknown subvolume
+  EXPECT_FALSE(s.addKeyframeLandmarks(7, 70, range(0, 3)));  // unknown subvolume
 }
 
 TEST(FusionSchedulerTest, InvalidConfigsAreRejected) {

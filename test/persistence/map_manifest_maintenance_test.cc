@@ -1,6 +1,6 @@
-// Manifest format version 2: the map maintenance section (covisibility landmark sets and pair
-// back-offs) round trip, version 1 manifests, and hostile or inconsistent sections; and the
-// section through saveMap / loadMap / MapCheckpointer.
+// Manifest format version 3: the map maintenance section (the keyframes' covisibility landmark
+// sets and pair back-offs) round trip, version 1 and 2 manifests, and hostile or inconsistent
+// sections; and the section through saveMap / loadMap / MapCheckpointer.
 
 #include <cstdint>
 #include <cstdio>
@@ -25,12 +25,20 @@ namespace {
 using persistence_detail::ByteWriter;
 
 constexpr uint64_t kMaxId = std::numeric_limits<uint64_t>::max();
+constexpr int64_t kUnknown = KeyframeLandmarks::kUnknownKeyframe;
+
+// A subvolume whose keyframes each observed the given landmarks.
+SubvolumeLandmarks subvolume(int64_t id, std::vector<KeyframeLandmarks> keyframes) {
+  return SubvolumeLandmarks{id, std::move(keyframes)};
+}
 
 // smallManifest() with a maintenance section that covers the varint edge cases.
 MapManifest withMaintenance() {
   MapManifest m = test::smallManifest();
   m.maintenance.subvolumes = {
-      {2, {0, 1, 127, 128, 16383, 16384, uint64_t{1} << 40, uint64_t{1} << 63, kMaxId}}, {8, {}}};
+      subvolume(2, {{4, {0, 1, 127, 128, 16383, 16384}},
+                    {7, {uint64_t{1} << 40, uint64_t{1} << 63, kMaxId}}}),
+      subvolume(8, {})};
   m.maintenance.backoffs = {{2, 8, 3, 1.5}};
   return m;
 }
@@ -62,7 +70,7 @@ class ManifestMaintenance : public ::testing::Test {
     return error;
   }
 
-  test::TempDir dir_{"cblox_manifest_v2"};
+  test::TempDir dir_{"cblox_manifest_v3"};
 };
 
 TEST_F(ManifestMaintenance, RoundTripIsExact) {
@@ -76,13 +84,46 @@ TEST_F(ManifestMaintenance, RoundTripIsExact) {
   EXPECT_EQ(back->counters, m.counters);
   // Everything else too: the same manifest encodes to the same bytes.
   EXPECT_EQ(encodeManifest(*back), encodeManifest(m));
-  // Version 2 on disk.
+  // Version 3 on disk.
   const std::string bytes = test::readFile(path());
-  EXPECT_EQ(bytes.substr(8, 4), std::string("\x02\x00\x00\x00", 4));
-  // Ascending ids cost their differences: 9 ids in 1+1+1+1+2+1+6+9+9 bytes.
+  EXPECT_EQ(bytes.substr(8, 4), std::string("\x03\x00\x00\x00", 4));
+  // Ascending ids cost their differences: 6 ids in 1+1+1+1+2+1 bytes, 3 in 6+9+9; each keyframe
+  // 8 + 4 bytes more, each subvolume 8 + 4.
   size_t section = 0;
   const std::string payload = payloadOf(m, &section);
-  EXPECT_EQ(payload.size() - section, 4u + (8 + 4 + 31) + (8 + 4) + 4u + 28u);
+  EXPECT_EQ(payload.size() - section,
+            4u + (8 + 4 + (8 + 4 + 7) + (8 + 4 + 24)) + (8 + 4) + 4u + 28u);
+}
+
+TEST_F(ManifestMaintenance, Version2SetsReadAsOfAKeyframeNotKnown) {
+  size_t section = 0;
+  std::string v2 = payloadOf(test::smallManifest(), &section).substr(0, section);
+  ByteWriter w(&v2);
+  w.u32(2);  // subvolumes 2 and 8, one landmark set each
+  w.i64(2);
+  w.u32(3);
+  w.uvarint(5);
+  w.uvarint(1);
+  w.uvarint(300);
+  w.i64(8);
+  w.u32(0);
+  w.u32(1);  // one back-off
+  w.i64(2);
+  w.i64(8);
+  w.i32(1);
+  w.f64(0.5);
+  ASSERT_EQ(readForged(v2, 2), "");
+  std::string error;
+  const auto back = readManifest(dir(), &error);
+  ASSERT_TRUE(back) << error;
+  ASSERT_EQ(back->maintenance.subvolumes.size(), 2u);
+  EXPECT_EQ(back->maintenance.subvolumes[0], subvolume(2, {{kUnknown, {5, 6, 306}}}));
+  EXPECT_EQ(back->maintenance.subvolumes[1], subvolume(8, {{kUnknown, {}}}));
+  ASSERT_EQ(back->maintenance.backoffs.size(), 1u);
+  EXPECT_EQ(back->maintenance.backoffs[0], (FusionPairBackoff{2, 8, 1, 0.5}));
+  // Written again, it is version 3 and reads back the same.
+  ASSERT_TRUE(writeManifest(*back, dir(), &error)) << error;
+  EXPECT_EQ(readManifest(dir(), &error)->maintenance, back->maintenance);
 }
 
 TEST_F(ManifestMaintenance, Version1ManifestsReadWithAnEmptySection) {
@@ -100,7 +141,7 @@ TEST_F(ManifestMaintenance, Version1ManifestsReadWithAnEmptySection) {
   EXPECT_NE(readForged(v2, 1).find("8 unexpected bytes after the counters"), std::string::npos);
   // A newer version than this reader's is refused with the version message.
   EXPECT_NE(readForged(v2, kManifestVersion + 1)
-                .find("format version 3 is newer than this reader supports (2)"),
+                .find("format version 4 is newer than this reader supports (3)"),
             std::string::npos);
 }
 
@@ -141,12 +182,23 @@ TEST_F(ManifestMaintenance, HostileCountsAndIdsAreRefusedBeforeAllocating) {
               w.u32(1);
               w.i64(2);
               w.u32(0x7fffffffu);
+              w.i64(4);
+            }).find("keyframe count 2147483647 out of bounds"),
+            std::string::npos);
+  EXPECT_NE(forged([](ByteWriter& w) {
+              w.u32(1);
+              w.i64(2);
+              w.u32(1);
+              w.i64(4);
+              w.u32(0x7fffffffu);
               w.uvarint(1);
             }).find("landmark count 2147483647 out of bounds"),
             std::string::npos);
   EXPECT_NE(forged([](ByteWriter& w) {  // 11 continuation bytes: no uvarint is that long
               w.u32(1);
               w.i64(2);
+              w.u32(1);
+              w.i64(4);
               w.u32(1);
               w.bytes(std::string(11, '\xff'));
               w.u32(0);
@@ -157,6 +209,8 @@ TEST_F(ManifestMaintenance, HostileCountsAndIdsAreRefusedBeforeAllocating) {
               w.u32(1);
               w.i64(2);
               w.u32(1);
+              w.i64(4);
+              w.u32(1);
               w.bytes(std::string(9, '\xff') + "\x02");
               w.u32(0);
             })
@@ -165,6 +219,8 @@ TEST_F(ManifestMaintenance, HostileCountsAndIdsAreRefusedBeforeAllocating) {
   EXPECT_NE(forged([](ByteWriter& w) {  // a repeated id: difference 0
               w.u32(1);
               w.i64(2);
+              w.u32(1);
+              w.i64(4);
               w.u32(2);
               w.uvarint(5);
               w.uvarint(0);
@@ -175,6 +231,8 @@ TEST_F(ManifestMaintenance, HostileCountsAndIdsAreRefusedBeforeAllocating) {
   EXPECT_NE(forged([](ByteWriter& w) {  // past 2^64 - 1
               w.u32(1);
               w.i64(2);
+              w.u32(1);
+              w.i64(4);
               w.u32(2);
               w.uvarint(kMaxId);
               w.uvarint(1);
@@ -217,13 +275,21 @@ TEST_F(ManifestMaintenance, InconsistentSectionsAreNotWrittenOrRead) {
   m = withMaintenance();
   std::swap(m.maintenance.subvolumes[0], m.maintenance.subvolumes[1]);
   expectInvalid(m, "subvolume ids do not strictly increase");
+  m = withMaintenance();
+  std::swap(m.maintenance.subvolumes[0].keyframes[0], m.maintenance.subvolumes[0].keyframes[1]);
+  expectInvalid(m, "keyframe 4: keyframe ids do not strictly increase");
+  m = withMaintenance();
+  m.maintenance.subvolumes[0].keyframes[0].keyframe = -2;
+  expectInvalid(m, "keyframe -2: keyframe id is negative");
 }
 
 TEST_F(ManifestMaintenance, SaveLoadAndCheckpointsCarryTheStateOfListedSubmaps) {
   const auto collection = test::buildTestCollection();  // submaps 0, 1, 3, 4
   FusionSchedulerState state;
   // 2 was removed (fused) and 9 does not exist yet: neither goes into the manifest.
-  state.subvolumes = {{0, {1, 5, 9}}, {1, {5, 6}}, {2, {7}}, {4, {uint64_t{1} << 50}}, {9, {1}}};
+  state.subvolumes = {subvolume(0, {{0, {1, 5}}, {3, {5, 9}}}), subvolume(1, {{5, {5, 6}}}),
+                      subvolume(2, {{7, {7}}}), subvolume(4, {{kUnknown, {uint64_t{1} << 50}}}),
+                      subvolume(9, {{20, {1}}})};
   state.backoffs = {{0, 1, 2, 0.25}, {0, 2, 1, 0.0}, {1, 9, 1, 2.0}, {3, 4, 0, 4.0}};
   FusionSchedulerState listed = state;
   listed.subvolumes = {state.subvolumes[0], state.subvolumes[1], state.subvolumes[3]};
@@ -239,7 +305,7 @@ TEST_F(ManifestMaintenance, SaveLoadAndCheckpointsCarryTheStateOfListedSubmaps) 
   test::expectSameCollection(*collection, *loadMap(dir(), nullptr, &error));
 
   // The checkpointer asks for the state once per checkpoint, after the map's snapshot.
-  test::TempDir checkpoints("cblox_manifest_v2_ckpt");
+  test::TempDir checkpoints("cblox_manifest_v3_ckpt");
   MapCheckpointer checkpointer(checkpoints.path().string());
   int asked = 0;
   state.backoffs.clear();
@@ -260,7 +326,7 @@ TEST_F(ManifestMaintenance, SaveLoadAndCheckpointsCarryTheStateOfListedSubmaps) 
 
   // A source that gives an inconsistent state: nothing is committed.
   FusionSchedulerState bad;
-  bad.subvolumes = {{1, {3, 3}}};
+  bad.subvolumes = {subvolume(1, {{5, {3, 3}}})};
   EXPECT_FALSE(checkpointer.checkpoint(
       *collection, {}, [&] { return bad; }, &error));
   EXPECT_NE(error.find("the maintenance state is inconsistent"), std::string::npos) << error;

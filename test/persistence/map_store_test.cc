@@ -252,8 +252,8 @@ TEST_F(MapStore, CorruptOrIncompleteMapsAreRefusedWithTheFileNamed) {
   newer.replace(8, 4, std::string("\xe7\x03\0\0", 4));  // 999
   ASSERT_TRUE(writeFileAtomically(manifest_path, newer, nullptr));
   expectLoadError({manifest_path,
-                   "map manifest format version 999 is newer than this reader "
-                   "supports (2)"});
+                   "map manifest format version 999 is newer than this reader supports (" +
+                       std::to_string(kManifestVersion) + ")"});
   ASSERT_TRUE(writeFileAtomically(manifest_path, manifest_bytes.substr(0, 40), nullptr));
   expectLoadError({manifest_path, "truncated"});
   restore();

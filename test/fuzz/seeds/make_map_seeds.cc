@@ -2,7 +2,8 @@
 // submaps (one finished, one active, a few blocks, keyframes) saved with saveMap, then its
 // manifest and a submap file in the forms fuzz_map_manifest, fuzz_submap_file and
 // fuzz_load_map read (first byte even: payload, sealed by the target; odd: the whole file),
-// and a few corrupt copies. Run by hand after the map format changes:
+// and a few corrupt copies. The manifest's version 2 seed (valid_v2_file) was written by the
+// version 2 build and is kept. Run by hand after the map format changes:
 //   build/test/fuzz/make_map_seeds test/fuzz/corpus
 
 #include <cstdint>
@@ -67,8 +68,13 @@ int main(int argc, char** argv) {
   const fs::path dir = fs::temp_directory_path() / "cblox-make-map-seeds";
   fs::remove_all(dir);
   std::string error;
-  const auto manifest =
-      saveMap(collection, dir.string(), {{"frames_integrated", 12}}, {}, nullptr, &error);
+  // A maintenance section (manifest version 3): the keyframes' landmark sets, a back-off.
+  FusionSchedulerState maintenance;
+  maintenance.subvolumes = {{0, {{0, {1, 2, 300}}, {1, {2, 5, 1u << 20}}}}, {1, {{2, {300, 301}}}}};
+  maintenance.backoffs = {{0, 1, 1, 2.5}};
+  const auto manifest = saveMap(
+      collection, dir.string(), {{"frames_integrated", 12}}, [&] { return maintenance; },
+      nullptr, &error);
   if (!manifest) {
     std::fprintf(stderr, "make_map_seeds: %s\n", error.c_str());
     return 1;

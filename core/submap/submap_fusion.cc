@@ -162,6 +162,9 @@ SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T
   // Target blocks covering the sampleable region of every observed source block.
   absl::flat_hash_set<uint64_t> target_keys;
   constexpr double kEpsilonVoxels = 1e-4;
+  // The global voxel indices of the blocks kGridIndexMin .. kGridIndexMax (exact in double).
+  const double min_voxel = std::ldexp(static_cast<double>(kGridIndexMin), n_t_log2);
+  const double max_voxel = std::ldexp(static_cast<double>(kGridIndexMax) + 1.0, n_t_log2) - 1.0;
   for (const auto& [key, block] : source.blocks()) {
     if (!hasObservedVoxel(*block, config.min_weight)) continue;
     ++stats.source_blocks;
@@ -177,13 +180,22 @@ SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T
       lo = lo.cwiseMin(p_T);
       hi = hi.cwiseMax(p_T);
     }
-    // Target voxels whose centre (g + 1/2) t lies in [lo, hi].
+    // Target voxels whose centre (g + 1/2) t lies in [lo, hi], within the voxels of the
+    // blocks the grid can index: a finite but huge T_T_S (a hostile pose) puts [lo, hi]
+    // beyond them, where the cast to int would overflow.
     GlobalVoxelIndex g_lo, g_hi;
+    bool outside = false;
     for (int axis = 0; axis < 3; ++axis) {
-      g_lo[axis] = static_cast<int>(std::ceil(lo[axis] / t - 0.5 - kEpsilonVoxels));
-      g_hi[axis] = static_cast<int>(std::floor(hi[axis] / t - 0.5 + kEpsilonVoxels));
+      const double first = std::max(std::ceil(lo[axis] / t - 0.5 - kEpsilonVoxels), min_voxel);
+      const double last = std::min(std::floor(hi[axis] / t - 0.5 + kEpsilonVoxels), max_voxel);
+      if (!(first <= last)) {  // empty, off the grid, or NaN
+        outside = true;
+        break;
+      }
+      g_lo[axis] = static_cast<int>(first);
+      g_hi[axis] = static_cast<int>(last);
     }
-    if ((g_lo.array() > g_hi.array()).any()) continue;
+    if (outside) continue;
     const BlockIndex b_lo(g_lo.x() >> n_t_log2, g_lo.y() >> n_t_log2, g_lo.z() >> n_t_log2);
     const BlockIndex b_hi(g_hi.x() >> n_t_log2, g_hi.y() >> n_t_log2, g_hi.z() >> n_t_log2);
     for (int z = b_lo.z(); z <= b_hi.z(); ++z) {

@@ -205,8 +205,7 @@ bool Mapper::onDepthFrame(DepthFrame frame) {
     if (isRestart(last_depth_utime_, frame.utime)) {
       source_restarts_.fetch_add(1, std::memory_order_relaxed);
       log(what + ": depth time stamps went back by " +
-          fixed((static_cast<double>(last_depth_utime_) - static_cast<double>(frame.utime)) * 1e-6,
-                3) +
+          fixed(secondsBack(last_depth_utime_, frame.utime), 3) +
           " s: source restarted, frame order starts afresh, pose buffer cleared");
       last_depth_utime_ = INT64_MIN;
       // The old stream's poses must not serve the new stream's frames (same time stamps).
@@ -242,7 +241,7 @@ bool Mapper::onFramePose(const TimedPose& pose) {
     if (result == PoseBuffer::AddResult::kOutOfOrder && isRestart(newest, pose.utime)) {
       source_restarts_.fetch_add(1, std::memory_order_relaxed);
       log(what + ": pose time stamps went back by " +
-          fixed((static_cast<double>(newest) - static_cast<double>(pose.utime)) * 1e-6, 3) +
+          fixed(secondsBack(newest, pose.utime), 3) +
           " s: source restarted, pose buffer cleared");
       poses.clear();
       result = poses.add(stored);

@@ -18,6 +18,7 @@
 #include "core/tsdf/layer_config.h"
 #include "daemon/common/checkpoint_config.h"
 #include "daemon/common/input_silence.h"
+#include "daemon/common/time_restart.h"
 #include "daemon/mapper/memory_cap.h"
 #include "daemon/mapper/pose_buffer.h"
 
@@ -47,16 +48,6 @@ enum class MaintenanceClock {
   /// on the inputs alone (deterministic replay, cblox-replay).
   kInput,
 };
-
-/// True when `utime` is more than `restart_after_backwards_s` (> 0) older than `newest_utime`
-/// (INT64_MIN: nothing yet): the source restarted (MapperConfig::restart_after_backwards_s).
-/// Thread-safe (pure).
-inline bool isTimeRestart(int64_t newest_utime, int64_t utime, double restart_after_backwards_s) {
-  if (restart_after_backwards_s <= 0.0 || newest_utime == INT64_MIN) return false;
-  // In double: two time stamps from the bus may be 2^63 apart (int64_t would overflow).
-  return (static_cast<double>(newest_utime) - static_cast<double>(utime)) * 1e-6 >
-         restart_after_backwards_s;
-}
 
 /// Periodic incremental checkpoints of the map and resume at start (the `checkpoint` part of
 /// config/mapper.yaml; README "Map file format"): daemon/common/checkpoint_config.h.

@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "daemon/common/time_restart.h"
+
 namespace cblox {
 namespace {
 
@@ -245,13 +247,9 @@ bool TrackerNode::onFrame(TrackerFrame frame) {
               std::to_string(camera_->baseline_m) + " m");
     return false;
   }
-  const bool time_restarted =
-      config_.restart_after_backwards_s > 0.0 && last_utime_ != INT64_MIN &&
-      static_cast<double>(last_utime_ - frame.utime) * 1e-6 > config_.restart_after_backwards_s;
-  if (time_restarted) {
+  if (isTimeRestart(last_utime_, frame.utime, config_.restart_after_backwards_s)) {
     source_restarts_.fetch_add(1, std::memory_order_relaxed);
-    log(what + "time went back by " +
-        std::to_string(static_cast<double>(last_utime_ - frame.utime) * 1e-6) +
+    log(what + "time went back by " + std::to_string(secondsBack(last_utime_, frame.utime)) +
         " s: the source restarted; a new map starts (map epoch " +
         std::to_string(map_epoch_.load() + 1) + ")");
     frame.starts_new_map = true;

@@ -5,6 +5,7 @@
 #include "daemon/tracker/tracker_node.h"
 
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -296,6 +297,26 @@ TEST(TrackerNodeTest, RejectsBadCalibrationSizeChangesAndDisorderCountingEachKin
             "restarted; tracking continues in the same map");
   EXPECT_EQ(out.log[4],
             "out_of_order: frame 4 (2000 us): not after the previous frame 1 (5000 us)");
+}
+
+// Time stamps from the bus may be 2^63 apart: a step back that large is a restart, counted,
+// not a signed overflow (found by fuzz_tracker_lcm).
+TEST(TrackerNodeTest, TimeStampsAtTheExtremesAreCountedNotOverflowed) {
+  TrackerNodeConfig config;
+  config.queue_capacity = 16;
+  Collected out;
+  TrackerNode node(config, nullptr, out.outputs());  // not started: frames only queue
+  EXPECT_TRUE(node.onFrame(smallFrame(1, 4035225266124964416)));
+  EXPECT_TRUE(node.onFrame(smallFrame(2, -5548433881925943296)));  // back by 9.6e12 s
+  EXPECT_TRUE(node.onFrame(smallFrame(3, INT64_MAX)));
+  EXPECT_TRUE(node.onFrame(smallFrame(4, INT64_MIN + 1)));  // back by 2^64 - 2 us
+  EXPECT_FALSE(node.onFrame(smallFrame(5, INT64_MIN + 1)));  // not after it
+  const TrackerStatus s = node.status();
+  EXPECT_EQ(s.source_restarts, 2u);
+  EXPECT_EQ(s.problem(TrackerProblem::kOutOfOrder), 1u);
+  std::lock_guard<std::mutex> lock(out.mutex);
+  ASSERT_FALSE(out.log.empty());
+  EXPECT_NE(out.log[0].find("time went back by 9583659148050.9"), std::string::npos) << out.log[0];
 }
 
 TEST(TrackerNodeTest, ATimeStepBackStartsANewMapInTheNextEpoch) {

@@ -117,6 +117,27 @@ TEST(FuseLayers, WholeVoxelTranslationCopiesVoxelsExactly) {
   }
 }
 
+// A finite pose that puts the source beyond the blocks the target's grid can index (a hostile
+// keyframe pose from the bus): nothing is fused and nothing allocated; a pose that puts it
+// partly off the grid fuses the part on it. Found by fuzz_mapper_lcm (the int cast overflowed).
+TEST(FuseLayers, SourceBeyondTheGridIsSkipped) {
+  TsdfLayer source(LayerConfig{kVoxel, 8});
+  for (int i = 0; i < 8; ++i) *voxelAt(&source, {i, 0, 0}) = TsdfVoxel{0.0f, 1.0f, {}};
+  for (const double far : {1e12, -1e12, 1e300, -1e300}) {
+    TsdfLayer target(LayerConfig{kVoxel, 8});
+    const Transformationd T_T_S(Eigen::Quaterniond::Identity(), Eigen::Vector3d(far, 0.0, 0.0));
+    EXPECT_EQ(fuseLayers(source, T_T_S, SubmapFusionConfig{}, &target).voxels_fused, 0u) << far;
+    EXPECT_EQ(target.numBlocks(), 0u) << far;
+  }
+  // The grid's last block along x holds voxels (kGridIndexMax + 1) * 8 - 8 ... - 1: the source
+  // row i = 0..7 moved to start 4 voxels before the end keeps its first 4 voxels.
+  TsdfLayer target(LayerConfig{kVoxel, 8});
+  const double v = static_cast<double>(kVoxel);
+  const double start = (static_cast<double>(kGridIndexMax) + 1.0) * 8.0 - 4.0;
+  const Transformationd T_T_S(Eigen::Quaterniond::Identity(), Eigen::Vector3d(start * v, 0, 0));
+  EXPECT_EQ(fuseLayers(source, T_T_S, SubmapFusionConfig{}, &target).voxels_fused, 4u);
+}
+
 // Trilinear interpolation reproduces a linear field exactly: with every source voxel
 // observed, each covered target voxel gets the field's value at its centre mapped into the
 // source (float rounding only), under an arbitrary rotation and translation. Target

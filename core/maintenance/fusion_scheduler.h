@@ -19,12 +19,15 @@ namespace cblox {
 
 /// Which keyframe of each subvolume a candidate pair's covariance is asked about.
 enum class PairKeyframes {
-  /// The two subvolumes' anchor keyframes (the paper's choice).
+  /// The two subvolumes' anchor keyframes (the paper's choice, the default): the relative
+  /// pose of the subvolumes' frames, which the fusion makes rigid.
   kAnchors,
   /// The pair of keyframes, one of each subvolume, that observed the most landmarks in
-  /// common: the place where the two subvolumes overlap, so the certainty of the relative
-  /// pose the fusion gives the overlapping voxels (README, "Map maintenance"). The anchors
-  /// when no two keyframes share a landmark.
+  /// common: where the two subvolumes overlap. The anchors when no two keyframes share a
+  /// landmark. Measured on the hall (BENCHMARKS.md, "Map maintenance"): every pair of
+  /// neighbours is certain where they overlap, so lap 1 fuses into one rigid subvolume
+  /// before the loop closes and the loop correction can no longer bend it (RMSE as the
+  /// naive map's). For comparison only.
   kMostShared,
 };
 
@@ -45,7 +48,7 @@ struct FusionSchedulerConfig {
   /// of standard deviation. > 0.
   double q_min = 1e4;
   /// Which keyframes q is computed for (see PairKeyframes).
-  PairKeyframes pair_keyframes = PairKeyframes::kMostShared;
+  PairKeyframes pair_keyframes = PairKeyframes::kAnchors;
   /// At most this many pairs per covariance request (>= 1).
   int max_pairs_per_request = 8;
   /// A request without a reply is abandoned after this long, seconds (> 0); its pairs may be

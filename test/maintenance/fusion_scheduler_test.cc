@@ -117,11 +117,12 @@ TEST(FusionSchedulerTest, AcceptsPairsAtOrAboveQMinAndLocksThemUntilFused) {
   EXPECT_EQ(next->pairs[0].older, 0);
   EXPECT_EQ(next->pairs[0].newer, 2);
   EXPECT_EQ(next->pairs[0].shared_landmarks, 45);
-  // 0 also took 1's keyframe 20, which shares [100, 140) with 2's keyframe 30: that pair is
-  // asked about, not the anchors 10 and 30 (which share nothing).
-  EXPECT_EQ(next->pairs[0].older_keyframe, 20);
+  EXPECT_EQ(next->pairs[0].older_keyframe, 10);  // the anchors (the default)
   EXPECT_EQ(next->pairs[0].newer_keyframe, 30);
-  EXPECT_EQ(next->pairs[0].keyframe_shared_landmarks, 40);
+  EXPECT_EQ(next->pairs[0].keyframe_shared_landmarks, 0);
+  // 0 also took 1's keyframe 20, which shares [100, 140) with 2's keyframe 30: the pair
+  // most_shared would ask about.
+  EXPECT_EQ(s.mostSharedKeyframes(0, 2), std::make_tuple(int64_t{20}, int64_t{30}, 40));
 }
 
 // Subvolume 0: keyframes 10 (anchor), 11, 12 along a corridor; subvolume 1 revisits it:
@@ -162,7 +163,9 @@ TEST(FusionSchedulerTest, MostSharedAsksAboutTheKeyframesWhereTheSubvolumesOverl
 }
 
 TEST(FusionSchedulerTest, MostSharedTiesGoToTheLowestIdsAndUnknownKeyframesAreNeverChosen) {
-  FusionScheduler s(testConfig());
+  FusionSchedulerConfig config = testConfig();
+  config.pair_keyframes = PairKeyframes::kMostShared;
+  FusionScheduler s(config);
   s.addSubvolume(0, 10);
   s.addSubvolume(1, 20);
   // Keyframes 11 and 12 of 0 each share 30 with 1's keyframes 21 and 22.
@@ -178,7 +181,7 @@ TEST(FusionSchedulerTest, MostSharedTiesGoToTheLowestIdsAndUnknownKeyframesAreNe
   s.addKeyframeLandmarks(1, kUnknown, range(0, 100));
   EXPECT_EQ(s.mostSharedKeyframes(0, 1), std::make_tuple(int64_t{11}, int64_t{21}, 30));
   // Only sets of unknown keyframes share anything: the anchors.
-  FusionScheduler old(testConfig());
+  FusionScheduler old(config);
   old.addSubvolume(0, 10);
   old.addSubvolume(1, 20);
   old.addKeyframeLandmarks(0, kUnknown, range(0, 100));

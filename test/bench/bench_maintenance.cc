@@ -7,8 +7,9 @@
 //   (d) on     the same with map maintenance: covisible subvolumes whose conditional
 //              covariance q = 1/||Sigma_{i|j}||_2 reaches q_min are fused (one mapper per
 //              q_min of the sweep, each with its own covariance service on the live map),
-//              q asked of the keyframes that share the most landmarks (the default); and
-//              for each q_min of --anchors-q-min, q asked of the two anchors (the paper's).
+//              q asked of the two anchor keyframes (the default, the paper's); and for
+//              each q_min of --most-shared-q-min, q asked of the keyframes that share the
+//              most landmarks (maintenance.pair_keyframes: most_shared, for comparison).
 // At the end every map is meshed (the projection of its subvolumes into one volume) and
 // compared with the scene's exact surface: vertex RMSE and median, and the map's size in
 // TSDF blocks (over all subvolumes). Maps made with the tracker's poses are first aligned
@@ -18,7 +19,7 @@
 //   cblox-bench-maintenance [--scene room|hall|town] [--laps 2] [--frames N]
 //                           [--voxel 0.05] [--keyframes-per-subvolume 10] [--depth-noise K]
 //                           [--min-shared-landmarks 30] [--min-shared-ratio 0.05]
-//                           [--q-min 3e3,1e4,3e4,1e5] [--anchors-q-min 1e4] [--out DIR]
+//                           [--q-min 3e3,1e4,3e4,1e5] [--most-shared-q-min Q,...] [--out DIR]
 //
 // Mappers integrate every frame (no time budget, waited for) so the comparison does not
 // depend on the machine's load. --out writes DIR/maintenance_<scene>.json and
@@ -74,7 +75,7 @@ struct Variant {
   std::string name;
   Kind kind = Kind::kOff;
   double q_min = 0.0;
-  PairKeyframes pair_keyframes = PairKeyframes::kMostShared;
+  PairKeyframes pair_keyframes = PairKeyframes::kAnchors;
   std::mutex pairs_mutex;
   std::map<int64_t, std::vector<FusionPair>> requested;  // by request id, until answered
   std::vector<PairAnswer> answers;
@@ -108,7 +109,7 @@ int run(int argc, char** argv) {
   double depth_noise = 0.0;
   CovisibilityGraphConfig candidates;
   std::vector<double> sweep = {3e3, 1e4, 3e4, 1e5};
-  std::vector<double> anchors_sweep = {1e4};
+  std::vector<double> most_shared_sweep;
 #ifdef CBLOX_DEFAULT_VOCABULARY
   vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
 #endif
@@ -137,9 +138,9 @@ int run(int argc, char** argv) {
       ->delimiter(',')
       ->allow_extra_args(false)
       ->type_name("Q[,Q...]");
-  app.add_option("--anchors-q-min", anchors_sweep,
-                 "also these q_min with q asked of the anchor keyframes (comma-separated; "
-                 "empty: none)")
+  app.add_option("--most-shared-q-min", most_shared_sweep,
+                 "also these q_min with q asked of the keyframes that share the most "
+                 "landmarks (comma-separated; default none)")
       ->delimiter(',')
       ->allow_extra_args(false)
       ->expected(0, 1 << 20)
@@ -190,7 +191,7 @@ int run(int argc, char** argv) {
   std::mutex positions_mutex;
   std::map<int64_t, Eigen::Vector3d> keyframe_positions;
   auto add = [&](std::string name, Kind kind, double q_min,
-                 PairKeyframes pair_keyframes = PairKeyframes::kMostShared) {
+                 PairKeyframes pair_keyframes = PairKeyframes::kAnchors) {
     auto v = std::make_unique<Variant>();
     v->name = std::move(name);
     v->kind = kind;
@@ -280,10 +281,10 @@ int run(int argc, char** argv) {
     std::snprintf(name, sizeof(name), "on q>=%.0g", q);
     add(name, Kind::kOn, q);
   }
-  for (const double q : anchors_sweep) {
+  for (const double q : most_shared_sweep) {
     char name[40];
-    std::snprintf(name, sizeof(name), "on q>=%.0g anchors", q);
-    add(name, Kind::kOn, q, PairKeyframes::kAnchors);
+    std::snprintf(name, sizeof(name), "on q>=%.0g most shared", q);
+    add(name, Kind::kOn, q, PairKeyframes::kMostShared);
   }
 
   std::map<uint64_t, Transformationd> truth_by_frame;  // for the trajectory alignment

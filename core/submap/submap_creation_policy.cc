@@ -1,5 +1,6 @@
 #include "core/submap/submap_creation_policy.h"
 
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 
@@ -9,6 +10,8 @@ std::string SubmapCreationPolicyConfig::validate() const {
   std::ostringstream error;
   if (max_keyframes_per_subvolume < 1) {
     error << "max_keyframes_per_subvolume must be >= 1, got " << max_keyframes_per_subvolume;
+  } else if (!(max_anchor_distance_m >= 0.0) || !std::isfinite(max_anchor_distance_m)) {
+    error << "max_anchor_distance_m must be finite and >= 0, got " << max_anchor_distance_m;
   }
   return error.str();
 }
@@ -39,9 +42,14 @@ SubmapCreationPolicy::FrameAction SubmapCreationPolicy::onFramePose(
   return integrate ? FrameAction::kIntegrate : FrameAction::kWaitForAnchor;
 }
 
-bool SubmapCreationPolicy::onKeyframe(const Submap* active, bool starts_new_map) {
-  const bool create = starts_new_map || pending_ != Pending::kNone || active == nullptr ||
-                      needsNewSubmap(*active, /*tracking_jump=*/false);
+bool SubmapCreationPolicy::onKeyframe(const Submap* active, bool starts_new_map,
+                                      const std::optional<Eigen::Vector3d>& keyframe_position) {
+  const bool too_far = config_.max_anchor_distance_m > 0.0 && active != nullptr &&
+                       keyframe_position &&
+                       (*keyframe_position - active->T_G_M().translation()).norm() >
+                           config_.max_anchor_distance_m;
+  const bool create = starts_new_map || too_far || pending_ != Pending::kNone ||
+                      active == nullptr || needsNewSubmap(*active, /*tracking_jump=*/false);
   if (create) pending_ = Pending::kNone;
   return create;
 }

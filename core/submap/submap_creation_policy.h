@@ -14,6 +14,11 @@ struct SubmapCreationPolicyConfig {
   /// anchors a new submap. >= 1. Default 10: a few metres of travel per subvolume at usual
   /// keyframe rates; tune per platform.
   int max_keyframes_per_subvolume = 10;
+  /// A keyframe farther than this from the active submap's anchor (its current T_G_M)
+  /// anchors a new submap, metres (> 0), or 0: no bound. Bounds a subvolume's extent where
+  /// keyframes are sparse (a revisit of mapped places adds few), so its anchor stays near
+  /// what it holds (README, "Map maintenance"). Default 0 until measured over several runs.
+  double max_anchor_distance_m = 0.0;
 
   /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
   std::string validate() const;
@@ -80,8 +85,11 @@ class SubmapCreationPolicy {
   /// is then cleared and the caller creates the submap with T_G_M = T_G_K. False: the
   /// caller adds the keyframe to `active`. `starts_new_map`: the keyframe belongs to another
   /// map than the active submap's (the tracker started a new map): always a new submap, as
-  /// after a jump. Not thread-safe.
-  bool onKeyframe(const Submap* active, bool starts_new_map = false);
+  /// after a jump. `keyframe_position` (p of T_G_K): with max_anchor_distance_m > 0, a
+  /// keyframe farther than that from the active submap's anchor anchors a new one. Not
+  /// thread-safe.
+  bool onKeyframe(const Submap* active, bool starts_new_map = false,
+                  const std::optional<Eigen::Vector3d>& keyframe_position = std::nullopt);
 
   /// The pending decision. Not thread-safe.
   Pending pending() const { return pending_; }

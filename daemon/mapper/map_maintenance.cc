@@ -190,7 +190,7 @@ void MapMaintenance::applyKeyframe(KeyframeId id, int64_t utime, const Transform
     // A keyframe of another map epoch (map_epoch_key.h: the tracker started a new map) never
     // joins a subvolume of the old map: the two maps' frames are unrelated.
     const bool new_map = active && epochOfKey(id) != epochOfKey(active->anchorKeyframe());
-    if (policy_->onKeyframe(active.get(), new_map)) {
+    if (policy_->onKeyframe(active.get(), new_map, T_G_K.translation())) {
       // Finishes the previous submap (waits for the frame being integrated into it).
       // Clamped: a keyframe time stamp from the bus beyond +-292 years overflows in ns.
       created = collection_->createSubmap(

@@ -17,7 +17,8 @@
 // sensor model's depth noise sigma = K z^2 (metres; the stereo images stay clean).
 //
 //   cblox-bench-maintenance [--scene room|hall|town] [--laps 2] [--frames N]
-//                           [--voxel 0.05] [--keyframes-per-subvolume 10] [--depth-noise K]
+//                           [--voxel 0.05] [--keyframes-per-subvolume 10]
+//                           [--max-anchor-distance M] [--depth-noise K]
 //                           [--min-shared-landmarks 30] [--min-shared-ratio 0.05]
 //                           [--q-min 3e3,1e4,3e4,1e5] [--most-shared-q-min Q,...] [--out DIR]
 //
@@ -106,6 +107,7 @@ int run(int argc, char** argv) {
   size_t max_frames = 0;
   float voxel = 0.05f;
   int keyframes_per_subvolume = MapperConfig{}.creation.max_keyframes_per_subvolume;
+  double max_anchor_distance = MapperConfig{}.creation.max_anchor_distance_m;
   double depth_noise = 0.0;
   CovisibilityGraphConfig candidates;
   std::vector<double> sweep = {3e3, 1e4, 3e4, 1e5};
@@ -124,6 +126,9 @@ int run(int argc, char** argv) {
   app.add_option("--voxel", voxel, "voxel size, metres")->capture_default_str();
   app.add_option("--keyframes-per-subvolume", keyframes_per_subvolume,
                  "a new subvolume after this many keyframes")
+      ->capture_default_str();
+  app.add_option("--max-anchor-distance", max_anchor_distance,
+                 "a new subvolume after a keyframe this far from the anchor, metres (0: off)")
       ->capture_default_str();
   app.add_option("--min-shared-ratio", candidates.min_shared_ratio,
                  "fusion candidates: share of landmarks seen by both")
@@ -204,6 +209,7 @@ int run(int argc, char** argv) {
     } else {
       config.pose_source = PoseSource::kTracker;
       config.creation.max_keyframes_per_subvolume = keyframes_per_subvolume;
+      config.creation.max_anchor_distance_m = max_anchor_distance;
       config.maintenance.enabled = kind == Kind::kOn;
       config.maintenance.candidates = candidates;
       if (kind == Kind::kOn) config.maintenance.q_min = q_min;

@@ -1,5 +1,6 @@
 #include "core/submap/submap_creation_policy.h"
 
+#include <limits>
 #include <stdexcept>
 
 #include <gtest/gtest.h>
@@ -18,6 +19,32 @@ TEST(SubmapCreationPolicyConfig, ValidateNamesTheField) {
   config.max_keyframes_per_subvolume = 0;
   EXPECT_NE(config.validate().find("max_keyframes_per_subvolume"), std::string::npos);
   EXPECT_THROW(SubmapCreationPolicy{config}, std::invalid_argument);
+  config = SubmapCreationPolicyConfig{};
+  config.max_anchor_distance_m = -1.0;
+  EXPECT_NE(config.validate().find("max_anchor_distance_m"), std::string::npos);
+  config.max_anchor_distance_m = std::numeric_limits<double>::infinity();
+  EXPECT_NE(config.validate().find("max_anchor_distance_m"), std::string::npos);
+}
+
+// With max_anchor_distance_m, a keyframe farther than that from the active submap's anchor
+// (its current T_G_M) anchors a new submap, whatever the keyframe count; at exactly the
+// distance, or without a position, it joins.
+TEST(SubmapCreationPolicy, AKeyframeTooFarFromTheAnchorAnchorsANewSubmap) {
+  SubmapCreationPolicyConfig config;
+  config.max_keyframes_per_subvolume = 100;
+  config.max_anchor_distance_m = 3.0;
+  SubmapCreationPolicy policy(config);
+  const Transformationd T_G_M(Eigen::Quaterniond::Identity(), Eigen::Vector3d(1.0, 2.0, 0.0));
+  Submap active(0, LayerConfig{}, T_G_M, 100, 0);
+  EXPECT_FALSE(policy.onKeyframe(&active, false, Eigen::Vector3d(4.0, 2.0, 0.0)));  // 3 m
+  EXPECT_TRUE(policy.onKeyframe(&active, false, Eigen::Vector3d(1.0, 2.0, 3.01)));
+  EXPECT_FALSE(policy.onKeyframe(&active, false));  // no position: the count rule only
+  // The anchor moved by a correction: the distance is to where it is now.
+  active.setT_G_M(Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d(1.0, 2.0, 2.0)));
+  EXPECT_FALSE(policy.onKeyframe(&active, false, Eigen::Vector3d(1.0, 2.0, 3.01)));
+  // Off (0): never.
+  SubmapCreationPolicy off(SubmapCreationPolicyConfig{100});
+  EXPECT_FALSE(off.onKeyframe(&active, false, Eigen::Vector3d(1e6, 0.0, 0.0)));
 }
 
 TEST(SubmapCreationPolicy, RuleNewSubmapAfterNKeyframesOrOnATrackingJump) {

@@ -101,17 +101,4 @@ std::vector<CovisibilityCandidate> SubvolumeCovisibilityGraph::candidates(
   return out;
 }
 
-std::vector<std::pair<int64_t, std::vector<uint64_t>>> SubvolumeCovisibilityGraph::landmarkSets()
-    const {
-  std::vector<std::pair<int64_t, std::vector<uint64_t>>> out;
-  out.reserve(landmarks_.size());
-  for (const auto& [subvolume, set] : landmarks_) {
-    std::vector<uint64_t> ids(set.begin(), set.end());
-    std::sort(ids.begin(), ids.end());
-    out.emplace_back(subvolume, std::move(ids));
-  }
-  std::sort(out.begin(), out.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-  return out;
-}
-
 }  // namespace cblox

@@ -74,9 +74,6 @@ class SubvolumeCovisibilityGraph {
   std::vector<std::pair<int64_t, int>> neighbours(int64_t subvolume) const;
   /// Edges that meet the config's bounds, by decreasing weight (then by (a, b)).
   std::vector<CovisibilityCandidate> candidates(const CovisibilityGraphConfig& config) const;
-  /// Every vertex with its landmark set (what determines the graph: addLandmarks of these
-  /// into an empty graph rebuilds the same weights), by ascending id, landmarks ascending.
-  std::vector<std::pair<int64_t, std::vector<uint64_t>>> landmarkSets() const;
 
  private:
   static std::pair<int64_t, int64_t> key(int64_t a, int64_t b) {

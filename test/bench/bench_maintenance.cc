@@ -46,6 +46,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/eval/mesh_accuracy.h"
+#include "core/eval/quantile.h"
 #include "core/eval/scatter_plot.h"
 #include "core/eval/umeyama.h"
 #include "core/raycast/triangle_mesh_raycaster.h"
@@ -480,18 +481,12 @@ int run(int argc, char** argv) {
       shared.push_back(a.keyframe_shared);
       if (a.q >= v->q_min) ++certain;
     }
-    const auto median = [](std::vector<double> x) {
-      if (x.empty()) return 0.0;
-      std::nth_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2),
-                       x.end());
-      return x[x.size() / 2];
-    };
     std::printf(
         "%s: %zu pairs answered (%s keyframes): q median %.3g, %zu (%.0f %%) >= q_min; "
         "distance between the keyframes median %.2f m; landmarks both saw median %.0f\n",
-        v->name.c_str(), q.size(), pairKeyframesName(v->pair_keyframes), median(q), certain,
+        v->name.c_str(), q.size(), pairKeyframesName(v->pair_keyframes), quantile(&q, 0.5), certain,
         q.empty() ? 0.0 : 100.0 * static_cast<double>(certain) / static_cast<double>(q.size()),
-        median(distance), median(shared));
+        quantile(&distance, 0.5), quantile(&shared, 0.5));
   }
   const Variant& gt = *variants[0];
   const Variant& off = *variants[2];

@@ -177,6 +177,7 @@ void MapMaintenance::applyKeyframe(KeyframeId id, int64_t utime, const Transform
                                    bool synthesised, std::span<const uint64_t> landmark_ids) {
   std::shared_ptr<Submap> created;
   SubmapId joined = -1;
+  SubmapCreationPolicy::Reason reason = SubmapCreationPolicy::Reason::kNone;
   {
     std::lock_guard<std::mutex> lock(*policy_mutex_);
     if (synthesised && keyframes_seen_.count(id) > 0) id = max_keyframe_seen_ + 1;
@@ -190,9 +191,18 @@ void MapMaintenance::applyKeyframe(KeyframeId id, int64_t utime, const Transform
     // A keyframe of another map epoch (map_epoch_key.h: the tracker started a new map) never
     // joins a subvolume of the old map: the two maps' frames are unrelated.
     const bool new_map = active && epochOfKey(id) != epochOfKey(active->anchorKeyframe());
-    if (policy_->onKeyframe(active.get(), new_map, T_G_K.translation())) {
+    // Revisit anchoring compares with the other subvolumes' anchors of this map epoch.
+    std::vector<Eigen::Vector3d> older_anchors;
+    if (policy_->config().revisit_anchor_distance_m > 0.0) {
+      for (const SubmapPose& pose : collection_->poseSnapshot()) {
+        if (pose.active || epochOfKey(pose.anchor_keyframe) != epochOfKey(id)) continue;
+        older_anchors.push_back(pose.T_G_M.translation());
+      }
+    }
+    if (policy_->onKeyframe(active.get(), new_map, T_G_K.translation(), older_anchors)) {
       // Finishes the previous submap (waits for the frame being integrated into it).
       // Clamped: a keyframe time stamp from the bus beyond +-292 years overflows in ns.
+      reason = policy_->lastReason();
       created = collection_->createSubmap(
           T_G_K, id, std::clamp<int64_t>(utime, INT64_MIN / 1000, INT64_MAX / 1000) * 1000);
       joined = created->id();
@@ -210,7 +220,8 @@ void MapMaintenance::applyKeyframe(KeyframeId id, int64_t utime, const Transform
   if (created) {
     log_("subvolume " + std::to_string(created->id()) + " anchored at keyframe " +
          std::to_string(idOfKey(id)) +
-         (epochOfKey(id) > 0 ? " of map epoch " + std::to_string(epochOfKey(id)) : ""));
+         (epochOfKey(id) > 0 ? " of map epoch " + std::to_string(epochOfKey(id)) : "") +
+         " (" + SubmapCreationPolicy::reasonName(reason) + ")");
   }
 }
 

@@ -75,7 +75,8 @@ bool MapMaintenance::enqueue(Item item) {
     }
   }
   queue_cv_.notify_all();
-  if (dropped) problems_(InputProblem::kMaintenanceDropped, "maintenance queue full: oldest dropped", 1);
+  if (dropped)
+    problems_(InputProblem::kMaintenanceDropped, "maintenance queue full: oldest dropped", 1);
   return true;
 }
 
@@ -165,7 +166,7 @@ void MapMaintenance::apply(const Item& item) {
         break;
     }
   } catch (const std::exception& e) {
-    problems_(item.kind == Kind::kBatch ? InputProblem::kKeyframePoseInvalid
+    problems_(item.kind == Kind::kBatch             ? InputProblem::kKeyframePoseInvalid
               : item.kind == Kind::kCovarianceReply ? InputProblem::kCovarianceReplyInvalid
                                                     : InputProblem::kKeyframeInvalid,
               e.what(), 1);
@@ -191,15 +192,7 @@ void MapMaintenance::applyKeyframe(KeyframeId id, int64_t utime, const Transform
     // A keyframe of another map epoch (map_epoch_key.h: the tracker started a new map) never
     // joins a subvolume of the old map: the two maps' frames are unrelated.
     const bool new_map = active && epochOfKey(id) != epochOfKey(active->anchorKeyframe());
-    // Revisit anchoring compares with the other subvolumes' anchors of this map epoch.
-    std::vector<Eigen::Vector3d> older_anchors;
-    if (policy_->config().revisit_anchor_distance_m > 0.0) {
-      for (const SubmapPose& pose : collection_->poseSnapshot()) {
-        if (pose.active || epochOfKey(pose.anchor_keyframe) != epochOfKey(id)) continue;
-        older_anchors.push_back(pose.T_G_M.translation());
-      }
-    }
-    if (policy_->onKeyframe(active.get(), new_map, T_G_K.translation(), older_anchors)) {
+    if (policy_->onKeyframe(active.get(), new_map, T_G_K.translation())) {
       // Finishes the previous submap (waits for the frame being integrated into it).
       // Clamped: a keyframe time stamp from the bus beyond +-292 years overflows in ns.
       reason = policy_->lastReason();
@@ -220,8 +213,8 @@ void MapMaintenance::applyKeyframe(KeyframeId id, int64_t utime, const Transform
   if (created) {
     log_("subvolume " + std::to_string(created->id()) + " anchored at keyframe " +
          std::to_string(idOfKey(id)) +
-         (epochOfKey(id) > 0 ? " of map epoch " + std::to_string(epochOfKey(id)) : "") +
-         " (" + SubmapCreationPolicy::reasonName(reason) + ")");
+         (epochOfKey(id) > 0 ? " of map epoch " + std::to_string(epochOfKey(id)) : "") + " (" +
+         SubmapCreationPolicy::reasonName(reason) + ")");
   }
 }
 

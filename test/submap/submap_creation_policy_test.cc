@@ -24,55 +24,33 @@ TEST(SubmapCreationPolicyConfig, ValidateNamesTheField) {
   EXPECT_NE(config.validate().find("max_anchor_distance_m"), std::string::npos);
   config.max_anchor_distance_m = std::numeric_limits<double>::infinity();
   EXPECT_NE(config.validate().find("max_anchor_distance_m"), std::string::npos);
-  config = SubmapCreationPolicyConfig{};
-  config.revisit_anchor_distance_m = -0.5;
-  EXPECT_NE(config.validate().find("revisit_anchor_distance_m"), std::string::npos);
-  config.revisit_anchor_distance_m = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_NE(config.validate().find("revisit_anchor_distance_m"), std::string::npos);
 }
 
-// With revisit_anchor_distance_m, a keyframe closer than that to an older subvolume's
-// anchor starts a new submap (tracking returned to a mapped place), unless the active
-// submap's anchor is itself within that distance of the older anchor (it already started
-// there); the reason is reported.
-TEST(SubmapCreationPolicy, AKeyframeNearAnOlderAnchorStartsARevisitSubmap) {
+// The policy says why it asked for each new submap (the mapper logs it).
+TEST(SubmapCreationPolicy, ReportsWhyASubmapWasCreated) {
   using Reason = SubmapCreationPolicy::Reason;
-  SubmapCreationPolicyConfig config;
-  config.max_keyframes_per_subvolume = 100;
-  config.revisit_anchor_distance_m = 1.0;
-  SubmapCreationPolicy policy(config);
+  SubmapCreationPolicy policy(SubmapCreationPolicyConfig{2});
   EXPECT_EQ(policy.lastReason(), Reason::kNone);
-  // The active submap is anchored at x = 10; older anchors at x = 0 and x = 5.
-  Submap active(2, LayerConfig{}, Transformationd(Eigen::Quaterniond::Identity(),
-                                                  Eigen::Vector3d(10.0, 0.0, 0.0)),
-                100, 0);
-  const std::vector<Eigen::Vector3d> older = {Eigen::Vector3d(0.0, 0.0, 0.0),
-                                              Eigen::Vector3d(5.0, 0.0, 0.0)};
-  EXPECT_FALSE(policy.onKeyframe(&active, false, Eigen::Vector3d(3.0, 0.0, 0.0), older));
-  EXPECT_FALSE(policy.onKeyframe(&active, false, Eigen::Vector3d(5.0, 1.0, 0.0), older));  // 1 m
-  EXPECT_TRUE(policy.onKeyframe(&active, false, Eigen::Vector3d(5.0, 0.0, 0.99), older));
-  EXPECT_EQ(policy.lastReason(), Reason::kRevisit);
-  EXPECT_STREQ(SubmapCreationPolicy::reasonName(policy.lastReason()), "revisit");
-  // The revisit submap anchored 0.6 m before the old anchor: the next keyframes near that
-  // anchor join it, the next old anchor starts another one.
-  Submap revisit(3, LayerConfig{}, Transformationd(Eigen::Quaterniond::Identity(),
-                                                   Eigen::Vector3d(4.4, 0.0, 0.0)),
-                 101, 0);
-  EXPECT_FALSE(policy.onKeyframe(&revisit, false, Eigen::Vector3d(5.3, 0.0, 0.0), older));
-  EXPECT_FALSE(policy.onKeyframe(&revisit, false, Eigen::Vector3d(0.5, 0.0, 0.0)));  // no anchors
-  EXPECT_TRUE(policy.onKeyframe(&revisit, false, Eigen::Vector3d(0.5, 0.0, 0.0), older));
-  // Without a position the rule cannot apply; the keyframe limit still does, and says so.
-  EXPECT_FALSE(policy.onKeyframe(&active, false, std::nullopt, older));
-  SubmapCreationPolicy small(SubmapCreationPolicyConfig{1, 0.0, 1.0});
-  EXPECT_TRUE(small.onKeyframe(&active, false, Eigen::Vector3d(5.0, 0.0, 0.0), older));
-  EXPECT_EQ(small.lastReason(), Reason::kKeyframeLimit);
-  EXPECT_TRUE(small.onKeyframe(nullptr, false, Eigen::Vector3d(5.0, 0.0, 0.0), older));
-  EXPECT_EQ(small.lastReason(), Reason::kNoActiveSubmap);
-  EXPECT_TRUE(small.onKeyframe(&active, true));
-  EXPECT_EQ(small.lastReason(), Reason::kNewMap);
-  // Off (0): never.
-  SubmapCreationPolicy off(SubmapCreationPolicyConfig{100});
-  EXPECT_FALSE(off.onKeyframe(&active, false, Eigen::Vector3d(0.0, 0.0, 0.0), older));
+  EXPECT_STREQ(SubmapCreationPolicy::reasonName(Reason::kNone), "none");
+  Submap active(0, LayerConfig{}, Transformationd(), 100, 0);
+  EXPECT_TRUE(policy.onKeyframe(nullptr));
+  EXPECT_EQ(policy.lastReason(), Reason::kNoActiveSubmap);
+  EXPECT_FALSE(policy.onKeyframe(&active));  // 1 of 2 keyframes: joins, the reason stays
+  EXPECT_EQ(policy.lastReason(), Reason::kNoActiveSubmap);
+  EXPECT_TRUE(policy.onKeyframe(&active, /*starts_new_map=*/true));
+  EXPECT_EQ(policy.lastReason(), Reason::kNewMap);
+  EXPECT_STREQ(SubmapCreationPolicy::reasonName(policy.lastReason()), "new map");
+  EXPECT_EQ(policy.onFramePose(&active, /*tracking_jump=*/true),
+            SubmapCreationPolicy::FrameAction::kWaitForAnchor);
+  EXPECT_TRUE(policy.onKeyframe(&active));
+  EXPECT_EQ(policy.lastReason(), Reason::kTrackingJump);
+  active.addKeyframe(101);
+  EXPECT_TRUE(policy.onKeyframe(&active));
+  EXPECT_EQ(policy.lastReason(), Reason::kKeyframeLimit);
+  EXPECT_STREQ(SubmapCreationPolicy::reasonName(policy.lastReason()), "keyframe limit");
+  active.finish();
+  EXPECT_TRUE(policy.onKeyframe(&active));
+  EXPECT_EQ(policy.lastReason(), Reason::kNoActiveSubmap);
 }
 
 // With max_anchor_distance_m, a keyframe farther than that from the active submap's anchor
@@ -88,6 +66,7 @@ TEST(SubmapCreationPolicy, AKeyframeTooFarFromTheAnchorAnchorsANewSubmap) {
   EXPECT_FALSE(policy.onKeyframe(&active, false, Eigen::Vector3d(4.0, 2.0, 0.0)));  // 3 m
   EXPECT_TRUE(policy.onKeyframe(&active, false, Eigen::Vector3d(1.0, 2.0, 3.01)));
   EXPECT_EQ(policy.lastReason(), SubmapCreationPolicy::Reason::kAnchorDistance);
+  EXPECT_STREQ(SubmapCreationPolicy::reasonName(policy.lastReason()), "anchor distance");
   EXPECT_FALSE(policy.onKeyframe(&active, false));  // no position: the count rule only
   // The anchor moved by a correction: the distance is to where it is now.
   active.setT_G_M(Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d(1.0, 2.0, 2.0)));
@@ -185,7 +164,7 @@ TEST(SubmapCreationPolicy, AJumpAnsweredByANewerSubmapAndANewMapsKeyframe) {
   Submap anchored(0, LayerConfig{}, Transformationd(), 100, /*creation_time_ns=*/5'000);
   EXPECT_EQ(policy.onFramePose(&anchored, true, 5'000), Action::kIntegrate);  // same time
   EXPECT_EQ(policy.pending(), Pending::kNone);
-  EXPECT_EQ(policy.onFramePose(&anchored, true, 4'000), Action::kIntegrate);  // older frame
+  EXPECT_EQ(policy.onFramePose(&anchored, true, 4'000), Action::kIntegrate);      // older frame
   EXPECT_EQ(policy.onFramePose(&anchored, true, 5'001), Action::kWaitForAnchor);  // newer
   EXPECT_EQ(policy.pending(), Pending::kTrackingJump);
   policy.reset();

@@ -12,6 +12,8 @@ std::string SubmapCreationPolicyConfig::validate() const {
     error << "max_keyframes_per_subvolume must be >= 1, got " << max_keyframes_per_subvolume;
   } else if (!(max_anchor_distance_m >= 0.0) || !std::isfinite(max_anchor_distance_m)) {
     error << "max_anchor_distance_m must be finite and >= 0, got " << max_anchor_distance_m;
+  } else if (!(revisit_anchor_distance_m >= 0.0) || !std::isfinite(revisit_anchor_distance_m)) {
+    error << "revisit_anchor_distance_m must be finite and >= 0, got " << revisit_anchor_distance_m;
   }
   return error.str();
 }
@@ -43,7 +45,8 @@ SubmapCreationPolicy::FrameAction SubmapCreationPolicy::onFramePose(
 }
 
 bool SubmapCreationPolicy::onKeyframe(const Submap* active, bool starts_new_map,
-                                      const std::optional<Eigen::Vector3d>& keyframe_position) {
+                                      const std::optional<Eigen::Vector3d>& keyframe_position,
+                                      std::span<const Eigen::Vector3d> older_anchors) {
   Reason reason = Reason::kNone;
   if (starts_new_map) {
     reason = Reason::kNewMap;
@@ -53,10 +56,21 @@ bool SubmapCreationPolicy::onKeyframe(const Submap* active, bool starts_new_map,
     reason = Reason::kNoActiveSubmap;
   } else if (pending_ == Pending::kKeyframeLimit || needsNewSubmap(*active, false)) {
     reason = Reason::kKeyframeLimit;
-  } else if (keyframe_position && config_.max_anchor_distance_m > 0.0 &&
-             (*keyframe_position - active->T_G_M().translation()).norm() >
-                 config_.max_anchor_distance_m) {
-    reason = Reason::kAnchorDistance;
+  } else if (keyframe_position) {
+    const Eigen::Vector3d anchor = active->T_G_M().translation();
+    const double revisit = config_.revisit_anchor_distance_m;
+    if (revisit > 0.0) {
+      for (const Eigen::Vector3d& older : older_anchors) {
+        if ((*keyframe_position - older).norm() < revisit && (anchor - older).norm() >= revisit) {
+          reason = Reason::kRevisit;
+          break;
+        }
+      }
+    }
+    if (reason == Reason::kNone && config_.max_anchor_distance_m > 0.0 &&
+        (*keyframe_position - anchor).norm() > config_.max_anchor_distance_m) {
+      reason = Reason::kAnchorDistance;
+    }
   }
   if (reason == Reason::kNone) return false;
   pending_ = Pending::kNone;
@@ -76,6 +90,8 @@ const char* SubmapCreationPolicy::reasonName(Reason reason) {
       return "tracking jump";
     case Reason::kKeyframeLimit:
       return "keyframe limit";
+    case Reason::kRevisit:
+      return "revisit";
     case Reason::kAnchorDistance:
       return "anchor distance";
   }

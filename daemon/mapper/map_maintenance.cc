@@ -192,7 +192,15 @@ void MapMaintenance::applyKeyframe(KeyframeId id, int64_t utime, const Transform
     // A keyframe of another map epoch (map_epoch_key.h: the tracker started a new map) never
     // joins a subvolume of the old map: the two maps' frames are unrelated.
     const bool new_map = active && epochOfKey(id) != epochOfKey(active->anchorKeyframe());
-    if (policy_->onKeyframe(active.get(), new_map, T_G_K.translation())) {
+    // Revisit anchoring compares with the other subvolumes' anchors of this map epoch.
+    std::vector<Eigen::Vector3d> older_anchors;
+    if (policy_->config().revisit_anchor_distance_m > 0.0) {
+      for (const SubmapPose& pose : collection_->poseSnapshot()) {
+        if (pose.active || epochOfKey(pose.anchor_keyframe) != epochOfKey(id)) continue;
+        older_anchors.push_back(pose.T_G_M.translation());
+      }
+    }
+    if (policy_->onKeyframe(active.get(), new_map, T_G_K.translation(), older_anchors)) {
       // Finishes the previous submap (waits for the frame being integrated into it).
       // Clamped: a keyframe time stamp from the bus beyond +-292 years overflows in ns.
       reason = policy_->lastReason();

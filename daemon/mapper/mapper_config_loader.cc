@@ -146,12 +146,14 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   const YAML::Node subvolumes = root["subvolumes"];
   requireKnownKeys(subvolumes, "subvolumes",
                    {"max_keyframes_per_subvolume", "max_anchor_distance_m",
-                    "keyframe_every_n_frames"});
+                    "revisit_anchor_distance_m", "keyframe_every_n_frames"});
   if (!isAbsent(subvolumes)) {
     readOptional(subvolumes, "subvolumes", "max_keyframes_per_subvolume",
                  &m.creation.max_keyframes_per_subvolume);
     readOptional(subvolumes, "subvolumes", "max_anchor_distance_m",
                  &m.creation.max_anchor_distance_m);
+    readOptional(subvolumes, "subvolumes", "revisit_anchor_distance_m",
+                 &m.creation.revisit_anchor_distance_m);
     readOptional(subvolumes, "subvolumes", "keyframe_every_n_frames", &m.keyframe_every_n_frames);
   }
 

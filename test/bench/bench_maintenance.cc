@@ -9,7 +9,9 @@
 //              q_min of the sweep, each with its own covariance service on the live map),
 //              q asked of the two anchor keyframes (the default, the paper's); and for
 //              each q_min of --most-shared-q-min, q asked of the keyframes that share the
-//              most landmarks (maintenance.pair_keyframes: most_shared, for comparison).
+//              most landmarks (maintenance.pair_keyframes: most_shared, for comparison);
+//              with --revisit-q-min, an off map and these q_min with subvolumes also
+//              started at revisits (subvolumes.revisit_anchor_distance_m).
 // At the end every map is meshed (the projection of its subvolumes into one volume) and
 // compared with the scene's exact surface: vertex RMSE and median, and the map's size in
 // TSDF blocks (over all subvolumes). Maps made with the tracker's poses are first aligned
@@ -18,7 +20,9 @@
 //
 //   cblox-bench-maintenance [--scene room|hall|town] [--laps 2] [--frames N]
 //                           [--voxel 0.05] [--keyframes-per-subvolume 10]
-//                           [--max-anchor-distance M] [--depth-noise K]
+//                           [--max-anchor-distance M] [--revisit-distance R]
+//                           [--revisit-q-min Q,... [--revisit-variant-distance 1]]
+//                           [--depth-noise K]
 //                           [--min-shared-landmarks 30] [--min-shared-ratio 0.05]
 //                           [--q-min 3e3,1e4,3e4,1e5] [--most-shared-q-min Q,...] [--out DIR]
 //
@@ -78,6 +82,7 @@ struct Variant {
   Kind kind = Kind::kOff;
   double q_min = 0.0;
   PairKeyframes pair_keyframes = PairKeyframes::kAnchors;
+  double revisit_m = 0.0;  ///< subvolumes.revisit_anchor_distance_m
   std::mutex pairs_mutex;
   std::map<int64_t, std::vector<FusionPair>> requested;  // by request id, until answered
   std::vector<PairAnswer> answers;
@@ -109,6 +114,9 @@ int run(int argc, char** argv) {
   float voxel = 0.05f;
   int keyframes_per_subvolume = MapperConfig{}.creation.max_keyframes_per_subvolume;
   double max_anchor_distance = MapperConfig{}.creation.max_anchor_distance_m;
+  double revisit_distance = MapperConfig{}.creation.revisit_anchor_distance_m;
+  std::vector<double> revisit_sweep;
+  double revisit_variant_distance = 1.0;
   double depth_noise = 0.0;
   CovisibilityGraphConfig candidates;
   std::vector<double> sweep = {3e3, 1e4, 3e4, 1e5};
@@ -130,6 +138,19 @@ int run(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--max-anchor-distance", max_anchor_distance,
                  "a new subvolume after a keyframe this far from the anchor, metres (0: off)")
+      ->capture_default_str();
+  app.add_option("--revisit-distance", revisit_distance,
+                 "a new subvolume at a keyframe this near an older anchor, metres (0: off)")
+      ->capture_default_str();
+  app.add_option("--revisit-q-min", revisit_sweep,
+                 "also an off map and these q_min with subvolumes anchored at revisits "
+                 "(--revisit-variant-distance; comma-separated; default none)")
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->expected(0, 1 << 20)
+      ->type_name("Q[,Q...]");
+  app.add_option("--revisit-variant-distance", revisit_variant_distance,
+                 "the revisit distance of the --revisit-q-min variants, metres (> 0)")
       ->capture_default_str();
   app.add_option("--min-shared-ratio", candidates.min_shared_ratio,
                  "fusion candidates: share of landmarks seen by both")
@@ -155,8 +176,10 @@ int run(int argc, char** argv) {
       ->type_name("DIR");
   app.add_option("--vocabulary", vocabulary_path, "vocabulary file")->capture_default_str();
   if (const std::optional<int> code = parseCommandLine(app, argc, argv)) return *code;
-  if (sweep.empty() || !(voxel > 0.0f)) {
-    std::fprintf(stderr, "--q-min needs at least one value and --voxel must be > 0\n");
+  if (sweep.empty() || !(voxel > 0.0f) || !(revisit_variant_distance > 0.0)) {
+    std::fprintf(stderr,
+                 "--q-min needs at least one value, --voxel and --revisit-variant-distance "
+                 "must be > 0\n");
     return 2;
   }
   std::string error;
@@ -197,12 +220,14 @@ int run(int argc, char** argv) {
   std::mutex positions_mutex;
   std::map<int64_t, Eigen::Vector3d> keyframe_positions;
   auto add = [&](std::string name, Kind kind, double q_min,
-                 PairKeyframes pair_keyframes = PairKeyframes::kAnchors) {
+                 PairKeyframes pair_keyframes = PairKeyframes::kAnchors,
+                 std::optional<double> revisit_m = std::nullopt) {
     auto v = std::make_unique<Variant>();
     v->name = std::move(name);
     v->kind = kind;
     v->q_min = q_min;
     v->pair_keyframes = pair_keyframes;
+    v->revisit_m = revisit_m.value_or(revisit_distance);
     MapperConfig config = baseConfig(voxel, work);
     if (kind == Kind::kGroundTruth || kind == Kind::kNaive) {
       config.pose_source = PoseSource::kGroundTruth;          // poses fed as given, never corrected
@@ -211,6 +236,7 @@ int run(int argc, char** argv) {
       config.pose_source = PoseSource::kTracker;
       config.creation.max_keyframes_per_subvolume = keyframes_per_subvolume;
       config.creation.max_anchor_distance_m = max_anchor_distance;
+      config.creation.revisit_anchor_distance_m = v->revisit_m;
       config.maintenance.enabled = kind == Kind::kOn;
       config.maintenance.candidates = candidates;
       if (kind == Kind::kOn) config.maintenance.q_min = q_min;
@@ -292,6 +318,14 @@ int run(int argc, char** argv) {
     char name[40];
     std::snprintf(name, sizeof(name), "on q>=%.0g most shared", q);
     add(name, Kind::kOn, q, PairKeyframes::kMostShared);
+  }
+  if (!revisit_sweep.empty()) {
+    add("off revisit", Kind::kOff, 0.0, PairKeyframes::kAnchors, revisit_variant_distance);
+  }
+  for (const double q : revisit_sweep) {
+    char name[40];
+    std::snprintf(name, sizeof(name), "on q>=%.0g revisit", q);
+    add(name, Kind::kOn, q, PairKeyframes::kAnchors, revisit_variant_distance);
   }
 
   std::map<uint64_t, Transformationd> truth_by_frame;  // for the trajectory alignment
@@ -522,12 +556,12 @@ int run(int argc, char** argv) {
                 : 0.0);
   std::printf(
       "| map | subvolumes | blocks | size / OFF | RMSE (mm) | RMSE / GT | median (mm) | "
-      "candidates | requested | fused | rejected by q | errors / timed out |\n");
+      "candidates | requested | fused | rejected by q | errors / timed out / late replies |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& v : variants) {
     std::printf(
         "| %s | %zu | %zu | %.0f %% | %.1f | %.2f | %.2f | %llu | %llu | %llu | %llu | "
-        "%llu / %llu |\n",
+        "%llu / %llu / %llu |\n",
         v->name.c_str(), v->subvolumes, v->blocks,
         100.0 * static_cast<double>(v->blocks) / static_cast<double>(off.blocks), 1e3 * v->rmse_m,
         v->rmse_m / gt.rmse_m, 1e3 * v->median_m,
@@ -536,7 +570,8 @@ int run(int argc, char** argv) {
         static_cast<unsigned long long>(v->fusion.fused),
         static_cast<unsigned long long>(v->fusion.rejected_by_q),
         static_cast<unsigned long long>(v->fusion.covariance_errors),
-        static_cast<unsigned long long>(v->fusion.requests_timed_out));
+        static_cast<unsigned long long>(v->fusion.requests_timed_out),
+        static_cast<unsigned long long>(v->fusion.replies_ignored));
   }
 
   if (!out_dir.empty()) {
@@ -548,6 +583,7 @@ int run(int argc, char** argv) {
       json["maps"].push_back({{"name", v->name},
                               {"q_min", v->q_min},
                               {"pair_keyframes", pairKeyframesName(v->pair_keyframes)},
+                              {"revisit_anchor_distance_m", v->revisit_m},
                               {"subvolumes", v->subvolumes},
                               {"blocks", v->blocks},
                               {"rmse_m", v->rmse_m},

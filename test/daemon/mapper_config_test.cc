@@ -60,6 +60,7 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.maintenance.max_retry_after_s, b.maintenance.max_retry_after_s);
   EXPECT_EQ(a.creation.max_keyframes_per_subvolume, b.creation.max_keyframes_per_subvolume);
   EXPECT_EQ(a.creation.max_anchor_distance_m, b.creation.max_anchor_distance_m);
+  EXPECT_EQ(a.creation.revisit_anchor_distance_m, b.creation.revisit_anchor_distance_m);
   EXPECT_EQ(a.keyframe_every_n_frames, b.keyframe_every_n_frames);
   EXPECT_EQ(a.pose_buffer.max_gap_s, b.pose_buffer.max_gap_s);
   EXPECT_EQ(a.pose_buffer.capacity, b.pose_buffer.capacity);
@@ -119,7 +120,7 @@ TEST(MapperConfigTest, ReadsOverrides) {
       "layer: {voxel_size: 0.02}\n"
       "integrator: {truncation_distance_m: 0.08, num_threads: 2}\n"
       "subvolumes: {max_keyframes_per_subvolume: 5, max_anchor_distance_m: 4.5, "
-      "keyframe_every_n_frames: 3}\n"
+      "revisit_anchor_distance_m: 0.75, keyframe_every_n_frames: 3}\n"
       "poses: {max_gap_s: 0.1, max_wait_s: 0.2, buffer_capacity: 64, restart_after_backwards_s: "
       "0}\n"
       "queues: {pending_frames: 2, maintenance: 8, commands: 1}\n"
@@ -142,6 +143,7 @@ TEST(MapperConfigTest, ReadsOverrides) {
   EXPECT_EQ(m.integrator.num_threads, 2);
   EXPECT_EQ(m.creation.max_keyframes_per_subvolume, 5);
   EXPECT_EQ(m.creation.max_anchor_distance_m, 4.5);
+  EXPECT_EQ(m.creation.revisit_anchor_distance_m, 0.75);
   EXPECT_EQ(m.keyframe_every_n_frames, 3);
   EXPECT_EQ(m.pose_buffer.max_gap_s, 0.1);
   EXPECT_EQ(m.max_pose_wait_s, 0.2);
@@ -196,6 +198,7 @@ TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"subvolumes: {keyframe_every_n_frames: 0}\n", "keyframe_every_n_frames"},
       {"subvolumes: {max_keyframes_per_subvolume: 0}\n", "max_keyframes_per_subvolume"},
       {"subvolumes: {max_anchor_distance_m: -2}\n", "max_anchor_distance_m"},
+      {"subvolumes: {revisit_anchor_distance_m: -1}\n", "revisit_anchor_distance_m"},
       {"poses: {max_gap_s: 0}\n", "max_gap_s"},
       {"poses: {max_wait_s: -1}\n", "max_pose_wait_s"},
       {"poses: {restart_after_backwards_s: -1}\n", "restart_after_backwards_s"},

@@ -24,6 +24,55 @@ TEST(SubmapCreationPolicyConfig, ValidateNamesTheField) {
   EXPECT_NE(config.validate().find("max_anchor_distance_m"), std::string::npos);
   config.max_anchor_distance_m = std::numeric_limits<double>::infinity();
   EXPECT_NE(config.validate().find("max_anchor_distance_m"), std::string::npos);
+  config = SubmapCreationPolicyConfig{};
+  config.revisit_anchor_distance_m = -0.5;
+  EXPECT_NE(config.validate().find("revisit_anchor_distance_m"), std::string::npos);
+  config.revisit_anchor_distance_m = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(config.validate().find("revisit_anchor_distance_m"), std::string::npos);
+}
+
+// With revisit_anchor_distance_m, a keyframe closer than that to an older subvolume's
+// anchor starts a new submap (tracking returned to a mapped place), unless the active
+// submap's anchor is itself within that distance of the older anchor (it already started
+// there); the reason is reported.
+TEST(SubmapCreationPolicy, AKeyframeNearAnOlderAnchorStartsARevisitSubmap) {
+  using Reason = SubmapCreationPolicy::Reason;
+  SubmapCreationPolicyConfig config;
+  config.max_keyframes_per_subvolume = 100;
+  config.revisit_anchor_distance_m = 1.0;
+  SubmapCreationPolicy policy(config);
+  EXPECT_EQ(policy.lastReason(), Reason::kNone);
+  // The active submap is anchored at x = 10; older anchors at x = 0 and x = 5.
+  Submap active(2, LayerConfig{},
+                Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d(10.0, 0.0, 0.0)),
+                100, 0);
+  const std::vector<Eigen::Vector3d> older = {Eigen::Vector3d(0.0, 0.0, 0.0),
+                                              Eigen::Vector3d(5.0, 0.0, 0.0)};
+  EXPECT_FALSE(policy.onKeyframe(&active, false, Eigen::Vector3d(3.0, 0.0, 0.0), older));
+  EXPECT_FALSE(policy.onKeyframe(&active, false, Eigen::Vector3d(5.0, 1.0, 0.0), older));  // 1 m
+  EXPECT_TRUE(policy.onKeyframe(&active, false, Eigen::Vector3d(5.0, 0.0, 0.99), older));
+  EXPECT_EQ(policy.lastReason(), Reason::kRevisit);
+  EXPECT_STREQ(SubmapCreationPolicy::reasonName(policy.lastReason()), "revisit");
+  // The revisit submap anchored 0.6 m before the old anchor: the next keyframes near that
+  // anchor join it, the next old anchor starts another one.
+  Submap revisit(3, LayerConfig{},
+                 Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d(4.4, 0.0, 0.0)),
+                 101, 0);
+  EXPECT_FALSE(policy.onKeyframe(&revisit, false, Eigen::Vector3d(5.3, 0.0, 0.0), older));
+  EXPECT_FALSE(policy.onKeyframe(&revisit, false, Eigen::Vector3d(0.5, 0.0, 0.0)));  // no anchors
+  EXPECT_TRUE(policy.onKeyframe(&revisit, false, Eigen::Vector3d(0.5, 0.0, 0.0), older));
+  // Without a position the rule cannot apply; the keyframe limit still does, and says so.
+  EXPECT_FALSE(policy.onKeyframe(&active, false, std::nullopt, older));
+  SubmapCreationPolicy small(SubmapCreationPolicyConfig{1, 0.0, 1.0});
+  EXPECT_TRUE(small.onKeyframe(&active, false, Eigen::Vector3d(5.0, 0.0, 0.0), older));
+  EXPECT_EQ(small.lastReason(), Reason::kKeyframeLimit);
+  EXPECT_TRUE(small.onKeyframe(nullptr, false, Eigen::Vector3d(5.0, 0.0, 0.0), older));
+  EXPECT_EQ(small.lastReason(), Reason::kNoActiveSubmap);
+  EXPECT_TRUE(small.onKeyframe(&active, true));
+  EXPECT_EQ(small.lastReason(), Reason::kNewMap);
+  // Off (0): never.
+  SubmapCreationPolicy off(SubmapCreationPolicyConfig{100});
+  EXPECT_FALSE(off.onKeyframe(&active, false, Eigen::Vector3d(0.0, 0.0, 0.0), older));
 }
 
 // The policy says why it asked for each new submap (the mapper logs it).

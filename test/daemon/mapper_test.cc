@@ -114,6 +114,14 @@ void feed(Mapper* mapper, size_t begin, size_t end) {
   }
 }
 
+/// Applies keyframe `key` at (x, y, 0), unrotated, 0.1 s after the previous one (`utime`).
+void keyframeAt(Mapper* mapper, int64_t* utime, int64_t key, double x, double y = 0.0) {
+  *utime += 100000;
+  const Transformationd T_G_K(Eigen::Quaterniond::Identity(), Eigen::Vector3d(x, y, 0.0));
+  ASSERT_TRUE(mapper->onKeyframe(key, *utime, T_G_K));
+  ASSERT_TRUE(mapper->waitUntilIdle(milliseconds(10000)));
+}
+
 MapperReply runCommand(Mapper* mapper, const std::string& name, const std::string& path = "") {
   MapperCommand command;
   command.id = 42;
@@ -497,92 +505,53 @@ TEST(MapperTest, TrackerModeFollowsKeyframesAndStartsANewSubvolumeAfterAJump) {
   EXPECT_GT(mapper.collection().getSubmap(1)->numBlocks(), 0u);
 }
 
-// subvolumes.revisit_anchor_distance_m: a keyframe that comes back near the anchor of an
-// older subvolume of the same map epoch starts a new subvolume there (logged with the
-// reason); keyframes near the revisit subvolume's own anchor join it; a keyframe of another
-// map epoch is not compared with the old epoch's anchors (a new map starts its own).
+// Every new subvolume is logged with its anchor and the rule that started it. With
+// subvolumes.revisit_anchor_distance_m, a keyframe that comes back near the anchor of an older
+// subvolume of the same map epoch starts a new subvolume there; keyframes near the revisit
+// subvolume's own anchor join it; a keyframe of another map epoch is not compared with the old
+// epoch's anchors (a new map starts its own). max_anchor_distance_m still applies.
 TEST(MapperTest, TrackerModeStartsASubvolumeWhereItRevisitsAnOlderAnchor) {
   test::TempDir dir("mapper");
   MapperConfig config = testConfig(dir.path());
   config.pose_source = PoseSource::kTracker;
   config.creation.max_keyframes_per_subvolume = 3;
   config.creation.revisit_anchor_distance_m = 1.0;
+  config.creation.max_anchor_distance_m = 8.0;
   LogLines log;
   Mapper mapper(config, log.sink());
   std::string error;
   ASSERT_TRUE(mapper.start(&error)) << error;
   int64_t utime = 1000000;
-  auto keyframe = [&](int64_t key, double x, double y) {
-    const Transformationd T_G_K(Eigen::Quaterniond::Identity(), Eigen::Vector3d(x, y, 0.0));
-    utime += 100000;
-    ASSERT_TRUE(mapper.onKeyframe(key, utime, T_G_K));
-    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
-  };
+  auto keyframe = [&](int64_t key, double x, double y) { keyframeAt(&mapper, &utime, key, x, y); };
   keyframe(0, 0.0, 0.0);  // subvolume 0 at x = 0 (no active subvolume)
   keyframe(1, 1.5, 0.0);
   keyframe(2, 3.0, 0.0);
   keyframe(3, 4.5, 0.0);  // subvolume 1 at x = 4.5 (keyframe limit)
   keyframe(4, 6.0, 0.0);
-  keyframe(5, 0.4, 0.5);  // back near x = 0: subvolume 2 (revisit)
-  keyframe(6, 0.2, 0.1);  // near anchors 0 and 2, which are 0.64 m apart: joins 2
-  keyframe(7, 4.3, 0.2);  // near anchor 1: subvolume 3 (revisit)
+  keyframe(5, 0.4, 0.5);   // back near x = 0: subvolume 2 (revisit)
+  keyframe(6, 0.2, 0.1);   // near anchors 0 and 2, which are 0.64 m apart: joins 2
+  keyframe(7, 4.3, 0.2);   // near anchor 1: subvolume 3 (revisit)
+  keyframe(8, 12.4, 0.2);  // 8.1 m from anchor 3: subvolume 4 (anchor distance)
   const std::optional<int64_t> other_epoch = epochKey(1, 0);
   ASSERT_TRUE(other_epoch.has_value());
-  keyframe(*other_epoch, 0.0, 0.0);      // a new map: subvolume 4
-  keyframe(*other_epoch + 1, 4.5, 0.0);  // near epoch 0's anchor 1, but another map: joins 4
+  keyframe(*other_epoch, 0.0, 0.0);      // a new map: subvolume 5
+  keyframe(*other_epoch + 1, 4.5, 0.0);  // near epoch 0's anchor 1, but another map: joins 5
 
   const auto ids = [&](SubmapId id) { return mapper.collection().getSubmap(id)->keyframeIds(); };
-  ASSERT_EQ(mapper.collection().size(), 5u);
+  ASSERT_EQ(mapper.collection().size(), 6u);
   EXPECT_EQ(ids(0), (std::vector<KeyframeId>{0, 1, 2}));
   EXPECT_EQ(ids(1), (std::vector<KeyframeId>{3, 4}));
   EXPECT_EQ(ids(2), (std::vector<KeyframeId>{5, 6}));
   EXPECT_EQ(ids(3), (std::vector<KeyframeId>{7}));
-  EXPECT_EQ(ids(4), (std::vector<KeyframeId>{*other_epoch, *other_epoch + 1}));
+  EXPECT_EQ(ids(4), (std::vector<KeyframeId>{8}));
+  EXPECT_EQ(ids(5), (std::vector<KeyframeId>{*other_epoch, *other_epoch + 1}));
   EXPECT_EQ(log.countContaining("(revisit)"), 2u);
-  EXPECT_EQ(log.countContaining("subvolume 2 anchored at keyframe 5 (revisit)"), 1u);
-  EXPECT_EQ(log.countContaining("subvolume 1 anchored at keyframe 3 (keyframe limit)"), 1u);
-  EXPECT_EQ(log.countContaining("(new map)"), 1u);
-}
-
-// Every new subvolume is logged with its anchor and the rule that started it: the first
-// keyframe (no active subvolume), the keyframe limit, max_anchor_distance_m, a keyframe of a
-// new map epoch.
-TEST(MapperTest, TrackerModeLogsWhyEachSubvolumeStarted) {
-  test::TempDir dir("mapper");
-  MapperConfig config = testConfig(dir.path());
-  config.pose_source = PoseSource::kTracker;
-  config.creation.max_keyframes_per_subvolume = 3;
-  config.creation.max_anchor_distance_m = 5.0;
-  LogLines log;
-  Mapper mapper(config, log.sink());
-  std::string error;
-  ASSERT_TRUE(mapper.start(&error)) << error;
-  int64_t utime = 1000000;
-  auto keyframe = [&](int64_t key, double x) {
-    const Transformationd T_G_K(Eigen::Quaterniond::Identity(), Eigen::Vector3d(x, 0.0, 0.0));
-    utime += 100000;
-    ASSERT_TRUE(mapper.onKeyframe(key, utime, T_G_K));
-    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
-  };
-  keyframe(0, 0.0);  // subvolume 0
-  keyframe(1, 1.0);
-  keyframe(2, 2.0);
-  keyframe(3, 3.0);  // subvolume 1: the keyframe limit
-  keyframe(4, 8.5);  // subvolume 2: 5.5 m from anchor 3
-  const std::optional<int64_t> other_epoch = epochKey(1, 0);
-  ASSERT_TRUE(other_epoch.has_value());
-  keyframe(*other_epoch, 8.6);  // subvolume 3: a new map
-
-  const auto ids = [&](SubmapId id) { return mapper.collection().getSubmap(id)->keyframeIds(); };
-  ASSERT_EQ(mapper.collection().size(), 4u);
-  EXPECT_EQ(ids(0), (std::vector<KeyframeId>{0, 1, 2}));
-  EXPECT_EQ(ids(1), (std::vector<KeyframeId>{3}));
-  EXPECT_EQ(ids(2), (std::vector<KeyframeId>{4}));
-  EXPECT_EQ(ids(3), (std::vector<KeyframeId>{*other_epoch}));
   EXPECT_EQ(log.countContaining("subvolume 0 anchored at keyframe 0 (no active submap)"), 1u);
   EXPECT_EQ(log.countContaining("subvolume 1 anchored at keyframe 3 (keyframe limit)"), 1u);
-  EXPECT_EQ(log.countContaining("subvolume 2 anchored at keyframe 4 (anchor distance)"), 1u);
-  EXPECT_EQ(log.countContaining("subvolume 3 anchored at keyframe 0 of map epoch 1 (new map)"), 1u);
+  EXPECT_EQ(log.countContaining("subvolume 2 anchored at keyframe 5 (revisit)"), 1u);
+  EXPECT_EQ(log.countContaining("subvolume 3 anchored at keyframe 7 (revisit)"), 1u);
+  EXPECT_EQ(log.countContaining("subvolume 4 anchored at keyframe 8 (anchor distance)"), 1u);
+  EXPECT_EQ(log.countContaining("subvolume 5 anchored at keyframe 0 of map epoch 1 (new map)"), 1u);
 }
 
 /// Covariance requests the mapper made, for a test to answer.

@@ -275,9 +275,17 @@ victim_mapper_arm() {
       done
       ;;
     checkpoint)
-      ack_if_due
-      wait_for_new_file "submap_*"
-      sleep_ms "$(rand_ms 0 "$pause_ms")"
+      # Just after a file of a new generation appeared, before its manifest commits; re-armed
+      # (up to 5 times) when the manifest was replaced before the kill, as happens when this
+      # script is starved of CPU on a loaded machine.
+      local tries inode
+      for (( tries = 0; tries < 5; tries++ )); do
+        ack_if_due
+        inode=$(stat -c %i "$ckpt/$manifest" 2> /dev/null || echo none)
+        wait_for_new_file "submap_*"
+        sleep_ms "$(rand_ms 0 "$pause_ms")"
+        [[ $(stat -c %i "$ckpt/$manifest" 2> /dev/null || echo none) == "$inode" ]] && break
+      done
       ;;
   esac
 }

@@ -125,6 +125,8 @@ std::optional<FusionCovarianceRequest> FusionScheduler::nextRequest(int64_t acti
                                                                     double now_s) {
   if (in_flight_ && now_s - in_flight_->sent_s >= config_.reply_timeout_s) {
     ++stats_.requests_timed_out;
+    timed_out_.push_back(std::move(in_flight_->request));
+    if (timed_out_.size() > kKeptTimedOut) timed_out_.pop_front();
     in_flight_.reset();
   }
   if (!config_.enabled || in_flight_) return std::nullopt;
@@ -168,12 +170,21 @@ std::vector<FusionPair> FusionScheduler::onReply(int64_t request_id,
                                                  std::span<const FusionCovarianceAnswer> answers,
                                                  double now_s) {
   std::vector<FusionPair> accepted;
-  if (!in_flight_ || in_flight_->request.request_id != request_id) {
-    ++stats_.replies_ignored;
-    return accepted;
+  std::vector<FusionPair> pairs;
+  if (in_flight_ && in_flight_->request.request_id == request_id) {
+    pairs = std::move(in_flight_->request.pairs);
+    in_flight_.reset();
+  } else {
+    const auto late = std::find_if(timed_out_.begin(), timed_out_.end(),
+                                   [&](const auto& r) { return r.request_id == request_id; });
+    if (late == timed_out_.end()) {
+      ++stats_.replies_ignored;
+      return accepted;
+    }
+    ++stats_.late_replies;
+    pairs = std::move(late->pairs);
+    timed_out_.erase(late);
   }
-  const std::vector<FusionPair> pairs = std::move(in_flight_->request.pairs);
-  in_flight_.reset();
   const bool sizes_match = answers.size() == pairs.size();
   for (size_t k = 0; k < pairs.size(); ++k) {
     const FusionPair& pair = pairs[k];

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <span>
 #include <string>
@@ -51,10 +52,11 @@ struct FusionSchedulerConfig {
   PairKeyframes pair_keyframes = PairKeyframes::kAnchors;
   /// At most this many pairs per covariance request (>= 1).
   int max_pairs_per_request = 8;
-  /// A request without a reply is abandoned after this long, seconds (> 0); its pairs may be
-  /// requested again. A fresh linearization of the tracker's whole map takes 0.1-0.5 s at
-  /// 1000 town keyframes on an idle core and up to seconds on a loaded one (measured with
-  /// cblox-bench-maintenance), so a short timeout only repeats the work.
+  /// A request without a reply is abandoned after this long, seconds (> 0): another request
+  /// may be sent and its pairs may be requested again. Its reply, if it still comes, is used
+  /// (see FusionScheduler::onReply). A fresh linearization of the tracker's whole map takes
+  /// 0.1-0.5 s at 1000 town keyframes on an idle core and up to 23 s on a loaded one
+  /// (measured with cblox-bench-maintenance), so a short timeout only repeats the work.
   double reply_timeout_s = 10.0;
   /// A pair rejected (q too small, or an error) is not requested again for this long,
   /// seconds (>= 0): BA may make it certain later, but not within a few keyframes.
@@ -104,7 +106,8 @@ struct FusionSchedulerStats {
   uint64_t rejected_by_q = 0;       ///< pairs answered with q < q_min
   uint64_t covariance_errors = 0;   ///< pairs answered with an error
   uint64_t requests_timed_out = 0;  ///< requests abandoned without a reply
-  uint64_t replies_ignored = 0;     ///< replies to no request in flight (late, duplicate)
+  uint64_t replies_ignored = 0;     ///< replies to no request in flight or kept (duplicate)
+  uint64_t late_replies = 0;        ///< replies to a timed-out request, used (onReply)
   uint64_t fused = 0;               ///< fusions reported done (onFused)
   uint64_t fusions_failed = 0;      ///< fusions reported failed (onFusionFailed)
 };
@@ -121,7 +124,8 @@ struct FusionSchedulerStats {
 ///   an earlier pair of the same request (each appears at most once per request, so one
 ///   fusion cannot remove a subvolume another pair of the batch needs).
 /// - At most one request is in flight; nextRequest() returns nothing until its reply came
-///   or it timed out.
+///   or it timed out. The last kKeptTimedOut timed-out requests are kept: a late reply to
+///   one is used like a timely one (the answers are as valid; only the slot was freed).
 /// - A pair accepted for fusion locks both subvolumes until onFused / onFusionFailed.
 ///   onFused merges the graph vertices (the older takes the union) and forgets the newer.
 /// Time is passed in by the caller (seconds of a monotonic clock) so tests are exact.
@@ -147,9 +151,10 @@ class FusionScheduler {
   /// `active_subvolume` (or -1) is excluded. Expires a timed-out request first.
   std::optional<FusionCovarianceRequest> nextRequest(int64_t active_subvolume, double now_s);
   /// The answers to request `request_id`, one per pair in order. Returns the pairs to fuse
-  /// (q >= q_min, both subvolumes still known and not in another fusion). A reply to no
-  /// request in flight returns nothing (counted); a reply with the wrong number of answers
-  /// counts every pair as an error.
+  /// (q >= q_min, both subvolumes still known and not in another fusion). A reply to one of
+  /// the kept timed-out requests is handled the same way (counted as late; the request in
+  /// flight, if any, stays). A reply to no request in flight or kept returns nothing
+  /// (counted); a reply with the wrong number of answers counts every pair as an error.
   std::vector<FusionPair> onReply(int64_t request_id,
                                   std::span<const FusionCovarianceAnswer> answers, double now_s);
   /// The fusion of `pair` is done: newer is gone, older holds both.
@@ -186,6 +191,9 @@ class FusionScheduler {
   /// Number of pairs accepted and not yet reported fused or failed.
   size_t fusionsInProgress() const { return fusing_pairs_; }
 
+ /// Timed-out requests kept for their late replies (the oldest is forgotten first).
+  static constexpr size_t kKeptTimedOut = 4;
+
  private:
   struct InFlight {
     FusionCovarianceRequest request;
@@ -203,6 +211,7 @@ class FusionScheduler {
   absl::flat_hash_map<PairKey, int> rejections_;   // pair -> rejections by q in a row
   absl::flat_hash_set<PairKey> proposed_;          // pairs ever requested
   std::optional<InFlight> in_flight_;
+  std::deque<FusionCovarianceRequest> timed_out_;  // newest last, at most kKeptTimedOut
   int64_t next_request_id_ = 1;
   size_t fusing_pairs_ = 0;
   FusionSchedulerStats stats_;

@@ -556,12 +556,12 @@ int run(int argc, char** argv) {
                 : 0.0);
   std::printf(
       "| map | subvolumes | blocks | size / OFF | RMSE (mm) | RMSE / GT | median (mm) | "
-      "candidates | requested | fused | rejected by q | errors / timed out / late replies |\n");
+      "candidates | requested | fused | rejected by q | errors / timed out / late replies used / ignored |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& v : variants) {
     std::printf(
         "| %s | %zu | %zu | %.0f %% | %.1f | %.2f | %.2f | %llu | %llu | %llu | %llu | "
-        "%llu / %llu / %llu |\n",
+        "%llu / %llu / %llu / %llu |\n",
         v->name.c_str(), v->subvolumes, v->blocks,
         100.0 * static_cast<double>(v->blocks) / static_cast<double>(off.blocks), 1e3 * v->rmse_m,
         v->rmse_m / gt.rmse_m, 1e3 * v->median_m,
@@ -571,6 +571,7 @@ int run(int argc, char** argv) {
         static_cast<unsigned long long>(v->fusion.rejected_by_q),
         static_cast<unsigned long long>(v->fusion.covariance_errors),
         static_cast<unsigned long long>(v->fusion.requests_timed_out),
+        static_cast<unsigned long long>(v->fusion.late_replies),
         static_cast<unsigned long long>(v->fusion.replies_ignored));
   }
 

@@ -86,10 +86,44 @@ TEST(FusionSchedulerTest, OneRequestInFlightUntilItsReplyOrTimeout) {
   EXPECT_EQ(s.stats().requests_timed_out, 1u);
   EXPECT_EQ(s.stats().candidates, 1u);  // the same pair, counted once
   EXPECT_EQ(s.stats().requested, 2u);
-  // The late reply to the first request is ignored.
+  // The late reply to the first request is used: the pair is accepted; the second request
+  // stays in flight, and its reply cannot fuse the locked pair again.
   const std::vector<FusionCovarianceAnswer> answers{answer(1e6)};
-  EXPECT_TRUE(s.onReply(first->request_id, answers, 2.5).empty());
+  const std::vector<FusionPair> fuse = s.onReply(first->request_id, answers, 2.5);
+  ASSERT_EQ(fuse.size(), 1u);
+  EXPECT_EQ(fuse[0].older, 0);
+  EXPECT_EQ(fuse[0].newer, 1);
+  EXPECT_EQ(s.stats().late_replies, 1u);
+  EXPECT_EQ(s.stats().accepted, 1u);
+  EXPECT_TRUE(s.requestInFlight());
+  // The same reply again is a duplicate: ignored.
+  EXPECT_TRUE(s.onReply(first->request_id, answers, 2.6).empty());
   EXPECT_EQ(s.stats().replies_ignored, 1u);
+  EXPECT_TRUE(s.onReply(second->request_id, answers, 2.7).empty());
+  EXPECT_FALSE(s.requestInFlight());
+  EXPECT_EQ(s.stats().accepted, 1u);
+  EXPECT_EQ(s.fusionsInProgress(), 1u);
+}
+
+// Only the last kKeptTimedOut timed-out requests are kept for late replies; a late answer
+// below q_min is a rejection like a timely one.
+TEST(FusionSchedulerTest, KeepsTheLastTimedOutRequestsForLateReplies) {
+  FusionScheduler s = threeSubvolumes();
+  std::vector<int64_t> ids;
+  for (size_t k = 0; k <= FusionScheduler::kKeptTimedOut; ++k) {
+    const auto r = s.nextRequest(-1, 2.0 * static_cast<double>(k));
+    ASSERT_TRUE(r.has_value());
+    ids.push_back(r->request_id);
+  }
+  ASSERT_TRUE(s.nextRequest(-1, 2.0 * static_cast<double>(ids.size())).has_value());
+  EXPECT_EQ(s.stats().requests_timed_out, ids.size());
+  const std::vector<FusionCovarianceAnswer> low{answer(1.0)};
+  EXPECT_TRUE(s.onReply(ids[0], low, 20.0).empty());  // forgotten
+  EXPECT_EQ(s.stats().replies_ignored, 1u);
+  EXPECT_EQ(s.stats().rejected_by_q, 0u);
+  EXPECT_TRUE(s.onReply(ids[1], low, 20.0).empty());  // kept: a rejection
+  EXPECT_EQ(s.stats().late_replies, 1u);
+  EXPECT_EQ(s.stats().rejected_by_q, 1u);
   EXPECT_TRUE(s.requestInFlight());
 }
 

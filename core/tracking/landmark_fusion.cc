@@ -7,18 +7,22 @@
 
 namespace cblox {
 
-int fuseLandmarks(SparseMap* map, Keyframe* keyframe, const std::vector<Landmark*>& landmarks,
-                  float th, const TrackingCamera& camera, const ScalePyramid& pyramid) {
-  const FrameFeatures& f = keyframe->features();
-  int fused = 0;
-  // Hold every candidate: replacing may retire (and free) one of them mid-loop.
+std::vector<std::shared_ptr<Landmark>> holdLandmarks(const std::vector<Landmark*>& landmarks) {
   std::vector<std::shared_ptr<Landmark>> held;
   held.reserve(landmarks.size());
   for (Landmark* l : landmarks) {
     if (l != nullptr && !l->bad()) held.push_back(l->shared_from_this());
   }
-  for (const std::shared_ptr<Landmark>& landmark : held) {
-    if (landmark->bad() || landmark->indexIn(keyframe) >= 0) continue;
+  return held;
+}
+
+int fuseLandmarks(SparseMap* map, Keyframe* keyframe,
+                  const std::vector<std::shared_ptr<Landmark>>& landmarks, float th,
+                  const TrackingCamera& camera, const ScalePyramid& pyramid) {
+  const FrameFeatures& f = keyframe->features();
+  int fused = 0;
+  for (const std::shared_ptr<Landmark>& landmark : landmarks) {
+    if (landmark == nullptr || landmark->bad() || landmark->indexIn(keyframe) >= 0) continue;
     const auto p = projectLandmark(landmark.get(), keyframe->T_C_G(), camera, pyramid, 0.5f);
     if (!p) continue;
     const float radius = th * pyramid.scale(p->level);

@@ -168,7 +168,8 @@ void LocalMapper::fuseWithNeighbours(Keyframe* keyframe) {
     for (Landmark* l : keyframe->landmarks()) {
       if (l != nullptr && !l->bad()) mine.push_back(l);
     }
-    fused += fuseLandmarks(map_, target, mine, config_.fuse_radius, camera_, pyramid_);
+    fused +=
+        fuseLandmarks(map_, target, holdLandmarks(mine), config_.fuse_radius, camera_, pyramid_);
   }
   // ... and the neighbours' landmarks into the keyframe.
   std::vector<Landmark*> theirs;
@@ -179,7 +180,8 @@ void LocalMapper::fuseWithNeighbours(Keyframe* keyframe) {
       theirs.push_back(l);
     }
   }
-  fused += fuseLandmarks(map_, keyframe, theirs, config_.fuse_radius, camera_, pyramid_);
+  fused +=
+      fuseLandmarks(map_, keyframe, holdLandmarks(theirs), config_.fuse_radius, camera_, pyramid_);
   for (Landmark* l : keyframe->landmarks()) {
     if (l == nullptr || l->bad()) continue;
     l->updateDescriptor();

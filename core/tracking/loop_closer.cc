@@ -346,8 +346,9 @@ void LoopCloser::correct(Keyframe* keyframe, const Verified& loop) {
     const Transformationd T_G_Ckf_old = keyframe->T_G_C();
     // Landmarks moved with a group keyframe here follow that keyframe in the essential
     // graph's propagation below, not their reference keyframe (ORB-SLAM2's
-    // mnCorrectedReference): else they would be corrected twice.
-    std::map<const Landmark*, const Keyframe*> corrected_with;
+    // mnCorrectedReference): else they would be corrected twice. Keyed by id: a landmark the
+    // fusion below retires is freed, and its address may be reused.
+    std::map<LandmarkId, const Keyframe*> corrected_with;
     event.correction_m = (loop.T_C_G.inverse().translation() - T_G_Ckf_old.translation()).norm();
     for (Keyframe* k : group) {
       const Transformationd T_Ck_Ckf = k->T_C_G() * T_G_Ckf_old;
@@ -357,7 +358,7 @@ void LoopCloser::correct(Keyframe* keyframe, const Verified& loop) {
         if (l == nullptr || l->bad() || l->corrected_by_keyframe == keyframe->id) continue;
         l->setPosition(T_G_Ck_new * (k->T_C_G() * l->position()));
         l->corrected_by_keyframe = keyframe->id;
-        corrected_with[l] = k;
+        corrected_with[l->id] = k;
       }
       k->setPose(corrected);
     }
@@ -373,7 +374,7 @@ void LoopCloser::correct(Keyframe* keyframe, const Verified& loop) {
         SparseMap::addObservation(keyframe, static_cast<uint32_t>(i), loop_landmark);
       }
     }
-    std::vector<Landmark*> loop_landmarks;
+    std::vector<Landmark*> loop_landmarks;  // held below, across the fusions
     {
       std::set<const Landmark*> seen;
       std::vector<Keyframe*> loop_group = loop.candidate->covisibleByWeight();
@@ -384,8 +385,9 @@ void LoopCloser::correct(Keyframe* keyframe, const Verified& loop) {
         }
       }
     }
+    const std::vector<std::shared_ptr<Landmark>> held = holdLandmarks(loop_landmarks);
     for (Keyframe* k : group) {
-      if (!k->bad()) fuseLandmarks(map_, k, loop_landmarks, 4.0f, camera_, pyramid_);
+      if (!k->bad()) fuseLandmarks(map_, k, held, 4.0f, camera_, pyramid_);
     }
     // 3. New links made by the loop.
     std::map<Keyframe*, std::set<Keyframe*, KeyframeIdLess>, KeyframeIdLess> loop_links;
@@ -451,7 +453,7 @@ void LoopCloser::correct(Keyframe* keyframe, const Verified& loop) {
     }
     // 5. Every landmark follows the keyframe that placed it (or that moved it in step 1).
     for (Landmark* l : map_->landmarks()) {
-      const auto moved = corrected_with.find(l);
+      const auto moved = corrected_with.find(l->id);
       const Keyframe* ref = moved != corrected_with.end() ? moved->second : l->referenceKeyframe();
       if (ref == nullptr || ref->bad() || before_graph.count(ref) == 0) continue;
       l->setPosition(ref->T_G_C() * (before_graph.at(ref) * l->position()));

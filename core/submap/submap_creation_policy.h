@@ -28,9 +28,10 @@ struct SubmapCreationPolicyConfig {
   /// asks about (q of the two anchors) is that of two nearby keyframes (README, "Map
   /// maintenance"). Positions are the current estimates (drift before a loop closes shifts
   /// them by as much). Keyframe-driven: a revisit the tracker follows without new keyframes
-  /// (the hall's second lap adds 3) is not split. Measured (BENCHMARKS.md, "Why revisits
-  /// are rejected"): town at 0.5 m voxels, 1.5 m, q_min 3e3: 70 % of the off size instead of
-  /// 82 %, same RMSE (one run); hall: no change. Default 0 (off) until measured over more runs.
+  /// (the hall's second lap adds 3) is not split. Measured (BENCHMARKS.md, "Why the hall's
+  /// revisit is never fused"): town at 0.5 m voxels, 1.5 m, q_min 3e3: 70-71 % of the off
+  /// size instead of 73-82 %, same RMSE (two runs); hall: no change. Default 0 (off) until
+  /// measured over more runs.
   double revisit_anchor_distance_m = 0.0;
 
   /// Empty when valid, otherwise a message naming the offending field. Thread-safe.

@@ -33,6 +33,7 @@
 #include "core/geometry/opencv_view.h"
 #include "daemon/common/cli.h"
 #include "drivers/calibration/calibration_file.h"
+#include "drivers/calibration/opencv_storage.h"
 #include "drivers/calibration/row_error.h"
 #include "drivers/calibration/stereo_rectifier.h"
 #include "drivers/dataset/euroc_reader.h"
@@ -51,13 +52,10 @@ struct InputError : std::runtime_error {
 // OpenCV's image list (the stereo_calib sample's stereo_calib.xml): left and right names
 // alternate; relative names are relative to the list's folder.
 std::vector<ImagePair> readImageList(const std::string& path) {
-  cv::FileStorage fs;
-  try {
-    fs.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw InputError(path + ": not an OpenCV image list: " + e.msg);
-  }
-  const cv::FileNode list = fs.isOpened() ? fs.getFirstTopLevelNode() : cv::FileNode();
+  std::string error;
+  const cv::FileStorage fs = openOpenCvStorage(path, &error);
+  if (!fs.isOpened()) throw InputError(error + " (expected an OpenCV image list)");
+  const cv::FileNode list = fs.getFirstTopLevelNode();
   if (list.empty() || !list.isSeq()) throw InputError(path + ": not an OpenCV image list");
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
   std::vector<std::string> names;

@@ -12,6 +12,7 @@
 #include <opencv2/core.hpp>
 
 #include "core/io/text_matrix.h"
+#include "drivers/calibration/opencv_storage.h"
 
 namespace cblox {
 namespace {
@@ -242,13 +243,10 @@ CameraCalibration openCvCamera(const cv::Mat& K, const cv::Mat& D, cv::Size size
 }
 
 cv::FileStorage openStorage(const std::string& path) {
-  try {
-    cv::FileStorage fs(path, cv::FileStorage::READ);
-    if (!fs.isOpened()) fail(path + ": cannot parse as OpenCV YAML/XML");
-    return fs;
-  } catch (const cv::Exception& e) {
-    fail(path + ": cannot parse as OpenCV YAML/XML: " + e.msg);
-  }
+  std::string error;
+  cv::FileStorage fs = openOpenCvStorage(path, &error);
+  if (!fs.isOpened()) fail(error);
+  return fs;
 }
 
 StereoCameraCalibration readOpenCv(const std::string& path, bool stereo) {

@@ -312,6 +312,11 @@ TEST(CalibrationFileTest, ErrorsNameFileAndKey) {
        "  distortion_model: omni\n",
        "cam0.distortion_model"},
       {"cam0: [1, 2\n", "camchain"},
+      // B14: OpenCV 4.6's XML parser dereferenced a null pointer on an embedded NUL; B5: its
+      // YAML parser threw std::length_error. Refused before OpenCV parses.
+      {std::string("<?xml von=\0\0\0\"0R\"<!dt:\0atopag>\n", 31), "NUL byte at offset 10"},
+      {head + m1 + std::string("D1: [0\0]\n", 10),
+       "NUL byte at offset " + std::to_string(head.size() + m1.size() + 6)},
   };
   int i = 0;
   for (const Case& c : cases) {

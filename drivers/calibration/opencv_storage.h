@@ -6,13 +6,15 @@
 
 namespace cblox {
 
-/// Opens an OpenCV YAML/XML file (cv::FileStorage, READ) that came from outside: a file
-/// holding a NUL byte is refused before OpenCV parses it, because OpenCV 4.6's parsers read
-/// the buffer as a C string (an embedded NUL made the XML parser dereference a null pointer,
-/// RELIABILITY.md B14, and the YAML parser throw std::length_error, B5). Returns an opened
-/// storage, or a closed one with `*error` set ("<path>: ..."): the file cannot be read, is not
-/// text, or OpenCV refused it (its cv::Exception message). Never throws cv::Exception.
-/// Thread-safe (nothing shared).
+/// Opens an OpenCV YAML/XML file (cv::FileStorage, READ) that came from outside, refusing
+/// before OpenCV parses it what OpenCV 4.6's parsers are known to crash on (RELIABILITY.md B5,
+/// B14): a file over 16 MiB; a NUL byte (its parsers read the buffer as a C string: the YAML
+/// parser threw std::length_error); and content OpenCV would parse as XML (anything not
+/// starting with "%YAML" or "{") that is not well-formed XML by libxml2 (its XML parser
+/// dereferenced a null pointer on "<?xml vsn=" at the end of the file). Returns an opened
+/// storage, or a closed one with `*error` set ("<path>: ..."): the file cannot be read, is
+/// refused as above (libxml2's message and line), or OpenCV refused it (its cv::Exception
+/// message). Never throws cv::Exception. Thread-safe.
 cv::FileStorage openOpenCvStorage(const std::string& path, std::string* error);
 
 }  // namespace cblox

@@ -315,6 +315,9 @@ TEST(CalibrationFileTest, ErrorsNameFileAndKey) {
       // B14: OpenCV 4.6's XML parser dereferenced a null pointer on an embedded NUL; B5: its
       // YAML parser threw std::length_error. Refused before OpenCV parses.
       {std::string("<?xml von=\0\0\0\"0R\"<!dt:\0atopag>\n", 31), "NUL byte at offset 10"},
+      {"<?xml vsn=", "not well-formed XML (line 1"},  // B14 without a NUL
+      {"<?xml version=\"1.0\"?>\n<opencv_storage>\n<image_width>752</image_width>\n",
+       "not well-formed XML (line 4"},  // cut short: no closing tag
       {head + m1 + std::string("D1: [0\0]\n", 10),
        "NUL byte at offset " + std::to_string(head.size() + m1.size() + 6)},
   };

@@ -1,11 +1,13 @@
 #include "drivers/calibration/opencv_storage.h"
 
+#include <algorithm>
 #include <fstream>
 #include <mutex>
 #include <sstream>
 
 #include <libxml/parser.h>
 #include <libxml/xmlerror.h>
+#include <yaml-cpp/yaml.h>
 
 namespace cblox {
 namespace {
@@ -42,6 +44,18 @@ std::string xmlWellFormedError(const std::string& text) {
   return "not well-formed XML (line " + std::to_string(e->line) + ": " + message + ")";
 }
 
+// Empty when `text` (OpenCV YAML: "%YAML:1.0" first) is well-formed YAML by yaml-cpp, else its
+// message. The directive line, which yaml-cpp does not know, is read as a comment.
+std::string yamlWellFormedError(std::string text) {
+  text.replace(0, std::min(text.find('\n'), text.size()), 1, '#');  // keeps line numbers
+  try {
+    (void)YAML::Load(text);
+    return "";
+  } catch (const YAML::Exception& e) {
+    return std::string("not well-formed YAML (") + e.what() + ")";
+  }
+}
+
 }  // namespace
 
 cv::FileStorage openOpenCvStorage(const std::string& path, std::string* error) {
@@ -62,11 +76,12 @@ cv::FileStorage openOpenCvStorage(const std::string& path, std::string* error) {
              ": binary data, not an OpenCV YAML/XML text file";
     return {};
   }
-  if (parsedAsXml(text)) {
-    if (const std::string e = xmlWellFormedError(text); !e.empty()) {
-      *error = path + ": " + e;
-      return {};
-    }
+  const std::string refusal = parsedAsXml(text)             ? xmlWellFormedError(text)
+                              : text.rfind("%YAML", 0) == 0 ? yamlWellFormedError(text)
+                                                            : "";
+  if (!refusal.empty()) {
+    *error = path + ": " + refusal;
+    return {};
   }
   try {
     cv::FileStorage fs(path, cv::FileStorage::READ);

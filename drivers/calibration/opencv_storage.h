@@ -11,7 +11,9 @@ namespace cblox {
 /// B14): a file over 16 MiB; a NUL byte (its parsers read the buffer as a C string: the YAML
 /// parser threw std::length_error); and content OpenCV would parse as XML (anything not
 /// starting with "%YAML" or "{") that is not well-formed XML by libxml2 (its XML parser
-/// dereferenced a null pointer on "<?xml vsn=" at the end of the file). Returns an opened
+/// dereferenced a null pointer on "<?xml vsn=" at the end of the file); and "%YAML" content
+/// that yaml-cpp does not find well-formed (its YAML parser looped forever on an unterminated
+/// quoted scalar). JSON ("{") goes to OpenCV unchecked. Returns an opened
 /// storage, or a closed one with `*error` set ("<path>: ..."): the file cannot be read, is
 /// refused as above (libxml2's message and line), or OpenCV refused it (its cv::Exception
 /// message). Never throws cv::Exception. Thread-safe.

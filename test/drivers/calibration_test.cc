@@ -316,6 +316,7 @@ TEST(CalibrationFileTest, ErrorsNameFileAndKey) {
       // YAML parser threw std::length_error. Refused before OpenCV parses.
       {std::string("<?xml von=\0\0\0\"0R\"<!dt:\0atopag>\n", 31), "NUL byte at offset 10"},
       {"<?xml vsn=", "not well-formed XML (line 1"},  // B14 without a NUL
+      {"%YAML:1.\n -  d\n0a--\nimag40296y2%pYte: i'", "not well-formed YAML"},  // B15: a hang
       {"<?xml version=\"1.0\"?>\n<opencv_storage>\n<image_width>752</image_width>\n",
        "not well-formed XML (line 4"},  // cut short: no closing tag
       {head + m1 + std::string("D1: [0\0]\n", 10),

@@ -15,12 +15,14 @@ namespace {
 // A calibration file is small; anything larger is refused before it is parsed.
 constexpr size_t kMaxFileBytes = size_t{16} << 20;
 
-// What OpenCV 4.6's FileStorage parses as XML: any content that does not start, after
-// white space, with "%YAML" or "{" (JSON).
-bool parsedAsXml(const std::string& text) {
-  const size_t start = text.find_first_not_of(" \t\r\n");
-  if (start == std::string::npos) return true;
-  return text.compare(start, 5, "%YAML") != 0 && text[start] != '{';
+// Which parser OpenCV 4.6's FileStorage picks by content: after white space, "%YAML" is
+// YAML, "{" is JSON, anything else XML.
+enum class OpenCvFormat { kXml, kYaml, kJson };
+OpenCvFormat formatOf(const std::string& text, size_t* start) {
+  *start = std::min(text.find_first_not_of(" \t\r\n"), text.size());
+  if (text.compare(*start, 5, "%YAML") == 0) return OpenCvFormat::kYaml;
+  if (*start < text.size() && text[*start] == '{') return OpenCvFormat::kJson;
+  return OpenCvFormat::kXml;
 }
 
 // Empty when `text` is well-formed XML (libxml2, no network, no entity substitution), else
@@ -76,9 +78,12 @@ cv::FileStorage openOpenCvStorage(const std::string& path, std::string* error) {
              ": binary data, not an OpenCV YAML/XML text file";
     return {};
   }
-  const std::string refusal = parsedAsXml(text)             ? xmlWellFormedError(text)
-                              : text.rfind("%YAML", 0) == 0 ? yamlWellFormedError(text)
-                                                            : "";
+  size_t start = 0;
+  const OpenCvFormat format = formatOf(text, &start);
+  const std::string refusal = format == OpenCvFormat::kXml ? xmlWellFormedError(text)
+                              : format == OpenCvFormat::kYaml
+                                  ? yamlWellFormedError(text.substr(start))
+                                  : "";
   if (!refusal.empty()) {
     *error = path + ": " + refusal;
     return {};

@@ -163,13 +163,10 @@ void LocalMapper::fuseWithNeighbours(Keyframe* keyframe) {
   }
   int fused = 0;
   // The keyframe's landmarks into its neighbours...
+  // (Held again per target: a fusion may have replaced some of the keyframe's landmarks.)
   for (Keyframe* target : targets) {
-    std::vector<Landmark*> mine;
-    for (Landmark* l : keyframe->landmarks()) {
-      if (l != nullptr && !l->bad()) mine.push_back(l);
-    }
-    fused +=
-        fuseLandmarks(map_, target, holdLandmarks(mine), config_.fuse_radius, camera_, pyramid_);
+    fused += fuseLandmarks(map_, target, holdLandmarks(keyframe->landmarks()), config_.fuse_radius,
+                           camera_, pyramid_);
   }
   // ... and the neighbours' landmarks into the keyframe.
   std::vector<Landmark*> theirs;

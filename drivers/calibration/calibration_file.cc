@@ -353,11 +353,10 @@ StereoCameraCalibration loadStereoCalibration(const std::string& path, bool ster
     // OpenCV's FileStorage YAML, unless it is a camchain saved with OpenCV's header (EuRoC).
     YAML::Node root;
     try {
-      std::string rest = text;
-      rest.replace(0, std::min(rest.find('\n'), rest.size()), 1, '#');  // keeps line numbers
-      root = YAML::Load(rest);
+      root = YAML::Load(yamlDirectiveAsComment(text));
     } catch (const YAML::Exception&) {
-      return readOpenCvChecked(path, stereo);  // !!opencv-matrix tags: OpenCV's own
+      // Refused there, before OpenCV parses it, naming yaml-cpp's reason (B15).
+      return readOpenCvChecked(path, stereo);
     }
     if (root.IsMap() && root["cam0"]) return parseCamchain(root, path, stereo);
     return readOpenCvChecked(path, stereo);

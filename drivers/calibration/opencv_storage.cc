@@ -47,11 +47,10 @@ std::string xmlWellFormedError(const std::string& text) {
 }
 
 // Empty when `text` (OpenCV YAML: "%YAML:1.0" first) is well-formed YAML by yaml-cpp, else its
-// message. The directive line, which yaml-cpp does not know, is read as a comment.
-std::string yamlWellFormedError(std::string text) {
-  text.replace(0, std::min(text.find('\n'), text.size()), 1, '#');  // keeps line numbers
+// message.
+std::string yamlWellFormedError(const std::string& text) {
   try {
-    (void)YAML::Load(text);
+    (void)YAML::Load(yamlDirectiveAsComment(text));
     return "";
   } catch (const YAML::Exception& e) {
     return std::string("not well-formed YAML (") + e.what() + ")";
@@ -59,6 +58,11 @@ std::string yamlWellFormedError(std::string text) {
 }
 
 }  // namespace
+
+std::string yamlDirectiveAsComment(std::string text) {
+  text.replace(0, std::min(text.find('\n'), text.size()), 1, '#');
+  return text;
+}
 
 cv::FileStorage openOpenCvStorage(const std::string& path, std::string* error) {
   std::ifstream in(path, std::ios::binary);

@@ -19,4 +19,8 @@ namespace cblox {
 /// message). Never throws cv::Exception. Thread-safe.
 cv::FileStorage openOpenCvStorage(const std::string& path, std::string* error);
 
+/// OpenCV YAML text ("%YAML:1.0" on its first line, a directive yaml-cpp does not know) with
+/// that line turned into a comment, so yaml-cpp reads the rest with its line numbers.
+std::string yamlDirectiveAsComment(std::string text);
+
 }  // namespace cblox

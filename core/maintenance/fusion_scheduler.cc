@@ -87,7 +87,88 @@ bool FusionScheduler::addKeyframeLandmarks(int64_t subvolume, int64_t keyframe,
   return true;
 }
 
+bool FusionScheduler::addSubvolumeSharingAnchor(int64_t subvolume, int64_t home) {
+  const auto home_anchor = anchors_.find(home);
+  if (home_anchor == anchors_.end()) return false;
+  const int64_t anchor = home_anchor->second;
+  addSubvolume(subvolume, anchor);
+  const std::vector<KeyframeLandmarks>& held = keyframes_.at(home);
+  const auto it = std::lower_bound(
+      held.begin(), held.end(), anchor,
+      [](const KeyframeLandmarks& k, int64_t id) { return k.keyframe < id; });
+  if (it != held.end() && it->keyframe == anchor) {
+    const std::vector<uint64_t> landmarks = it->landmark_ids;  // keyframes_ may rehash
+    addKeyframeLandmarks(subvolume, anchor, landmarks);
+  }
+  return true;
+}
+
+bool FusionScheduler::fusedWithoutCovariance(int64_t older, int64_t newer) const {
+  const int64_t anchor = anchors_.at(newer);
+  if (anchors_.at(older) == anchor) return true;
+  const auto holder = absorbed_.find(anchor);
+  return holder != absorbed_.end() && holder->second == older;
+}
+
+std::vector<FusionPair> FusionScheduler::takeSameAnchorPairs(int64_t active_subvolume) {
+  std::vector<FusionPair> pairs;
+  if (!config_.enabled) return pairs;
+  const auto free = [&](int64_t subvolume) {
+    return subvolume != active_subvolume && !fusing_.contains(subvolume) &&
+           anchors_.contains(subvolume);
+  };
+  // anchor -> the free subvolumes anchored there, ascending
+  absl::flat_hash_map<int64_t, std::vector<int64_t>> groups;
+  for (const auto& [subvolume, anchor] : anchors_) {
+    if (free(subvolume)) groups[anchor].push_back(subvolume);
+  }
+  absl::flat_hash_set<int64_t> used;
+  const auto take = [&](int64_t older, int64_t newer, int64_t older_keyframe,
+                        int64_t newer_keyframe) {
+    FusionPair pair;
+    pair.older = older;
+    pair.newer = newer;
+    pair.older_keyframe = older_keyframe;
+    pair.newer_keyframe = newer_keyframe;
+    pair.shared_landmarks = graph_.weight(older, newer);
+    used.insert(older);
+    used.insert(newer);
+    pairs.push_back(pair);
+  };
+  std::vector<int64_t> anchors;
+  for (auto& [anchor, group] : groups) {
+    std::sort(group.begin(), group.end());
+    anchors.push_back(anchor);
+  }
+  std::sort(anchors.begin(), anchors.end());  // a deterministic order of pairs
+  for (const int64_t anchor : anchors) {
+    const std::vector<int64_t>& group = groups.at(anchor);
+    const int64_t first = group.front();
+    if (used.contains(first)) continue;
+    const auto holder = absorbed_.find(anchor);
+    if (holder != absorbed_.end() && holder->second < first && free(holder->second) &&
+        !used.contains(holder->second)) {
+      take(holder->second, first, anchors_.at(holder->second), anchor);
+    } else if (group.size() >= 2 && !used.contains(group[1])) {
+      take(first, group[1], anchor, anchor);
+    }
+  }
+  for (const FusionPair& pair : pairs) {
+    fusing_.insert(pair.older);
+    fusing_.insert(pair.newer);
+    ++fusing_pairs_;
+    ++stats_.same_anchor;
+    retry_at_.erase(PairKey{pair.older, pair.newer});
+    rejections_.erase(PairKey{pair.older, pair.newer});
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const FusionPair& x, const FusionPair& y) {
+    return std::pair{x.older, x.newer} < std::pair{y.older, y.newer};
+  });
+  return pairs;
+}
+
 void FusionScheduler::removeSubvolume(int64_t subvolume) {
+  absl::erase_if(absorbed_, [&](const auto& entry) { return entry.second == subvolume; });
   anchors_.erase(subvolume);
   keyframes_.erase(subvolume);
   graph_.removeSubvolume(subvolume);
@@ -139,6 +220,7 @@ std::optional<FusionCovarianceRequest> FusionScheduler::nextRequest(int64_t acti
     if (older == active_subvolume || newer == active_subvolume) continue;
     if (fusing_.contains(older) || fusing_.contains(newer)) continue;
     if (used.contains(older) || used.contains(newer)) continue;
+    if (fusedWithoutCovariance(older, newer)) continue;  // takeSameAnchorPairs' pairs
     const PairKey key{older, newer};
     if (const auto it = retry_at_.find(key); it != retry_at_.end() && now_s < it->second) {
       continue;
@@ -223,6 +305,14 @@ void FusionScheduler::onFused(const FusionPair& pair) {
     --fusing_pairs_;
   }
   graph_.merge(pair.older, pair.newer);
+  if (const auto it = anchors_.find(pair.newer); it != anchors_.end() &&
+                                                  anchors_.contains(pair.older)) {
+    // The newer's voxels, and those of anything fused into it before, are the older's now.
+    for (auto& [anchor, holder] : absorbed_) {
+      if (holder == pair.newer) holder = pair.older;
+    }
+    absorbed_[it->second] = pair.older;
+  }
   anchors_.erase(pair.newer);
   if (const auto it = keyframes_.find(pair.newer); it != keyframes_.end()) {
     if (anchors_.contains(pair.older)) {

@@ -108,6 +108,7 @@ struct FusionSchedulerStats {
   uint64_t requests_timed_out = 0;  ///< requests abandoned without a reply
   uint64_t replies_ignored = 0;     ///< replies to no request in flight or kept (duplicate)
   uint64_t late_replies = 0;        ///< replies to a timed-out request, used (onReply)
+  uint64_t same_anchor = 0;  ///< pairs handed on without a covariance (takeSameAnchorPairs)
   uint64_t fused = 0;               ///< fusions reported done (onFused)
   uint64_t fusions_failed = 0;      ///< fusions reported failed (onFusionFailed)
 };
@@ -123,6 +124,8 @@ struct FusionSchedulerStats {
 ///   by q up to max_retry_after_s), and subvolumes already used by
 ///   an earlier pair of the same request (each appears at most once per request, so one
 ///   fusion cannot remove a subvolume another pair of the batch needs).
+/// - Pairs that takeSameAnchorPairs fuses without a covariance (the same anchor, or the
+///   newer's anchor already fused into the older) are never requested.
 /// - At most one request is in flight; nextRequest() returns nothing until its reply came
 ///   or it timed out. The last kKeptTimedOut timed-out requests are kept: a late reply to
 ///   one is used like a timely one (the answers are as valid; only the slot was freed).
@@ -143,9 +146,28 @@ class FusionScheduler {
   /// for the keyframe, are ignored). Unknown subvolumes are ignored (returns false).
   bool addKeyframeLandmarks(int64_t subvolume, int64_t keyframe,
                             std::span<const uint64_t> landmark_ids);
+  /// A new subvolume anchored at the anchor keyframe of `home` (a known subvolume): a revisit
+  /// subvolume (SubmapCreationPolicyConfig::revisit_after_frames). Like addSubvolume, and the
+  /// anchor keyframe's landmarks held for `home` are held for it too (it observed them), so
+  /// the two share them in the graph. False (nothing added) when `home` is unknown.
+  bool addSubvolumeSharingAnchor(int64_t subvolume, int64_t home);
   /// The subvolume left the map by other means (e.g. removed); pairs in flight that name it
   /// are dropped when answered.
   void removeSubvolume(int64_t subvolume);
+
+  /// Pairs to fuse at once, without a covariance, among the subvolumes that are not
+  /// `active_subvolume` (or -1) and not in a fusion:
+  /// - two subvolumes anchored at the same keyframe: their relative pose is the identity,
+  ///   exactly (q is infinite). Per anchor, the two oldest form a pair (newer into older).
+  /// - a subvolume anchored at keyframe A, when a subvolume anchored at A was fused into an
+  ///   older one O (onFused; O may since have been fused further: the one holding it now),
+  ///   and none anchored at A is older than it: it goes into O. Its anchor's relative pose to
+  ///   O's was accepted when that fusion was (q >= q_min or exact), and the fusion uses the
+  ///   current estimate of it, as that one did. older_keyframe is then O's anchor.
+  /// Each subvolume is in at most one pair per call; each returned pair locks both until
+  /// onFused / onFusionFailed, as an accepted pair does. Counted in stats().same_anchor (not
+  /// in accepted). None when config().enabled is false. O(subvolumes).
+  std::vector<FusionPair> takeSameAnchorPairs(int64_t active_subvolume);
 
   /// The next request to send, if any candidate is eligible (see the class rules);
   /// `active_subvolume` (or -1) is excluded. Expires a timed-out request first.
@@ -200,10 +222,14 @@ class FusionScheduler {
     double sent_s = 0.0;
   };
   using PairKey = std::pair<int64_t, int64_t>;  // (older, newer)
+  // True for a pair takeSameAnchorPairs fuses without a covariance (both known).
+  bool fusedWithoutCovariance(int64_t older, int64_t newer) const;
 
   FusionSchedulerConfig config_;
   SubvolumeCovisibilityGraph graph_;
   absl::flat_hash_map<int64_t, int64_t> anchors_;  // subvolume -> anchor keyframe
+  // anchor keyframe of a subvolume fused away -> the subvolume holding its voxels now
+  absl::flat_hash_map<int64_t, int64_t> absorbed_;
   // subvolume -> its keyframes' landmark sets, ascending keyframe ids, sets ascending
   absl::flat_hash_map<int64_t, std::vector<KeyframeLandmarks>> keyframes_;
   absl::flat_hash_set<int64_t> fusing_;            // subvolumes in an accepted pair

@@ -213,4 +213,14 @@ std::vector<SubmapPose> SubmapCollection::poseSnapshot() const {
   return poses;
 }
 
+std::optional<SubmapPose> SubmapCollection::oldestSubmapWithKeyframe(KeyframeId keyframe) const {
+  std::lock_guard lock(mutex_);
+  for (const auto& [id, submap] : submaps_) {  // ascending ids
+    if (submap->hasKeyframe(keyframe)) {
+      return SubmapPose{id, submap->anchorKeyframe(), submap->T_G_M(), submap == active_};
+    }
+  }
+  return std::nullopt;
+}
+
 }  // namespace cblox

@@ -5,6 +5,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -152,6 +153,9 @@ class SubmapCollection {
   /// Id, anchor, T_G_M and state of every submap in creation order, taken atomically with
   /// respect to updateKeyframePoses(). Thread-safe.
   std::vector<SubmapPose> poseSnapshot() const;
+  /// The oldest (lowest id) submap that records `keyframe` (as anchor or contributor), as
+  /// poseSnapshot() gives it; nullopt when none does. O(submaps) hash lookups. Thread-safe.
+  std::optional<SubmapPose> oldestSubmapWithKeyframe(KeyframeId keyframe) const;
 
  private:
   // Finishes `previous` unless it is null (called without holding mutex_).

@@ -14,6 +14,10 @@ std::string SubmapCreationPolicyConfig::validate() const {
     error << "max_anchor_distance_m must be finite and >= 0, got " << max_anchor_distance_m;
   } else if (!(revisit_anchor_distance_m >= 0.0) || !std::isfinite(revisit_anchor_distance_m)) {
     error << "revisit_anchor_distance_m must be finite and >= 0, got " << revisit_anchor_distance_m;
+  } else if (revisit_after_frames < 0) {
+    error << "revisit_after_frames must be >= 0, got " << revisit_after_frames;
+  } else if (revisit_max_frames < 0) {
+    error << "revisit_max_frames must be >= 0, got " << revisit_max_frames;
   }
   return error.str();
 }
@@ -74,7 +78,38 @@ bool SubmapCreationPolicy::onKeyframe(const Submap* active, bool starts_new_map,
   }
   if (reason == Reason::kNone) return false;
   pending_ = Pending::kNone;
+  revisit_anchor_ = -1;  // the new submap is no revisit submap
   last_reason_ = reason;
+  return true;
+}
+
+bool SubmapCreationPolicy::onFrameReference(const Submap& active,
+                                            const std::optional<ReferenceHome>& home) {
+  if (config_.revisit_after_frames <= 0) return false;
+  if (!home || home->submap == active.id() || home->anchor == active.anchorKeyframe()) {
+    revisit_home_ = -1;
+    revisit_votes_ = 0;
+    // At home in the revisit submap started last: renewed after revisit_max_frames.
+    if (home && revisit_anchor_ == active.anchorKeyframe() && config_.revisit_max_frames > 0 &&
+        ++revisit_frames_ >= config_.revisit_max_frames) {
+      revisit_frames_ = 0;
+      pending_ = Pending::kNone;
+      last_reason_ = Reason::kRevisitFrames;
+      return true;
+    }
+    return false;
+  }
+  if (home->submap != revisit_home_) {
+    revisit_home_ = home->submap;
+    revisit_votes_ = 0;
+  }
+  if (++revisit_votes_ < config_.revisit_after_frames) return false;
+  revisit_home_ = -1;
+  revisit_votes_ = 0;
+  revisit_anchor_ = home->anchor;
+  revisit_frames_ = 0;
+  pending_ = Pending::kNone;
+  last_reason_ = Reason::kRevisitFrames;
   return true;
 }
 
@@ -94,6 +129,8 @@ const char* SubmapCreationPolicy::reasonName(Reason reason) {
       return "revisit";
     case Reason::kAnchorDistance:
       return "anchor distance";
+    case Reason::kRevisitFrames:
+      return "tracked in an older subvolume";
   }
   return "none";
 }

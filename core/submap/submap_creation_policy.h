@@ -33,6 +33,28 @@ struct SubmapCreationPolicyConfig {
   /// size instead of 73-82 %, same RMSE (two runs); hall: no change. Default 0 (off) until
   /// measured over more runs.
   double revisit_anchor_distance_m = 0.0;
+  /// Frame-driven revisit anchoring, frames (>= 1), or 0: off. Each frame names the keyframe
+  /// it was tracked against (frame_pose_t::reference_keyframe_id); its home is the oldest
+  /// submap that records that keyframe. A frame whose home is a finished submap with another
+  /// anchor than the active submap's votes for that home; after this many consecutive votes
+  /// for the same home, the frame starts a new submap anchored at the home's anchor keyframe
+  /// (T_G_M = the home's), and it and the following frames are integrated there. So a revisit
+  /// the tracker follows inside its known map, making no keyframe (the hall's second lap),
+  /// goes into subvolumes that share an anchor with what they revisit: their relative pose is
+  /// exact (the identity), and map maintenance fuses them without a covariance
+  /// (FusionScheduler::takeSameAnchorPairs). The frames' poses are the tracker's, made
+  /// against that home's landmarks, so the anchoring adds no uncertainty of its own. The votes
+  /// keep a reference that flickers between neighbouring subvolumes (or lags behind a new
+  /// keyframe) from starting a subvolume per frame. README, "Map maintenance". Default 0
+  /// (off) until measured over several runs.
+  int revisit_after_frames = 0;
+  /// With revisit_after_frames: a revisit submap (one started by that rule) whose frames keep
+  /// being tracked against its home takes at most this many frames (>= 1); the next one
+  /// starts a fresh revisit submap with the same anchor, and the full one, finished, is fused
+  /// into its home at once. So a long revisit (a whole lap in a known map) never builds up
+  /// in the one active submap, which map maintenance cannot fuse. 0: no bound. Default 100
+  /// (5 s at 20 Hz).
+  int revisit_max_frames = 100;
 
   /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
   std::string validate() const;
@@ -106,7 +128,26 @@ class SubmapCreationPolicy {
   bool onKeyframe(const Submap* active, bool starts_new_map = false,
                   const std::optional<Eigen::Vector3d>& keyframe_position = std::nullopt,
                   std::span<const Eigen::Vector3d> older_anchors = {});
-  /// Why the last onKeyframe() that returned true created a submap (logs, benchmarks).
+  /// Where a frame's reference keyframe is: the oldest submap that records it.
+  struct ReferenceHome {
+    SubmapId submap = 0;
+    KeyframeId anchor = 0;  ///< that submap's anchor keyframe
+  };
+  /// Applies the frame-driven revisit rule (revisit_after_frames) to a frame that is to be
+  /// integrated into `active` (onFramePose returned kIntegrate); `home`: its reference
+  /// keyframe's home, nullopt when it has none or no submap records it. True when the frame
+  /// must start a revisit submap: the caller creates it with T_G_M = the home's current
+  /// T_G_M, anchored at home->anchor, and integrates the frame into it; a pending
+  /// keyframe-limit decision is cleared (lastReason() is kRevisitFrames). A frame whose home
+  /// is `active`, or shares its anchor, or that has no home, clears the votes. When `active`
+  /// is the revisit submap this rule started last (and no keyframe started another since),
+  /// the frames at home are counted: the revisit_max_frames-th after its start returns true
+  /// with the same home (a fresh revisit submap). Always false when revisit_after_frames is
+  /// 0. Not thread-safe.
+  bool onFrameReference(const Submap& active, const std::optional<ReferenceHome>& home);
+
+  /// Why the last onKeyframe() or onFrameReference() that returned true created a submap
+  /// (logs, benchmarks).
   enum class Reason {
     kNone,            ///< no submap created yet
     kNoActiveSubmap,  ///< there was no active submap (or it was finished)
@@ -115,24 +156,38 @@ class SubmapCreationPolicy {
     kKeyframeLimit,   ///< the active submap was full
     kRevisit,         ///< near an older anchor (revisit_anchor_distance_m)
     kAnchorDistance,  ///< far from the active anchor (max_anchor_distance_m)
+    kRevisitFrames,   ///< frames tracked in an older subvolume (revisit_after_frames)
   };
   /// Not thread-safe.
   Reason lastReason() const { return last_reason_; }
 
   /// The pending decision. Not thread-safe.
   Pending pending() const { return pending_; }
-  /// Forgets the pending decision (e.g. after the mapper cleared its map). Not thread-safe.
-  void reset() { pending_ = Pending::kNone; }
+  /// Forgets the pending decision and the revisit rule's state (e.g. after the mapper cleared
+  /// its map). Not thread-safe.
+  void reset() {
+    pending_ = Pending::kNone;
+    revisit_home_ = -1;
+    revisit_votes_ = 0;
+    revisit_anchor_ = -1;
+    revisit_frames_ = 0;
+  }
 
   const SubmapCreationPolicyConfig& config() const { return config_; }
   /// "no active submap", "new map", "tracking jump", "keyframe limit", "revisit",
-  /// "anchor distance" ("none" for kNone).
+  /// "anchor distance", "tracked in an older subvolume" ("none" for kNone).
   static const char* reasonName(Reason reason);
 
  private:
   SubmapCreationPolicyConfig config_;
   Pending pending_ = Pending::kNone;
   Reason last_reason_ = Reason::kNone;
+  SubmapId revisit_home_ = -1;  // the home the current votes are for
+  int revisit_votes_ = 0;
+  // The revisit submap started last (its anchor) while it is the active one, and the frames
+  // at home since; -1: the active submap is no revisit submap.
+  KeyframeId revisit_anchor_ = -1;
+  int revisit_frames_ = 0;
 };
 
 }  // namespace cblox

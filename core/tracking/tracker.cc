@@ -124,6 +124,9 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
   for (size_t i = 0; i < current_.size(); ++i) {
     if (current_.outlier[i]) current_.landmarks[i] = nullptr;
   }
+  if (result.state == TrackingState::kOk && reference_keyframe_ != nullptr) {
+    result.reference_keyframe = reference_keyframe_->id;
+  }
   last_frame_ = current_;
   if (current_.T_C_G && reference_keyframe_ != nullptr) {
     std::shared_lock<std::shared_mutex> lock(map_->mutex());

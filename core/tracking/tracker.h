@@ -38,6 +38,10 @@ struct TrackingResult {
   bool map_corrected = false;
   /// A keyframe made from this frame (already in the map and handed to the sink).
   Keyframe* new_keyframe = nullptr;
+  /// The keyframe the frame was tracked against when state is kOk: of the local map's
+  /// keyframes, the one sharing the most landmarks with the frame (ORB-SLAM2's reference
+  /// keyframe), or the keyframe made from this frame; -1 otherwise.
+  int64_t reference_keyframe = -1;
   /// Inlier matches after the last pose optimisation.
   int inliers = 0;
   /// Why tracking failed (empty when state is kOk).

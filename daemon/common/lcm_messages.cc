@@ -336,14 +336,16 @@ std::optional<RectifiedStereoCalibration> fromStereoCalibrationMsg(const stereo_
 
 frame_pose_t toFramePoseMsg(int64_t utime, int64_t frame_id,
                             const std::optional<Transformationd>& T_G_C, int8_t tracking_state,
-                            bool tracking_jump, int32_t map_epoch) {
-  frame_pose_t msg;
+                            bool tracking_jump, int32_t map_epoch,
+                            int64_t reference_keyframe_id) {
+  frame_pose_t msg{};
   msg.utime = utime;
   msg.frame_id = frame_id;
   msg.T_G_C = toPoseMsg(T_G_C.value_or(Transformationd::Identity()));
   msg.tracking_state = tracking_state;
   msg.tracking_jump = tracking_jump;
   msg.map_epoch = map_epoch;
+  msg.reference_keyframe_id = reference_keyframe_id < 0 ? -1 : reference_keyframe_id;
   return msg;
 }
 

@@ -71,10 +71,12 @@ std::optional<RectifiedStereoCalibration> fromStereoCalibrationMsg(const stereo_
                                                                    std::string* error);
 
 /// CBLOX_FRAME_POSE message (tracker). `T_G_C` is absent for NOT_INITIALIZED / LOST frames:
-/// the identity is sent (consumers ignore the pose of such states).
+/// the identity is sent (consumers ignore the pose of such states). `reference_keyframe_id`:
+/// the keyframe the frame was tracked against, -1 (any negative value) for none.
 frame_pose_t toFramePoseMsg(int64_t utime, int64_t frame_id,
                             const std::optional<Transformationd>& T_G_C, int8_t tracking_state,
-                            bool tracking_jump, int32_t map_epoch);
+                            bool tracking_jump, int32_t map_epoch,
+                            int64_t reference_keyframe_id = -1);
 /// CBLOX_KEYFRAME message (tracker): a new keyframe of map `map_epoch` and the landmarks it
 /// observes.
 keyframe_t toKeyframeMsg(int64_t utime, int64_t keyframe_id, int64_t frame_id,

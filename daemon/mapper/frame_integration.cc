@@ -1,5 +1,6 @@
 #include "daemon/mapper/frame_integration.h"
 
+#include <algorithm>
 #include <exception>
 #include <optional>
 #include <utility>
@@ -7,6 +8,7 @@
 #include "core/geometry/pinhole_camera.h"
 #include "daemon/common/text_format.h"
 #include "daemon/common/thread_priority.h"
+#include "daemon/mapper/map_epoch_key.h"
 
 namespace cblox {
 namespace {
@@ -94,6 +96,7 @@ void FrameIntegration::loop() {
       busy_ = true;
       Transformationd T_G_B;
       bool jump = false;
+      int64_t reference = -1;
       const Clock::time_point now = Clock::now();
       // One view of the poses for the whole scan (lock order: poses, then the in-tray),
       // released before the frame is integrated.
@@ -103,7 +106,8 @@ void FrameIntegration::loop() {
         frame = pending_.takeNewestReady([&](const PendingFrame& p) -> FrameReadiness {
           Transformationd T;
           bool j = false;
-          const PoseBuffer::Lookup result = poses.lookup(p.frame.utime, &T, &j);
+          int64_t r = -1;
+          const PoseBuffer::Lookup result = poses.lookup(p.frame.utime, &T, &j, &r);
           auto what = [&p] {
             return "depth frame " + std::to_string(p.frame.frame_id) + " at " +
                    std::to_string(p.frame.utime) + " us: ";
@@ -112,6 +116,7 @@ void FrameIntegration::loop() {
             case PoseBuffer::Lookup::kFound:
               T_G_B = T;
               jump = j;
+              reference = r;
               return FrameReadiness::kReady;
             case PoseBuffer::Lookup::kNotYet:
               if (now - p.received <= max_wait) return FrameReadiness::kWait;
@@ -139,7 +144,7 @@ void FrameIntegration::loop() {
         break;
       }
       try {
-        processFrame(std::move(*frame), T_G_B, jump);
+        processFrame(std::move(*frame), T_G_B, jump, reference);
       } catch (const std::exception& e) {
         problems_(InputProblem::kIntegrationFailed, e.what(), 1);
       }
@@ -148,7 +153,28 @@ void FrameIntegration::loop() {
   }
 }
 
-void FrameIntegration::processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump) {
+std::shared_ptr<Submap> FrameIntegration::applyRevisitRule(std::shared_ptr<Submap> active,
+                                                           int64_t reference_keyframe,
+                                                           int64_t frame_time_ns) {
+  if (policy_->config().revisit_after_frames <= 0 || !active) return active;
+  std::optional<SubmapPose> home;
+  if (reference_keyframe >= 0) home = collection_->oldestSubmapWithKeyframe(reference_keyframe);
+  // Another map epoch's subvolume is never a home: the two maps' frames are unrelated.
+  if (home && epochOfKey(home->anchor_keyframe) != epochOfKey(active->anchorKeyframe())) {
+    home.reset();
+  }
+  std::optional<SubmapCreationPolicy::ReferenceHome> where;
+  if (home) where = SubmapCreationPolicy::ReferenceHome{home->id, home->anchor_keyframe};
+  if (!policy_->onFrameReference(*active, where)) return active;
+  // Finishes the previous submap (this thread holds no layer lock: nothing to wait for).
+  std::shared_ptr<Submap> revisit =
+      collection_->createSubmap(home->T_G_M, home->anchor_keyframe, frame_time_ns);
+  maintenance_->adoptRevisitSubmap(revisit->id(), home->id, home->anchor_keyframe);
+  return revisit;
+}
+
+void FrameIntegration::processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump,
+                                    int64_t reference_keyframe) {
   DepthFrame& frame = pending.frame;
   const std::string what = "depth frame " + std::to_string(frame.frame_id) + ": ";
 
@@ -182,7 +208,13 @@ void FrameIntegration::processFrame(PendingFrame pending, const Transformationd&
     {
       std::lock_guard<std::mutex> lock(*policy_mutex_);
       active = collection_->activeSubmap();
-      action = policy_->onFramePose(active.get(), jump && attempt == 0, frame.utime * 1000);
+      // Clamped: a time stamp from the bus beyond +-292 years would overflow in nanoseconds.
+      const int64_t time_ns =
+          std::clamp<int64_t>(frame.utime, INT64_MIN / 1000, INT64_MAX / 1000) * 1000;
+      action = policy_->onFramePose(active.get(), jump && attempt == 0, time_ns);
+      if (action == SubmapCreationPolicy::FrameAction::kIntegrate && attempt == 0) {
+        active = applyRevisitRule(std::move(active), reference_keyframe, time_ns);
+      }
     }
     if (action == SubmapCreationPolicy::FrameAction::kWaitForAnchor) {
       problems_(InputProblem::kWaitingForAnchor,

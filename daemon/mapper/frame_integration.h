@@ -111,7 +111,14 @@ class FrameIntegration {
   class FrameIntegrator;  // one integrator bound to one submap's layer
 
   void loop();
-  void processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump);
+  // `reference_keyframe`: the frame pose's (PoseBuffer::lookup), -1 for none.
+  void processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump,
+                    int64_t reference_keyframe);
+  // The frame-driven revisit rule (SubmapCreationPolicy::onFrameReference) for a frame to be
+  // integrated into `active`: returns the revisit submap it starts, or `active`. Call with
+  // *policy_mutex_ held.
+  std::shared_ptr<Submap> applyRevisitRule(std::shared_ptr<Submap> active,
+                                           int64_t reference_keyframe, int64_t frame_time_ns);
 
   const FrameIntegrationConfig config_;
   SubmapCollection* const collection_;

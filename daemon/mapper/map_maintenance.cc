@@ -133,7 +133,7 @@ void MapMaintenance::loop() {
     if (stop_) break;
     if (queue_.empty()) {
       lock.unlock();
-      requestCovariances();
+      scheduleFusions();
       lock.lock();
       continue;
     }
@@ -142,7 +142,7 @@ void MapMaintenance::loop() {
     busy_ = true;
     lock.unlock();
     apply(item);
-    requestCovariances();
+    scheduleFusions();
     lock.lock();
     busy_ = false;
   }
@@ -282,15 +282,47 @@ FusionSchedulerState MapMaintenance::schedulerState() const {
   return scheduler_.exportState(seconds());
 }
 
-void MapMaintenance::requestCovariances() {
-  if (!covariance_requester_) return;
+void MapMaintenance::scheduleFusions() {
+  std::vector<FusionPair> exact;
   std::optional<FusionCovarianceRequest> request;
   {
     std::lock_guard<std::mutex> lock(scheduler_mutex_);
     const std::shared_ptr<Submap> active = collection_->activeSubmap();
-    request = scheduler_.nextRequest(active ? active->id() : -1, seconds());
+    const SubmapId active_id = active ? active->id() : -1;
+    exact = scheduler_.takeSameAnchorPairs(active_id);
+    if (covariance_requester_) request = scheduler_.nextRequest(active_id, seconds());
   }
+  submitSameAnchorPairs(exact);
   if (request) covariance_requester_(*request);
+}
+
+void MapMaintenance::submitSameAnchorPairs(const std::vector<FusionPair>& pairs) {
+  for (const FusionPair& pair : pairs) {
+    const bool same = pair.older_keyframe == pair.newer_keyframe;
+    log_("fusion accepted: subvolume " + std::to_string(pair.newer) + " into " +
+         std::to_string(pair.older) + " without a covariance (" +
+         (same ? "both anchored at keyframe " + std::to_string(idOfKey(pair.older_keyframe))
+               : "anchored at keyframe " + std::to_string(idOfKey(pair.newer_keyframe)) +
+                     ", whose subvolume was fused into it") +
+         ")");
+  }
+  if (!pairs.empty()) worker_->submitFusions(pairs);
+}
+
+void MapMaintenance::adoptRevisitSubmap(SubmapId revisit, SubmapId home, KeyframeId anchor) {
+  std::vector<FusionPair> exact;
+  {
+    std::lock_guard<std::mutex> lock(scheduler_mutex_);
+    scheduler_.addSubvolumeSharingAnchor(revisit, home);
+    // The submap it replaced as the active one may now pair with one sharing its anchor.
+    exact = scheduler_.takeSameAnchorPairs(revisit);
+  }
+  log_("subvolume " + std::to_string(revisit) + " anchored at keyframe " +
+       std::to_string(idOfKey(anchor)) +
+       (epochOfKey(anchor) > 0 ? " of map epoch " + std::to_string(epochOfKey(anchor)) : "") +
+       " (" + SubmapCreationPolicy::reasonName(SubmapCreationPolicy::Reason::kRevisitFrames) +
+       ": revisit of subvolume " + std::to_string(home) + ")");
+  submitSameAnchorPairs(exact);
 }
 
 void MapMaintenance::applyReply(const Item& item) {

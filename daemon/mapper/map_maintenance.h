@@ -86,6 +86,12 @@ class MapMaintenance {
   /// applied, when maintenance is stopping). A synthesised id used before gets the next
   /// unused one. Not from the maintenance thread.
   bool applySynthesisedKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K);
+  /// The integrator started revisit submap `revisit`, anchored at the anchor keyframe of
+  /// submap `home` (SubmapCreationPolicy::onFrameReference): makes it a subvolume of the
+  /// fusion scheduler sharing home's anchor (FusionScheduler::addSubvolumeSharingAnchor) and
+  /// logs it. Call with `*policy_mutex` held, right after SubmapCollection::createSubmap, so
+  /// no keyframe joins it before the scheduler knows it.
+  void adoptRevisitSubmap(SubmapId revisit, SubmapId home, KeyframeId anchor);
   /// The worker's result for an accepted pair (FusionExportWorker::FusionCallback).
   void onFusionResult(const FusionPair& pair, bool fused);
   /// An accepted depth frame or pose at `utime` (MaintenanceClock::kInput's time).
@@ -135,7 +141,10 @@ class MapMaintenance {
                      bool synthesised, std::span<const uint64_t> landmark_ids);
   void applyBatch(const std::vector<std::pair<KeyframeId, Transformationd>>& batch);
   void applyReply(const Item& item);
-  void requestCovariances();
+  // Same-anchor pairs go to the worker at once; then a covariance request, if one is due.
+  void scheduleFusions();
+  // Logs same-anchor pairs (FusionScheduler::takeSameAnchorPairs) and hands them to the worker.
+  void submitSameAnchorPairs(const std::vector<FusionPair>& pairs);
   double seconds() const;
 
   const MapMaintenanceConfig config_;

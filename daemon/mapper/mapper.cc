@@ -556,6 +556,7 @@ std::vector<std::pair<std::string, uint64_t>> integerCounters(const MapperStatus
           {"fusion_candidates", s.fusion.candidates},
           {"covariance_requested", s.fusion.requested},
           {"subvolumes_fused", s.fusion.fused},
+          {"fused_same_anchor", s.fusion.same_anchor},
           {"rejected_by_q", s.fusion.rejected_by_q},
           {"covariance_errors", s.fusion.covariance_errors},
           {"checkpoints_written", s.checkpoints_written},

@@ -146,7 +146,8 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   const YAML::Node subvolumes = root["subvolumes"];
   requireKnownKeys(subvolumes, "subvolumes",
                    {"max_keyframes_per_subvolume", "max_anchor_distance_m",
-                    "revisit_anchor_distance_m", "keyframe_every_n_frames"});
+                    "revisit_anchor_distance_m", "revisit_after_frames",
+                    "revisit_max_frames", "keyframe_every_n_frames"});
   if (!isAbsent(subvolumes)) {
     readOptional(subvolumes, "subvolumes", "max_keyframes_per_subvolume",
                  &m.creation.max_keyframes_per_subvolume);
@@ -154,6 +155,9 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
                  &m.creation.max_anchor_distance_m);
     readOptional(subvolumes, "subvolumes", "revisit_anchor_distance_m",
                  &m.creation.revisit_anchor_distance_m);
+    readOptional(subvolumes, "subvolumes", "revisit_after_frames",
+                 &m.creation.revisit_after_frames);
+    readOptional(subvolumes, "subvolumes", "revisit_max_frames", &m.creation.revisit_max_frames);
     readOptional(subvolumes, "subvolumes", "keyframe_every_n_frames", &m.keyframe_every_n_frames);
   }
 

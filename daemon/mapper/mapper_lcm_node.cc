@@ -175,6 +175,9 @@ void MapperNode::onFramePose(const frame_pose_t& msg, const std::string& /*chann
   pose.utime = msg.utime;
   pose.epoch = msg.map_epoch;
   pose.jump = msg.tracking_jump;
+  // Another version's or program's value outside this epoch's ids: no reference (the frame
+  // is integrated as without one).
+  pose.reference_keyframe = epochKey(msg.map_epoch, msg.reference_keyframe_id).value_or(-1);
   switch (msg.tracking_state) {
     case frame_pose_t::OK:
       break;

@@ -37,13 +37,14 @@ PoseBuffer::AddResult PoseBuffer::add(const TimedPose& pose) {
   return AddResult::kAdded;
 }
 
-PoseBuffer::Lookup PoseBuffer::lookup(int64_t utime, Transformationd* T_G_C, bool* jump) const {
+PoseBuffer::Lookup PoseBuffer::lookup(int64_t utime, Transformationd* T_G_C, bool* jump,
+                                      int64_t* reference_keyframe) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return lookupLocked(utime, T_G_C, jump);
+  return lookupLocked(utime, T_G_C, jump, reference_keyframe);
 }
 
-PoseBuffer::Lookup PoseBuffer::lookupLocked(int64_t utime, Transformationd* T_G_C,
-                                            bool* jump) const {
+PoseBuffer::Lookup PoseBuffer::lookupLocked(int64_t utime, Transformationd* T_G_C, bool* jump,
+                                            int64_t* reference_keyframe) const {
   if (poses_.empty() || utime > poses_.back().utime) return Lookup::kNotYet;
   if (utime < poses_.front().utime) return Lookup::kTooOld;
   const auto after = std::lower_bound(
@@ -53,6 +54,7 @@ PoseBuffer::Lookup PoseBuffer::lookupLocked(int64_t utime, Transformationd* T_G_
     if (!after->tracking_ok) return Lookup::kLost;
     *T_G_C = after->T_G_C;
     *jump = after->jump;
+    if (reference_keyframe != nullptr) *reference_keyframe = after->reference_keyframe;
     return Lookup::kFound;
   }
   const auto before = after - 1;  // utime > front: after is not the first
@@ -64,6 +66,9 @@ PoseBuffer::Lookup PoseBuffer::lookupLocked(int64_t utime, Transformationd* T_G_
                        static_cast<double>(after->utime - before->utime);
   *T_G_C = Transformationd::interpolate(before->T_G_C, after->T_G_C, alpha);
   *jump = false;
+  if (reference_keyframe != nullptr) {
+    *reference_keyframe = alpha < 0.5 ? before->reference_keyframe : after->reference_keyframe;
+  }
   return Lookup::kFound;
 }
 

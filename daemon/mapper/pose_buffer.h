@@ -17,6 +17,8 @@ struct TimedPose {
   bool tracking_ok = true;  ///< false for LOST / NOT_INITIALIZED: the pose is meaningless
   bool jump = false;        ///< discontinuity before this pose (relocalisation, loop, reset)
   int32_t epoch = 0;        ///< tracker map epoch; poses of different epochs are unrelated
+  /// The keyframe (mapper key, map_epoch_key.h) the frame was tracked against, -1: none.
+  int64_t reference_keyframe = -1;
 };
 
 /// Recent frame poses, looked up at a depth frame's time stamp by geodesic interpolation
@@ -52,8 +54,11 @@ class PoseBuffer {
   AddResult add(const TimedPose& pose);
 
   /// Pose at `utime`. On kFound, *T_G_C is the pose and *jump tells whether the frame is the
-  /// first after a discontinuity (it has the jump pose itself).
-  Lookup lookup(int64_t utime, Transformationd* T_G_C, bool* jump) const;
+  /// first after a discontinuity (it has the jump pose itself); `reference_keyframe`, when
+  /// given, is set to the reference keyframe of the pose at `utime`, or of the nearer of the
+  /// two poses interpolated (the later one at the midpoint).
+  Lookup lookup(int64_t utime, Transformationd* T_G_C, bool* jump,
+                int64_t* reference_keyframe = nullptr) const;
 
   /// Holds the buffer's lock for its lifetime so that several lookups see one state: a pose
   /// added between two lookups of a scan over waiting frames would otherwise make a newer
@@ -62,8 +67,9 @@ class PoseBuffer {
   class Reader {
    public:
     explicit Reader(const PoseBuffer& buffer) : buffer_(buffer), lock_(buffer.mutex_) {}
-    Lookup lookup(int64_t utime, Transformationd* T_G_C, bool* jump) const {
-      return buffer_.lookupLocked(utime, T_G_C, jump);
+    Lookup lookup(int64_t utime, Transformationd* T_G_C, bool* jump,
+                  int64_t* reference_keyframe = nullptr) const {
+      return buffer_.lookupLocked(utime, T_G_C, jump, reference_keyframe);
     }
 
    private:
@@ -79,7 +85,8 @@ class PoseBuffer {
   static const char* name(Lookup result);
 
  private:
-  Lookup lookupLocked(int64_t utime, Transformationd* T_G_C, bool* jump) const;
+  Lookup lookupLocked(int64_t utime, Transformationd* T_G_C, bool* jump,
+                      int64_t* reference_keyframe) const;
 
   Config config_;
   mutable std::mutex mutex_;

@@ -54,7 +54,8 @@ TrackerNode::Outputs TrackerLcmNode::outputs() {
   TrackerNode::Outputs out;
   out.frame_pose = [this](const FramePoseReport& r) {
     const frame_pose_t msg =
-        toFramePoseMsg(r.utime, r.frame_id, r.T_G_C, toStateConstant(r.state), r.jump, r.map_epoch);
+        toFramePoseMsg(r.utime, r.frame_id, r.T_G_C, toStateConstant(r.state), r.jump,
+                       r.map_epoch, r.reference_keyframe_id);
     std::lock_guard<std::mutex> lock(publish_mutex_);
     lcm_->publish(config_.frame_pose_channel, &msg);
   };

@@ -504,6 +504,7 @@ void TrackerNode::processFrame(TrackerFrame& frame) {
   report.utime = frame.utime;
   report.frame_id = frame.frame_id;
   report.T_G_C = result.T_C_G->inverse();
+  report.reference_keyframe_id = result.reference_keyframe;
   if (result.relocalized) {
     report.state = FramePoseState::kRelocalized;
     relocalizations_.fetch_add(1, std::memory_order_relaxed);

@@ -117,6 +117,9 @@ struct FramePoseReport {
   /// The camera (rectified left / RGB-D) pose T_G_C; set for kOk, kRelocalized and
   /// kLoopCorrected.
   std::optional<Transformationd> T_G_C;
+  /// The keyframe the frame was tracked against (TrackingResult::reference_keyframe), -1
+  /// when there is no pose.
+  int64_t reference_keyframe_id = -1;
   /// Why there is no pose (empty when there is one).
   std::string reason;
 };

@@ -11,7 +11,10 @@
 //              each q_min of --most-shared-q-min, q asked of the keyframes that share the
 //              most landmarks (maintenance.pair_keyframes: most_shared, for comparison);
 //              with --revisit-q-min, an off map and these q_min with subvolumes also
-//              started at revisits (subvolumes.revisit_anchor_distance_m).
+//              started at revisits (subvolumes.revisit_anchor_distance_m); with
+//              --revisit-frames-q-min, an off map and these q_min with frames tracked in an
+//              older subvolume anchored to it (subvolumes.revisit_after_frames, pairs sharing
+//              an anchor fused exactly).
 // At the end every map is meshed (the projection of its subvolumes into one volume) and
 // compared with the scene's exact surface: vertex RMSE and median, and the map's size in
 // TSDF blocks (over all subvolumes). Maps made with the tracker's poses are first aligned
@@ -22,6 +25,8 @@
 //                           [--voxel 0.05] [--keyframes-per-subvolume 10]
 //                           [--max-anchor-distance M] [--revisit-distance R]
 //                           [--revisit-q-min Q,... [--revisit-variant-distance 1]]
+//                           [--revisit-frames F]
+//                           [--revisit-frames-q-min Q,... [--revisit-variant-frames 10]]
 //                           [--depth-noise K]
 //                           [--min-shared-landmarks 30] [--min-shared-ratio 0.05]
 //                           [--q-min 3e3,1e4,3e4,1e5] [--most-shared-q-min Q,...] [--out DIR]
@@ -83,6 +88,7 @@ struct Variant {
   double q_min = 0.0;
   PairKeyframes pair_keyframes = PairKeyframes::kAnchors;
   double revisit_m = 0.0;  ///< subvolumes.revisit_anchor_distance_m
+  int revisit_frames = 0;  ///< subvolumes.revisit_after_frames
   std::mutex pairs_mutex;
   std::map<int64_t, std::vector<FusionPair>> requested;  // by request id, until answered
   std::vector<PairAnswer> answers;
@@ -117,6 +123,9 @@ int run(int argc, char** argv) {
   double revisit_distance = MapperConfig{}.creation.revisit_anchor_distance_m;
   std::vector<double> revisit_sweep;
   double revisit_variant_distance = 1.0;
+  int revisit_frames = MapperConfig{}.creation.revisit_after_frames;
+  std::vector<double> revisit_frames_sweep;
+  int revisit_variant_frames = 10;
   double depth_noise = 0.0;
   CovisibilityGraphConfig candidates;
   std::vector<double> sweep = {3e3, 1e4, 3e4, 1e5};
@@ -152,6 +161,20 @@ int run(int argc, char** argv) {
   app.add_option("--revisit-variant-distance", revisit_variant_distance,
                  "the revisit distance of the --revisit-q-min variants, metres (> 0)")
       ->capture_default_str();
+  app.add_option("--revisit-frames", revisit_frames,
+                 "frames tracked in an older subvolume this many times in a row start a "
+                 "subvolume sharing its anchor (0: off)")
+      ->capture_default_str();
+  app.add_option("--revisit-frames-q-min", revisit_frames_sweep,
+                 "also an off map and these q_min with --revisit-variant-frames (comma-separated; "
+                 "default none)")
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->expected(0, 1 << 20)
+      ->type_name("Q[,Q...]");
+  app.add_option("--revisit-variant-frames", revisit_variant_frames,
+                 "the revisit_after_frames of the --revisit-frames-q-min variants (>= 1)")
+      ->capture_default_str();
   app.add_option("--min-shared-ratio", candidates.min_shared_ratio,
                  "fusion candidates: share of landmarks seen by both")
       ->capture_default_str();
@@ -176,10 +199,11 @@ int run(int argc, char** argv) {
       ->type_name("DIR");
   app.add_option("--vocabulary", vocabulary_path, "vocabulary file")->capture_default_str();
   if (const std::optional<int> code = parseCommandLine(app, argc, argv)) return *code;
-  if (sweep.empty() || !(voxel > 0.0f) || !(revisit_variant_distance > 0.0)) {
+  if (sweep.empty() || !(voxel > 0.0f) || !(revisit_variant_distance > 0.0) ||
+      revisit_variant_frames < 1 || revisit_frames < 0) {
     std::fprintf(stderr,
                  "--q-min needs at least one value, --voxel and --revisit-variant-distance "
-                 "must be > 0\n");
+                 "must be > 0, --revisit-variant-frames >= 1, --revisit-frames >= 0\n");
     return 2;
   }
   std::string error;
@@ -221,13 +245,15 @@ int run(int argc, char** argv) {
   std::map<int64_t, Eigen::Vector3d> keyframe_positions;
   auto add = [&](std::string name, Kind kind, double q_min,
                  PairKeyframes pair_keyframes = PairKeyframes::kAnchors,
-                 std::optional<double> revisit_m = std::nullopt) {
+                 std::optional<double> revisit_m = std::nullopt,
+                 std::optional<int> frames = std::nullopt) {
     auto v = std::make_unique<Variant>();
     v->name = std::move(name);
     v->kind = kind;
     v->q_min = q_min;
     v->pair_keyframes = pair_keyframes;
     v->revisit_m = revisit_m.value_or(revisit_distance);
+    v->revisit_frames = frames.value_or(revisit_frames);
     MapperConfig config = baseConfig(voxel, work);
     if (kind == Kind::kGroundTruth || kind == Kind::kNaive) {
       config.pose_source = PoseSource::kGroundTruth;          // poses fed as given, never corrected
@@ -237,6 +263,7 @@ int run(int argc, char** argv) {
       config.creation.max_keyframes_per_subvolume = keyframes_per_subvolume;
       config.creation.max_anchor_distance_m = max_anchor_distance;
       config.creation.revisit_anchor_distance_m = v->revisit_m;
+      config.creation.revisit_after_frames = v->revisit_frames;
       config.maintenance.enabled = kind == Kind::kOn;
       config.maintenance.candidates = candidates;
       if (kind == Kind::kOn) config.maintenance.q_min = q_min;
@@ -327,6 +354,15 @@ int run(int argc, char** argv) {
     std::snprintf(name, sizeof(name), "on q>=%.0g revisit", q);
     add(name, Kind::kOn, q, PairKeyframes::kAnchors, revisit_variant_distance);
   }
+  if (!revisit_frames_sweep.empty()) {
+    add("off frames", Kind::kOff, 0.0, PairKeyframes::kAnchors, std::nullopt,
+        revisit_variant_frames);
+  }
+  for (const double q : revisit_frames_sweep) {
+    char name[40];
+    std::snprintf(name, sizeof(name), "on q>=%.0g frames", q);
+    add(name, Kind::kOn, q, PairKeyframes::kAnchors, std::nullopt, revisit_variant_frames);
+  }
 
   std::map<uint64_t, Transformationd> truth_by_frame;  // for the trajectory alignment
 
@@ -405,6 +441,7 @@ int run(int argc, char** argv) {
         } else {
           pose.T_G_C = r.T_C_G->inverse();
           pose.jump = v->kind != Kind::kNaive && (r.relocalized || r.map_corrected);
+          pose.reference_keyframe = r.reference_keyframe;  // epoch 0: keys are the ids
         }
       }
       v->mapper->onFramePose(pose);
@@ -543,6 +580,17 @@ int run(int argc, char** argv) {
                 submap->numKeyframes(), submap->numBlocks(), farthest);
   }
   std::printf("\n");
+  // What the other subvolume maps end with: which anchors are left apart.
+  for (const auto& v : variants) {
+    if (v.get() == &off || (v->kind != Kind::kOff && v->kind != Kind::kOn)) continue;
+    std::printf("%s subvolumes (id: anchor keyframe, keyframes, blocks):", v->name.c_str());
+    for (const std::shared_ptr<Submap>& submap : v->mapper->collection().submaps()) {
+      std::printf(" %lld: %lld, %zu, %zu;", static_cast<long long>(submap->id()),
+                  static_cast<long long>(submap->anchorKeyframe()), submap->numKeyframes(),
+                  submap->numBlocks());
+    }
+    std::printf("\n");
+  }
   std::printf(
       "scene %s x%d, %zu frames (%zu not tracked), %zu keyframes, %llu loops closed, voxel "
       "%.3f m, "
@@ -556,11 +604,12 @@ int run(int argc, char** argv) {
                 : 0.0);
   std::printf(
       "| map | subvolumes | blocks | size / OFF | RMSE (mm) | RMSE / GT | median (mm) | "
-      "candidates | requested | fused | rejected by q | errors / timed out / late replies used / ignored |\n");
+      "candidates | requested | fused (same anchor) | rejected by q | errors / timed out / late "
+      "replies used / ignored |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& v : variants) {
     std::printf(
-        "| %s | %zu | %zu | %.0f %% | %.1f | %.2f | %.2f | %llu | %llu | %llu | %llu | "
+        "| %s | %zu | %zu | %.0f %% | %.1f | %.2f | %.2f | %llu | %llu | %llu (%llu) | %llu | "
         "%llu / %llu / %llu / %llu |\n",
         v->name.c_str(), v->subvolumes, v->blocks,
         100.0 * static_cast<double>(v->blocks) / static_cast<double>(off.blocks), 1e3 * v->rmse_m,
@@ -568,6 +617,7 @@ int run(int argc, char** argv) {
         static_cast<unsigned long long>(v->fusion.candidates),
         static_cast<unsigned long long>(v->fusion.requested),
         static_cast<unsigned long long>(v->fusion.fused),
+        static_cast<unsigned long long>(v->fusion.same_anchor),
         static_cast<unsigned long long>(v->fusion.rejected_by_q),
         static_cast<unsigned long long>(v->fusion.covariance_errors),
         static_cast<unsigned long long>(v->fusion.requests_timed_out),
@@ -585,6 +635,7 @@ int run(int argc, char** argv) {
                               {"q_min", v->q_min},
                               {"pair_keyframes", pairKeyframesName(v->pair_keyframes)},
                               {"revisit_anchor_distance_m", v->revisit_m},
+                              {"revisit_after_frames", v->revisit_frames},
                               {"subvolumes", v->subvolumes},
                               {"blocks", v->blocks},
                               {"rmse_m", v->rmse_m},
@@ -592,6 +643,7 @@ int run(int argc, char** argv) {
                               {"candidates", v->fusion.candidates},
                               {"requested", v->fusion.requested},
                               {"fused", v->fusion.fused},
+                              {"fused_same_anchor", v->fusion.same_anchor},
                               {"rejected_by_q", v->fusion.rejected_by_q}});
     }
     std::ofstream(out_dir + "/maintenance_" + scene + ".json") << json.dump(2) << "\n";

@@ -196,15 +196,18 @@ TEST(LcmMessagesTest, TrackerMessagesRoundTrip) {
   std::string error;
 
   const frame_pose_t pose =
-      wireRoundTrip(toFramePoseMsg(1234, 56, T, frame_pose_t::RELOCALIZED, true, 2));
+      wireRoundTrip(toFramePoseMsg(1234, 56, T, frame_pose_t::RELOCALIZED, true, 2, 77));
   EXPECT_EQ(pose.utime, 1234);
   EXPECT_EQ(pose.frame_id, 56);
   EXPECT_EQ(pose.tracking_state, frame_pose_t::RELOCALIZED);
   EXPECT_TRUE(pose.tracking_jump);
   EXPECT_EQ(pose.map_epoch, 2);
+  EXPECT_EQ(pose.reference_keyframe_id, 77);
   EXPECT_TRUE(fromPoseMsg(pose.T_G_C, &error)->isApprox(T, 1e-12));
   const frame_pose_t lost =
       wireRoundTrip(toFramePoseMsg(1, 2, std::nullopt, frame_pose_t::LOST, false, 0));
+  EXPECT_EQ(lost.reference_keyframe_id, -1);  // the default: none
+  EXPECT_EQ(toFramePoseMsg(1, 2, T, frame_pose_t::OK, false, 0, -5).reference_keyframe_id, -1);
   EXPECT_TRUE(fromPoseMsg(lost.T_G_C, &error)->isApprox(Transformationd::Identity(), 0.0));
 
   const keyframe_t keyframe = wireRoundTrip(toKeyframeMsg(99, 3, 56, T, {4, 8, 15, 16, 23, 42}, 5));

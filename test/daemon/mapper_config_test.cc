@@ -61,6 +61,8 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.creation.max_keyframes_per_subvolume, b.creation.max_keyframes_per_subvolume);
   EXPECT_EQ(a.creation.max_anchor_distance_m, b.creation.max_anchor_distance_m);
   EXPECT_EQ(a.creation.revisit_anchor_distance_m, b.creation.revisit_anchor_distance_m);
+  EXPECT_EQ(a.creation.revisit_after_frames, b.creation.revisit_after_frames);
+  EXPECT_EQ(a.creation.revisit_max_frames, b.creation.revisit_max_frames);
   EXPECT_EQ(a.keyframe_every_n_frames, b.keyframe_every_n_frames);
   EXPECT_EQ(a.pose_buffer.max_gap_s, b.pose_buffer.max_gap_s);
   EXPECT_EQ(a.pose_buffer.capacity, b.pose_buffer.capacity);
@@ -120,7 +122,8 @@ TEST(MapperConfigTest, ReadsOverrides) {
       "layer: {voxel_size: 0.02}\n"
       "integrator: {truncation_distance_m: 0.08, num_threads: 2}\n"
       "subvolumes: {max_keyframes_per_subvolume: 5, max_anchor_distance_m: 4.5, "
-      "revisit_anchor_distance_m: 0.75, keyframe_every_n_frames: 3}\n"
+      "revisit_anchor_distance_m: 0.75, revisit_after_frames: 7, revisit_max_frames: 9, "
+      "keyframe_every_n_frames: 3}\n"
       "poses: {max_gap_s: 0.1, max_wait_s: 0.2, buffer_capacity: 64, restart_after_backwards_s: "
       "0}\n"
       "queues: {pending_frames: 2, maintenance: 8, commands: 1}\n"
@@ -144,6 +147,8 @@ TEST(MapperConfigTest, ReadsOverrides) {
   EXPECT_EQ(m.creation.max_keyframes_per_subvolume, 5);
   EXPECT_EQ(m.creation.max_anchor_distance_m, 4.5);
   EXPECT_EQ(m.creation.revisit_anchor_distance_m, 0.75);
+  EXPECT_EQ(m.creation.revisit_after_frames, 7);
+  EXPECT_EQ(m.creation.revisit_max_frames, 9);
   EXPECT_EQ(m.keyframe_every_n_frames, 3);
   EXPECT_EQ(m.pose_buffer.max_gap_s, 0.1);
   EXPECT_EQ(m.max_pose_wait_s, 0.2);
@@ -199,6 +204,8 @@ TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"subvolumes: {max_keyframes_per_subvolume: 0}\n", "max_keyframes_per_subvolume"},
       {"subvolumes: {max_anchor_distance_m: -2}\n", "max_anchor_distance_m"},
       {"subvolumes: {revisit_anchor_distance_m: -1}\n", "revisit_anchor_distance_m"},
+      {"subvolumes: {revisit_after_frames: -2}\n", "revisit_after_frames"},
+      {"subvolumes: {revisit_max_frames: -1}\n", "revisit_max_frames"},
       {"poses: {max_gap_s: 0}\n", "max_gap_s"},
       {"poses: {max_wait_s: -1}\n", "max_pose_wait_s"},
       {"poses: {restart_after_backwards_s: -1}\n", "restart_after_backwards_s"},

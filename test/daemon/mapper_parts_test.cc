@@ -47,6 +47,33 @@ TEST(PoseBufferTest, InterpolatesBetweenNeighboursAndReturnsExactMatches) {
   EXPECT_EQ(buffer.lookup(999'999, &T, &jump), PoseBuffer::Lookup::kTooOld);
 }
 
+// The reference keyframe comes with the pose: the exact pose's, or the nearer one's when
+// interpolated (the later one at the midpoint); a caller that does not ask gets the pose.
+TEST(PoseBufferTest, GivesTheReferenceKeyframeOfTheNearerPose) {
+  PoseBuffer buffer(PoseBuffer::Config{});
+  TimedPose a = poseAt(1'000'000, 0.0);
+  a.reference_keyframe = 7;
+  TimedPose b = poseAt(1'100'000, 1.0);
+  b.reference_keyframe = 8;
+  ASSERT_EQ(buffer.add(a), PoseBuffer::AddResult::kAdded);
+  ASSERT_EQ(buffer.add(b), PoseBuffer::AddResult::kAdded);
+  Transformationd T;
+  bool jump = false;
+  int64_t reference = -1;
+  ASSERT_EQ(buffer.lookup(1'000'000, &T, &jump, &reference), PoseBuffer::Lookup::kFound);
+  EXPECT_EQ(reference, 7);
+  ASSERT_EQ(buffer.lookup(1'049'999, &T, &jump, &reference), PoseBuffer::Lookup::kFound);
+  EXPECT_EQ(reference, 7);
+  ASSERT_EQ(buffer.lookup(1'050'000, &T, &jump, &reference), PoseBuffer::Lookup::kFound);
+  EXPECT_EQ(reference, 8);
+  ASSERT_EQ(buffer.lookup(1'100'000, &T, &jump, &reference), PoseBuffer::Lookup::kFound);
+  EXPECT_EQ(reference, 8);
+  reference = 99;
+  EXPECT_EQ(buffer.lookup(1'100'001, &T, &jump, &reference), PoseBuffer::Lookup::kNotYet);
+  EXPECT_EQ(reference, 99);  // untouched unless found
+  ASSERT_EQ(buffer.lookup(1'020'000, &T, &jump), PoseBuffer::Lookup::kFound);
+}
+
 TEST(PoseBufferTest, RefusesGapsJumpsLostPosesAndEpochChanges) {
   PoseBuffer::Config config;
   config.max_gap_s = 0.2;

@@ -577,6 +577,92 @@ struct RequestLog {
   }
 };
 
+// subvolumes.revisit_after_frames: frames tracked against a keyframe of an older subvolume
+// (TimedPose::reference_keyframe) start, after that many in a row, a subvolume anchored at that
+// subvolume's anchor (logged with its reason); a single stray frame does not. A pose batch
+// moving the shared anchor moves both. Once the revisit subvolume is finished it is fused into
+// the older one at once, without a covariance request (same anchor: the relative pose is the
+// identity), and its keyframes join it.
+TEST(MapperTest, TrackerModeAnchorsFramesTrackedInAnOlderSubvolumeToIt) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  config.pose_source = PoseSource::kTracker;
+  config.creation.max_keyframes_per_subvolume = 2;
+  config.creation.revisit_after_frames = 2;
+  LogLines log;
+  Mapper mapper(config, log.sink());
+  RequestLog requests;
+  mapper.setCovarianceRequester(requests.requester());
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  const auto& frames = roomFrames();
+  ASSERT_GE(frames.size(), 12u);
+  auto frameWithReference = [&](size_t i, KeyframeId reference) {
+    ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));
+    TimedPose pose = groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C);
+    pose.reference_keyframe = reference;
+    ASSERT_TRUE(mapper.onFramePose(pose));
+    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  };
+  auto keyframe = [&](KeyframeId id, size_t i) {
+    ASSERT_TRUE(mapper.onKeyframe(id, utimeOf(frames[i]), frames[i].T_G_C));
+    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  };
+  keyframe(100, 0);  // subvolume 0
+  frameWithReference(0, 100);
+  frameWithReference(1, 100);
+  keyframe(101, 2);  // joins 0
+  keyframe(102, 3);  // subvolume 1 (keyframe limit)
+  frameWithReference(3, 102);
+  frameWithReference(4, 101);  // one vote for subvolume 0
+  frameWithReference(5, 102);  // back home: the votes start again
+  frameWithReference(6, 101);
+  EXPECT_EQ(mapper.collection().size(), 2u);
+  frameWithReference(7, 100);  // the second vote in a row: subvolume 2, anchored at 100
+  frameWithReference(8, 100);
+  ASSERT_EQ(mapper.collection().size(), 3u);
+  const std::shared_ptr<Submap> revisit = mapper.collection().getSubmap(2);
+  ASSERT_NE(revisit, nullptr);
+  EXPECT_EQ(revisit->anchorKeyframe(), 100);
+  EXPECT_TRUE(revisit->T_G_M().isApprox(frames[0].T_G_C, 1e-12));
+  EXPECT_GT(revisit->numBlocks(), 0u);  // frames 7 and 8
+  EXPECT_EQ(log.countContaining("subvolume 2 anchored at keyframe 100 (tracked in an older "
+                                "subvolume: revisit of subvolume 0)"),
+            1u);
+  EXPECT_EQ(mapper.status().frames_integrated, 8u);  // 0, 1, 3, ..., 8
+
+  // A correction of keyframe 100 moves both subvolumes anchored there.
+  const Transformationd moved = Transformationd(Eigen::Quaterniond::Identity(),
+                                                Eigen::Vector3d(0.5, 0.0, 0.0)) *
+                                frames[0].T_G_C;
+  mapper.onKeyframePoses({{100, moved}});
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  EXPECT_TRUE(mapper.collection().getSubmap(0)->T_G_M().isApprox(moved, 1e-12));
+  EXPECT_TRUE(revisit->T_G_M().isApprox(moved, 1e-12));
+
+  // Back to subvolume 1's keyframe: subvolume 3 anchored at 102; subvolume 2 is finished and
+  // fused into 0 without a covariance.
+  frameWithReference(9, 102);
+  frameWithReference(10, 102);
+  for (int i = 0; i < 500 && mapper.collection().getSubmap(2) != nullptr; ++i) {
+    std::this_thread::sleep_for(milliseconds(10));
+  }
+  EXPECT_EQ(mapper.collection().submapIds(), (std::vector<SubmapId>{0, 1, 3}));
+  EXPECT_EQ(mapper.collection().getSubmap(3)->anchorKeyframe(), 102);
+  EXPECT_EQ(mapper.collection().getSubmap(0)->keyframeIds(), (std::vector<KeyframeId>{100, 101}));
+  const MapperStatus s = mapper.status();
+  EXPECT_EQ(s.fusion.same_anchor, 1u);
+  EXPECT_EQ(s.fusion.fused, 1u);
+  EXPECT_EQ(s.fusion.accepted, 0u);
+  EXPECT_EQ(log.countContaining("fusion accepted: subvolume 2 into 0 without a covariance (both "
+                                "anchored at keyframe 100)"),
+            1u);
+  std::lock_guard<std::mutex> lock(requests.mutex);
+  for (const FusionCovarianceRequest& r : requests.requests) {
+    for (const FusionPair& p : r.pairs) EXPECT_NE(p.older_keyframe, p.newer_keyframe);
+  }
+}
+
 std::vector<uint64_t> landmarkRange(uint64_t begin, uint64_t end) {
   std::vector<uint64_t> ids;
   for (uint64_t i = begin; i < end; ++i) ids.push_back(i);

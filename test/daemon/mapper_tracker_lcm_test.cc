@@ -133,7 +133,7 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
     const int64_t utime = t0 + frame.timestamp_ns / 1000;
     const depth_frame_t depth =
         toDepthFrameMsg(frame, source->info(), utime, DepthEncoding::kFloat32Metres);
-    frame_pose_t pose;
+    frame_pose_t pose{};
     pose.utime = utime;
     pose.frame_id = frame.frame_id;
     pose.T_G_C = toPoseMsg(*frame.T_G_C);
@@ -169,7 +169,7 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
   truncated.depth.data.resize(100);
   truncated.depth.size = 100;
   lcm.publish("CBLOX_DEPTH", &truncated);
-  frame_pose_t nan_pose;
+  frame_pose_t nan_pose{};
   nan_pose.utime = t0 + 20'000'000;
   nan_pose.frame_id = 999;
   nan_pose.T_G_C = toPoseMsg(Transformationd::Identity());

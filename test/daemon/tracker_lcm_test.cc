@@ -7,6 +7,7 @@
 // tracking. Must run inside a private network namespace (scripts/netns-run.sh; ctest does
 // this).
 
+#include <algorithm>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -236,6 +237,13 @@ TEST(TrackerLcmTest, TracksTheSimulatedRoomCloseToGroundTruth) {
     EXPECT_FALSE(pose.tracking_jump) << "frame " << id;
     EXPECT_EQ(pose.utime, received.ground_truth.at(id).utime);
     if (pose.tracking_state != frame_pose_t::OK) continue;
+    // Tracked against a keyframe published before (or made from this frame).
+    EXPECT_TRUE(std::any_of(received.keyframes.begin(), received.keyframes.end(),
+                            [&](const keyframe_t& k) {
+                              return k.keyframe_id == pose.reference_keyframe_id &&
+                                     k.frame_id <= pose.frame_id;
+                            }))
+        << "frame " << id << ": reference keyframe " << pose.reference_keyframe_id;
     const Transformationd T = poseOf(pose.T_G_C);
     const Transformationd T_true = poseOf(received.ground_truth.at(id).T_G_C);
     const double dt = (T.translation() - T_true.translation()).norm();

@@ -220,6 +220,7 @@ TEST(lcmtypes_roundtrip, FramePoseT) {
   EXPECT_EQ(d.tracking_state, cblox::frame_pose_t::LOOP_CORRECTED);
   EXPECT_EQ(d.tracking_jump, 1);
   EXPECT_EQ(d.map_epoch, 3);
+  EXPECT_EQ(d.reference_keyframe_id, 4321);
   const std::set<int8_t> states = {cblox::frame_pose_t::NOT_INITIALIZED,
                                    cblox::frame_pose_t::OK,
                                    cblox::frame_pose_t::LOST,

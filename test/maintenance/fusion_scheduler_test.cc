@@ -72,6 +72,106 @@ TEST(FusionSchedulerTest, TheActiveSubvolumeIsNeverProposed) {
   EXPECT_FALSE(only_active_pairs.nextRequest(/*active_subvolume=*/1, 0.0).has_value());
 }
 
+// A revisit subvolume shares its home's anchor and the anchor's landmarks; pairs sharing an
+// anchor are handed over for fusion without a covariance (the two oldest per anchor, the
+// active one excluded, each pair locked until fused), and never requested.
+TEST(FusionSchedulerTest, SubvolumesSharingAnAnchorAreFusedWithoutACovariance) {
+  FusionScheduler s = threeSubvolumes();
+  EXPECT_FALSE(s.addSubvolumeSharingAnchor(4, 99));  // unknown home
+  ASSERT_TRUE(s.addSubvolumeSharingAnchor(3, 0));    // anchored at 10 with 0's landmarks
+  ASSERT_TRUE(s.addSubvolumeSharingAnchor(4, 0));
+  ASSERT_TRUE(s.addSubvolumeSharingAnchor(5, 1));  // anchored at 20
+  EXPECT_EQ(s.graph().weight(0, 3), 100);
+  EXPECT_EQ(s.graph().weight(3, 4), 100);
+  EXPECT_EQ(s.graph().weight(1, 5), 100);
+  EXPECT_EQ(std::get<2>(s.mostSharedKeyframes(0, 3)), 100);
+
+  // 5 is active: anchor 20 has no free pair. Anchor 10: (0, 3); 4 waits for the next call.
+  std::vector<FusionPair> pairs = s.takeSameAnchorPairs(/*active_subvolume=*/5);
+  ASSERT_EQ(pairs.size(), 1u);
+  EXPECT_EQ(pairs[0].older, 0);
+  EXPECT_EQ(pairs[0].newer, 3);
+  EXPECT_EQ(pairs[0].older_keyframe, 10);
+  EXPECT_EQ(pairs[0].newer_keyframe, 10);
+  EXPECT_EQ(pairs[0].shared_landmarks, 100);
+  EXPECT_EQ(s.fusionsInProgress(), 1u);
+  EXPECT_TRUE(s.takeSameAnchorPairs(5).empty());  // 0 is locked; 4 has no partner
+  // With 0 and 3 locked and 5 active, the strongest free edge is (1, 4): 60 landmarks.
+  const auto request = s.nextRequest(5, 0.0);
+  ASSERT_TRUE(request.has_value());
+  ASSERT_EQ(request->pairs.size(), 1u);
+  EXPECT_EQ(request->pairs[0].older, 1);
+  EXPECT_EQ(request->pairs[0].newer, 4);
+  s.onFused(pairs[0]);
+  EXPECT_EQ(s.stats().same_anchor, 1u);
+  EXPECT_EQ(s.stats().accepted, 0u);
+  EXPECT_EQ(s.stats().fused, 1u);
+  // Now 0 and 4 pair, and 1 and 5 once 5 is no longer active (a request does not lock).
+  pairs = s.takeSameAnchorPairs(-1);
+  ASSERT_EQ(pairs.size(), 2u);
+  EXPECT_EQ(std::tie(pairs[0].older, pairs[0].newer), std::make_tuple(0, 4));
+  EXPECT_EQ(std::tie(pairs[1].older, pairs[1].newer), std::make_tuple(1, 5));
+  EXPECT_EQ(pairs[1].older_keyframe, 20);
+  EXPECT_EQ(s.stats().same_anchor, 3u);
+  // Same-anchor pairs are never in a covariance request, even when nothing else is left.
+  FusionScheduler only = threeSubvolumes();
+  ASSERT_TRUE(only.addSubvolumeSharingAnchor(3, 0));
+  only.onReply(only.nextRequest(-1, 0.0)->request_id, std::vector{answer(1.0)}, 0.0);  // (0, 1)
+  while (const auto r = only.nextRequest(-1, 100.0)) {
+    for (const FusionPair& p : r->pairs) EXPECT_NE(p.older_keyframe, p.newer_keyframe);
+    only.onReply(r->request_id, std::vector<FusionCovarianceAnswer>(r->pairs.size(), answer(1.0)),
+                 100.0);
+  }
+}
+
+// A subvolume anchored at a keyframe whose subvolume was fused into an older one follows it
+// there without a covariance, also after that one was fused further; such a pair is never
+// requested.
+TEST(FusionSchedulerTest, ASubvolumeFollowsItsAnchorsSubvolumeIntoWhatAbsorbedIt) {
+  FusionScheduler s(testConfig());
+  s.addSubvolume(0, 10);
+  s.addSubvolume(1, 20);
+  s.addSubvolume(2, 30);
+  s.addKeyframeLandmarks(0, 10, range(0, 100));
+  s.addKeyframeLandmarks(1, 20, range(50, 150));
+  s.addKeyframeLandmarks(2, 30, range(100, 200));
+  ASSERT_TRUE(s.addSubvolumeSharingAnchor(3, 2));  // a revisit of 2, anchored at 30
+  // 0 active: (2, 3) shares an anchor and is not requested; (1, 2) is, and is fused.
+  auto request = s.nextRequest(/*active_subvolume=*/0, 0.0);
+  ASSERT_TRUE(request.has_value());
+  ASSERT_EQ(request->pairs.size(), 1u);
+  ASSERT_EQ(std::tie(request->pairs[0].older, request->pairs[0].newer), std::make_tuple(1, 2));
+  std::vector<FusionPair> accepted = s.onReply(request->request_id, std::vector{answer(1e3)}, 0.0);
+  ASSERT_EQ(accepted.size(), 1u);
+  s.onFused(accepted[0]);
+  // 3 active: (1, 3) would now go without a covariance, so only (0, 1) is requested.
+  request = s.nextRequest(3, 1.0);
+  ASSERT_TRUE(request.has_value());
+  ASSERT_EQ(request->pairs.size(), 1u);
+  ASSERT_EQ(std::tie(request->pairs[0].older, request->pairs[0].newer), std::make_tuple(0, 1));
+  accepted = s.onReply(request->request_id, std::vector{answer(1e3)}, 1.0);
+  ASSERT_EQ(accepted.size(), 1u);
+  s.onFused(accepted[0]);
+  EXPECT_TRUE(s.takeSameAnchorPairs(3).empty());  // still active
+  const std::vector<FusionPair> pairs = s.takeSameAnchorPairs(-1);
+  ASSERT_EQ(pairs.size(), 1u);
+  EXPECT_EQ(pairs[0].older, 0);
+  EXPECT_EQ(pairs[0].newer, 3);
+  EXPECT_EQ(pairs[0].older_keyframe, 10);
+  EXPECT_EQ(pairs[0].newer_keyframe, 30);
+  EXPECT_EQ(s.stats().same_anchor, 1u);
+  EXPECT_EQ(s.stats().accepted, 2u);
+}
+
+TEST(FusionSchedulerTest, SameAnchorPairsNeedFusionEnabled) {
+  FusionSchedulerConfig config = testConfig();
+  config.enabled = false;
+  FusionScheduler s = threeSubvolumes(config);
+  ASSERT_TRUE(s.addSubvolumeSharingAnchor(3, 0));
+  EXPECT_TRUE(s.takeSameAnchorPairs(-1).empty());
+  EXPECT_EQ(s.stats().same_anchor, 0u);
+}
+
 TEST(FusionSchedulerTest, OneRequestInFlightUntilItsReplyOrTimeout) {
   FusionScheduler s = threeSubvolumes();
   const auto first = s.nextRequest(-1, 0.0);

@@ -251,6 +251,29 @@ TEST(SubmapCollection, UpdateKeyframePosesMovesOnlyAnchoredSubmaps) {
   EXPECT_EQ(collection.updateKeyframePoses({{30, Q1}}).keyframes_unknown, 1u);
 }
 
+// The home of a keyframe is the oldest submap that records it, as anchor or contributor.
+TEST(SubmapCollection, OldestSubmapWithKeyframe) {
+  SubmapCollection collection(collectionConfig());
+  const Transformationd P0 = pose(0.1, {0, 0, 1}, {0, 0, 0});
+  const Transformationd P1 = pose(0.2, {0, 1, 0}, {1, 0, 0});
+  collection.createSubmap(P0, 10, 0)->addKeyframe(11);
+  collection.createSubmap(P1, 20, 0);
+  collection.createSubmap(P0, 10, 0)->addKeyframe(21);  // shares anchor 10 with submap 0
+  EXPECT_FALSE(collection.oldestSubmapWithKeyframe(99).has_value());
+  const std::optional<SubmapPose> home = collection.oldestSubmapWithKeyframe(10);
+  ASSERT_TRUE(home.has_value());
+  EXPECT_EQ(home->id, 0);
+  EXPECT_EQ(home->anchor_keyframe, 10);
+  EXPECT_TRUE(home->T_G_M.isApprox(P0, 0.0));
+  EXPECT_FALSE(home->active);
+  EXPECT_EQ(collection.oldestSubmapWithKeyframe(11)->id, 0);
+  EXPECT_EQ(collection.oldestSubmapWithKeyframe(21)->id, 2);
+  EXPECT_EQ(collection.oldestSubmapWithKeyframe(20)->anchor_keyframe, 20);
+  collection.removeSubmap(0);
+  EXPECT_EQ(collection.oldestSubmapWithKeyframe(10)->id, 2);
+  EXPECT_TRUE(collection.oldestSubmapWithKeyframe(10)->active);
+}
+
 // Moving a submap moves its mesh exactly: the global mesh after the anchor keyframe's pose
 // changes from A to B equals the old global mesh transformed by B A^-1 (vertex-wise within
 // 1e-5 m), and no voxel changes.

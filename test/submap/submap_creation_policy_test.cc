@@ -75,6 +75,73 @@ TEST(SubmapCreationPolicy, AKeyframeNearAnOlderAnchorStartsARevisitSubmap) {
   EXPECT_FALSE(off.onKeyframe(&active, false, Eigen::Vector3d(0.0, 0.0, 0.0), older));
 }
 
+// With revisit_after_frames = 3, three frames in a row tracked against a keyframe whose home
+// is the same older submap (another anchor than the active one's) start a revisit submap; a
+// frame at home (the active submap, or one sharing its anchor), without a home, or voting for
+// another home starts the count again. A pending keyframe-limit decision is cleared (the new
+// submap has one keyframe). Off (0): never.
+TEST(SubmapCreationPolicy, FramesTrackedInAnOlderSubmapStartARevisitSubmap) {
+  using Home = SubmapCreationPolicy::ReferenceHome;
+  using Reason = SubmapCreationPolicy::Reason;
+  SubmapCreationPolicyConfig config;
+  config.max_keyframes_per_subvolume = 1;
+  config.revisit_after_frames = 3;
+  EXPECT_EQ(config.validate(), "");
+  SubmapCreationPolicy policy(config);
+  Submap active(5, LayerConfig{}, Transformationd(), 50, 0);  // full: 1 keyframe
+  ASSERT_EQ(policy.onFramePose(&active, false), Action::kIntegrate);
+  ASSERT_EQ(policy.pending(), Pending::kKeyframeLimit);
+  const Home old_home{2, 20}, other_home{3, 30};
+  EXPECT_FALSE(policy.onFrameReference(active, old_home));
+  EXPECT_FALSE(policy.onFrameReference(active, old_home));
+  EXPECT_FALSE(policy.onFrameReference(active, Home{5, 50}));  // at home: votes cleared
+  EXPECT_FALSE(policy.onFrameReference(active, old_home));
+  EXPECT_FALSE(policy.onFrameReference(active, old_home));
+  EXPECT_FALSE(policy.onFrameReference(active, std::nullopt));  // no home: cleared
+  EXPECT_FALSE(policy.onFrameReference(active, old_home));
+  EXPECT_FALSE(policy.onFrameReference(active, old_home));
+  EXPECT_FALSE(policy.onFrameReference(active, Home{1, 50}));  // shares the anchor: cleared
+  EXPECT_FALSE(policy.onFrameReference(active, old_home));
+  EXPECT_FALSE(policy.onFrameReference(active, other_home));  // another home: counts anew
+  EXPECT_FALSE(policy.onFrameReference(active, other_home));
+  EXPECT_EQ(policy.lastReason(), Reason::kNone);
+  EXPECT_TRUE(policy.onFrameReference(active, other_home));
+  EXPECT_EQ(policy.lastReason(), Reason::kRevisitFrames);
+  EXPECT_STREQ(SubmapCreationPolicy::reasonName(policy.lastReason()),
+               "tracked in an older subvolume");
+  EXPECT_EQ(policy.pending(), Pending::kNone);
+  // The votes start from zero after a revisit submap.
+  EXPECT_FALSE(policy.onFrameReference(active, other_home));
+
+  // revisit_max_frames: the revisit submap (anchored at 30) takes that many frames at home,
+  // then a fresh one starts; frames elsewhere do not count. Not for other submaps.
+  config.revisit_max_frames = 4;
+  SubmapCreationPolicy renewing(config);
+  ASSERT_FALSE(renewing.onFrameReference(active, other_home));
+  ASSERT_FALSE(renewing.onFrameReference(active, other_home));
+  ASSERT_TRUE(renewing.onFrameReference(active, other_home));  // revisit submap at 30
+  Submap revisit(6, LayerConfig{}, Transformationd(), 30, 0);
+  EXPECT_FALSE(renewing.onFrameReference(revisit, other_home));
+  EXPECT_FALSE(renewing.onFrameReference(revisit, Home{6, 30}));
+  EXPECT_FALSE(renewing.onFrameReference(revisit, old_home));  // a vote, not a frame at home
+  EXPECT_FALSE(renewing.onFrameReference(revisit, other_home));
+  EXPECT_TRUE(renewing.onFrameReference(revisit, other_home));  // the 4th at home
+  EXPECT_EQ(renewing.lastReason(), Reason::kRevisitFrames);
+  for (int i = 0; i < 3; ++i) EXPECT_FALSE(renewing.onFrameReference(revisit, other_home));
+  EXPECT_TRUE(renewing.onFrameReference(revisit, other_home));
+  // A keyframe that starts a submap ends the revisit: its frames at home are not counted.
+  EXPECT_TRUE(renewing.onKeyframe(nullptr));
+  for (int i = 0; i < 8; ++i) EXPECT_FALSE(renewing.onFrameReference(revisit, other_home));
+
+  SubmapCreationPolicy off(SubmapCreationPolicyConfig{});
+  for (int i = 0; i < 10; ++i) EXPECT_FALSE(off.onFrameReference(active, old_home));
+  config.revisit_after_frames = -1;
+  EXPECT_NE(config.validate().find("revisit_after_frames"), std::string::npos);
+  config.revisit_after_frames = 1;
+  config.revisit_max_frames = -1;
+  EXPECT_NE(config.validate().find("revisit_max_frames"), std::string::npos);
+}
+
 // The policy says why it asked for each new submap (the mapper logs it).
 TEST(SubmapCreationPolicy, ReportsWhyASubmapWasCreated) {
   using Reason = SubmapCreationPolicy::Reason;

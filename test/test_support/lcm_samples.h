@@ -120,6 +120,7 @@ inline cblox::frame_pose_t MakeFramePose() {
   m.tracking_state = cblox::frame_pose_t::LOOP_CORRECTED;
   m.tracking_jump = 1;
   m.map_epoch = 3;
+  m.reference_keyframe_id = 4321;
   return m;
 }
 

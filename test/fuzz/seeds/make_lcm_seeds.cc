@@ -172,7 +172,7 @@ int main(int argc, char** argv) {
   const Bytes stereo = encode(stereoPair(1000000, 1));
   const Bytes gt = encode(groundTruth(1000000, 1));
   const Bytes frame_pose =
-      encode(toFramePoseMsg(1000000, 1, pose(0.0), frame_pose_t::OK, false, 0));
+      encode(toFramePoseMsg(1000000, 1, pose(0.0), frame_pose_t::OK, false, 0, 0));
   const Bytes frame_lost =
       encode(toFramePoseMsg(1100000, 2, std::nullopt, frame_pose_t::LOST, false, 0));
   const Bytes keyframe = encode(toKeyframeMsg(1000000, 0, 1, pose(0.0), {1, 2, 3, 5, 8}, 0));

@@ -46,7 +46,9 @@ class SourceSampler {
         log2_(layer.voxelsPerSideLog2()),
         mask_(layer.voxelsPerSide() - 1) {}
 
-  bool sample(const Eigen::Vector3f& q, float* distance, float* weight, Eigen::Vector3f* color) {
+  // *complete (optional): every needed corner was observed (not a rim sample).
+  bool sample(const Eigen::Vector3f& q, float* distance, float* weight, Eigen::Vector3f* color,
+              bool* complete_out = nullptr) {
     GlobalVoxelIndex base(fastFloor(q.x()), fastFloor(q.y()), fastFloor(q.z()));
     Eigen::Vector3f f = q - base.cast<float>();
     // q just below an integer can round to f == 1: the same point as base + 1 with f == 0.
@@ -89,6 +91,7 @@ class SourceSampler {
       sum_weight += c * voxel->weight;
       sum_color += c * Eigen::Vector3f(voxel->color.r, voxel->color.g, voxel->color.b);
     }
+    if (complete_out != nullptr) *complete_out = complete;
     if (complete) {
       *distance = sum_distance;
       *weight = sum_weight;
@@ -221,7 +224,9 @@ SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T
   }
   stats.target_blocks_visited = blocks.size();
 
+  // Per target block: 0 no sample, 1 rim samples only, 2 a sample with every corner observed.
   std::vector<uint8_t> block_used(blocks.size(), 0);
+  std::vector<size_t> fused_in_block(blocks.size(), 0);
   std::vector<size_t> fused_per_thread(static_cast<size_t>(config.num_threads), 0);
   std::atomic<size_t> next_block{0};
   const int n_t = target->voxelsPerSide();
@@ -234,6 +239,7 @@ SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T
       Block& block = *blocks[b];
       const Eigen::Vector3f q0 = (A * (block.index() * n_t).cast<double>() + c).cast<float>();
       size_t fused_here = 0;
+      bool interior_here = false;
       int linear = 0;
       for (int z = 0; z < n_t; ++z) {
         for (int y = 0; y < n_t; ++y) {
@@ -243,7 +249,9 @@ SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T
             const Eigen::Vector3f q = q_row + A_f.col(0) * static_cast<float>(x);
             float d_s = 0.0f, w_s = 0.0f;
             Eigen::Vector3f color_s;
-            if (!sampler.sample(q, &d_s, &w_s, &color_s)) continue;
+            bool complete = false;
+            if (!sampler.sample(q, &d_s, &w_s, &color_s, &complete)) continue;
+            interior_here = interior_here || complete;
             TsdfVoxel& voxel = block.voxel(linear);
             if (voxel.weight <= 0.0f) {
               voxel.distance = d_s;
@@ -269,7 +277,8 @@ SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T
         }
       }
       if (fused_here > 0) {
-        block_used[b] = 1;
+        block_used[b] = interior_here ? 2 : 1;
+        fused_in_block[b] = fused_here;
         block.setUpdated(true);
       }
       fused += fused_here;
@@ -280,9 +289,12 @@ SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T
 
   for (size_t b = 0; b < blocks.size(); ++b) {
     if (!newly_allocated[b]) continue;
-    if (block_used[b]) {
+    // A new block with rim samples only lies beyond the source's observed region: it would
+    // grow the map by a one-voxel rim at every fusion, so it is not kept.
+    if (block_used[b] == 2) {
       ++stats.target_blocks_allocated;
     } else {
+      stats.voxels_fused -= fused_in_block[b];
       target->removeBlock(blocks[b]->index());
     }
   }

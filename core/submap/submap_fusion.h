@@ -84,7 +84,11 @@ struct SubmapFusionStats {
 ///   d = (d_T w_T + d_S w_S) / w, colour = round((colour_T w_T + colour_S w_S) / w) per
 ///   channel, weight = min(w, max_weight). Colours are written only when use_color. Updated
 ///   target blocks get Block::setUpdated(true) (for the incremental mesher).
-/// - Target blocks newly allocated here that received no voxel are removed again.
+/// - Target blocks newly allocated here that received no sample with every needed corner
+///   observed (none, or rim samples only) are removed again, their voxels uncounted: rim
+///   samples extend an existing block but never allocate one, so repeated fusions do not
+///   grow the map by a one-voxel rim each (measured: two halves of an orbit fused 1179
+///   blocks instead of 1124 this way, the whole integration 1067).
 /// Throws std::invalid_argument for an invalid config, a non-finite T_T_S, a null target
 /// or source == target. Thread safety: nothing else may touch `target` during the call;
 /// `source` is only read (concurrent readers are fine). Uses config.num_threads threads.

@@ -25,7 +25,7 @@
 //                           [--voxel 0.05] [--keyframes-per-subvolume 10]
 //                           [--max-anchor-distance M] [--revisit-distance R]
 //                           [--revisit-q-min Q,... [--revisit-variant-distance 1]]
-//                           [--revisit-frames F]
+//                           [--revisit-frames F] [--revisit-max-frames M]
 //                           [--revisit-frames-q-min Q,... [--revisit-variant-frames 10]]
 //                           [--depth-noise K]
 //                           [--min-shared-landmarks 30] [--min-shared-ratio 0.05]
@@ -126,6 +126,7 @@ int run(int argc, char** argv) {
   int revisit_frames = MapperConfig{}.creation.revisit_after_frames;
   std::vector<double> revisit_frames_sweep;
   int revisit_variant_frames = 10;
+  int revisit_max_frames = MapperConfig{}.creation.revisit_max_frames;
   double depth_noise = 0.0;
   CovisibilityGraphConfig candidates;
   std::vector<double> sweep = {3e3, 1e4, 3e4, 1e5};
@@ -165,6 +166,9 @@ int run(int argc, char** argv) {
                  "frames tracked in an older subvolume this many times in a row start a "
                  "subvolume sharing its anchor (0: off)")
       ->capture_default_str();
+  app.add_option("--revisit-max-frames", revisit_max_frames,
+                 "a revisit subvolume takes at most this many frames (0: no bound)")
+      ->capture_default_str();
   app.add_option("--revisit-frames-q-min", revisit_frames_sweep,
                  "also an off map and these q_min with --revisit-variant-frames (comma-separated; "
                  "default none)")
@@ -200,10 +204,11 @@ int run(int argc, char** argv) {
   app.add_option("--vocabulary", vocabulary_path, "vocabulary file")->capture_default_str();
   if (const std::optional<int> code = parseCommandLine(app, argc, argv)) return *code;
   if (sweep.empty() || !(voxel > 0.0f) || !(revisit_variant_distance > 0.0) ||
-      revisit_variant_frames < 1 || revisit_frames < 0) {
+      revisit_variant_frames < 1 || revisit_frames < 0 || revisit_max_frames < 0) {
     std::fprintf(stderr,
                  "--q-min needs at least one value, --voxel and --revisit-variant-distance "
-                 "must be > 0, --revisit-variant-frames >= 1, --revisit-frames >= 0\n");
+                 "must be > 0, --revisit-variant-frames >= 1, --revisit-frames and "
+                 "--revisit-max-frames >= 0\n");
     return 2;
   }
   std::string error;
@@ -264,6 +269,7 @@ int run(int argc, char** argv) {
       config.creation.max_anchor_distance_m = max_anchor_distance;
       config.creation.revisit_anchor_distance_m = v->revisit_m;
       config.creation.revisit_after_frames = v->revisit_frames;
+      config.creation.revisit_max_frames = revisit_max_frames;
       config.maintenance.enabled = kind == Kind::kOn;
       config.maintenance.candidates = candidates;
       if (kind == Kind::kOn) config.maintenance.q_min = q_min;

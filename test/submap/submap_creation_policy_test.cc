@@ -133,8 +133,11 @@ TEST(SubmapCreationPolicy, FramesTrackedInAnOlderSubmapStartARevisitSubmap) {
   EXPECT_TRUE(renewing.onKeyframe(nullptr));
   for (int i = 0; i < 8; ++i) EXPECT_FALSE(renewing.onFrameReference(revisit, other_home));
 
-  SubmapCreationPolicy off(SubmapCreationPolicyConfig{});
-  for (int i = 0; i < 10; ++i) EXPECT_FALSE(off.onFrameReference(active, old_home));
+  SubmapCreationPolicyConfig off_config;
+  EXPECT_EQ(off_config.revisit_after_frames, 10);  // on by default
+  off_config.revisit_after_frames = 0;
+  SubmapCreationPolicy off(off_config);
+  for (int i = 0; i < 20; ++i) EXPECT_FALSE(off.onFrameReference(active, old_home));
   config.revisit_after_frames = -1;
   EXPECT_NE(config.validate().find("revisit_after_frames"), std::string::npos);
   config.revisit_after_frames = 1;

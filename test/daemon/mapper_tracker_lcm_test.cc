@@ -140,6 +140,8 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
     pose.tracking_state = frame_pose_t::OK;
     pose.tracking_jump = false;
     pose.map_epoch = 0;
+    // Tracked against the newest keyframe (every 5th frame is one): never a revisit.
+    pose.reference_keyframe_id = frame.frame_id - frame.frame_id % 5;
     lcm.publish("CBLOX_FRAME_POSE", &pose);
     if (frame.frame_id % 5 == 0) {
       keyframe_t keyframe{};
@@ -177,6 +179,7 @@ TEST(MapperTrackerLcmTest, IntegratesTrackerPosesAppliesBatchesAndCountsBadInput
   nan_pose.tracking_state = frame_pose_t::OK;
   nan_pose.tracking_jump = false;
   nan_pose.map_epoch = 0;
+  nan_pose.reference_keyframe_id = -1;
   lcm.publish("CBLOX_FRAME_POSE", &nan_pose);
 
   // A loop correction moves keyframe 0 (the subvolume's anchor) and names an unknown one.

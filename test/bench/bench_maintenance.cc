@@ -27,12 +27,14 @@
 //                           [--revisit-q-min Q,... [--revisit-variant-distance 1]]
 //                           [--revisit-frames F] [--revisit-max-frames M]
 //                           [--revisit-frames-q-min Q,... [--revisit-variant-frames 10]]
-//                           [--depth-noise K]
+//                           [--depth-noise K] [--no-sync-slam]
 //                           [--min-shared-landmarks 30] [--min-shared-ratio 0.05]
 //                           [--q-min 3e3,1e4,3e4,1e5] [--most-shared-q-min Q,...] [--out DIR]
 //
 // Mappers integrate every frame (no time budget, waited for) so the comparison does not
-// depend on the machine's load. --out writes DIR/maintenance_<scene>.json and
+// depend on the machine's load; with --sync-slam (the default) the SLAM's local mapping and
+// loop closing are waited for after every frame too (ORB-SLAM2 run offline), so the
+// tracker's poses do not depend on it either (--no-sync-slam: as in real time). --out writes DIR/maintenance_<scene>.json and
 // DIR/maintenance_<scene>_sweep.png (map size against RMSE for every variant). For every
 // fusion variant it also prints the answered pairs: q (median, share >= q_min) and the
 // distance between the two keyframes asked about, so the reason for rejections is visible.
@@ -127,6 +129,7 @@ int run(int argc, char** argv) {
   std::vector<double> revisit_frames_sweep;
   int revisit_variant_frames = 10;
   int revisit_max_frames = MapperConfig{}.creation.revisit_max_frames;
+  bool sync_slam = true;
   double depth_noise = 0.0;
   CovisibilityGraphConfig candidates;
   std::vector<double> sweep = {3e3, 1e4, 3e4, 1e5};
@@ -179,6 +182,8 @@ int run(int argc, char** argv) {
   app.add_option("--revisit-variant-frames", revisit_variant_frames,
                  "the revisit_after_frames of the --revisit-frames-q-min variants (>= 1)")
       ->capture_default_str();
+  app.add_flag("--sync-slam,!--no-sync-slam", sync_slam,
+               "wait for local mapping and loop closing after every frame (default: yes)");
   app.add_option("--min-shared-ratio", candidates.min_shared_ratio,
                  "fusion candidates: share of landmarks seen by both")
       ->capture_default_str();
@@ -422,6 +427,7 @@ int run(int argc, char** argv) {
     const TrackingResult r =
         slam.trackStereo(static_cast<uint64_t>(frame.frame_id), frame.timestamp_ns, frame.left,
                          frame.right, frame.T_G_C->inverse());
+    if (sync_slam) slam.waitUntilIdle();  // keyframes and corrections of this frame are out
     deliver();
     const int64_t utime = frame.timestamp_ns / 1000;
     DepthFrame depth;
@@ -600,11 +606,12 @@ int run(int argc, char** argv) {
   std::printf(
       "scene %s x%d, %zu frames (%zu not tracked), %zu keyframes, %llu loops closed, voxel "
       "%.3f m, "
-      "depth noise %.4f z^2, %d keyframes per subvolume; alignment of the tracker's "
+      "depth noise %.4f z^2, %d keyframes per subvolume, SLAM %s; alignment of the tracker's "
       "frame: %.1f mm, %.3f deg\n",
       scene.c_str(), laps, n, lost, slam.map().numKeyframes(),
       static_cast<unsigned long long>(slam.loopClosingStats().loops_closed), voxel, depth_noise,
-      keyframes_per_subvolume, alignment ? 1e3 * alignment->T_A_B.translation().norm() : 0.0,
+      keyframes_per_subvolume, sync_slam ? "waited for per frame" : "in real time",
+      alignment ? 1e3 * alignment->T_A_B.translation().norm() : 0.0,
       alignment ? alignment->T_A_B.rotation().angularDistance(Eigen::Quaterniond::Identity()) *
                       180.0 / M_PI
                 : 0.0);

@@ -577,6 +577,21 @@ struct RequestLog {
   }
 };
 
+/// A started tracker-mode mapper logging to `log`, its covariance requests going to
+/// `requests` (both must outlive it); null when it did not start.
+std::unique_ptr<Mapper> startTrackerModeMapper(MapperConfig config, LogLines* log,
+                                               RequestLog* requests) {
+  config.pose_source = PoseSource::kTracker;
+  auto mapper = std::make_unique<Mapper>(config, log->sink());
+  mapper->setCovarianceRequester(requests->requester());
+  std::string error;
+  if (!mapper->start(&error)) {
+    ADD_FAILURE() << error;
+    return nullptr;
+  }
+  return mapper;
+}
+
 // subvolumes.revisit_after_frames: frames tracked against a keyframe of an older subvolume
 // (TimedPose::reference_keyframe) start, after that many in a row, a subvolume anchored at that
 // subvolume's anchor (logged with its reason); a single stray frame does not. A pose batch
@@ -586,15 +601,13 @@ struct RequestLog {
 TEST(MapperTest, TrackerModeAnchorsFramesTrackedInAnOlderSubvolumeToIt) {
   test::TempDir dir("mapper");
   MapperConfig config = testConfig(dir.path());
-  config.pose_source = PoseSource::kTracker;
   config.creation.max_keyframes_per_subvolume = 2;
   config.creation.revisit_after_frames = 2;
   LogLines log;
-  Mapper mapper(config, log.sink());
   RequestLog requests;
-  mapper.setCovarianceRequester(requests.requester());
-  std::string error;
-  ASSERT_TRUE(mapper.start(&error)) << error;
+  const std::unique_ptr<Mapper> started = startTrackerModeMapper(config, &log, &requests);
+  ASSERT_NE(started, nullptr);
+  Mapper& mapper = *started;
   const auto& frames = roomFrames();
   ASSERT_GE(frames.size(), 12u);
   auto frameWithReference = [&](size_t i, KeyframeId reference) {
@@ -677,15 +690,13 @@ std::vector<uint64_t> landmarkRange(uint64_t begin, uint64_t end) {
 TEST(MapperTest, TrackerModeFusesSubvolumesWhoseCovarianceIsSmallEnough) {
   test::TempDir dir("mapper");
   MapperConfig config = testConfig(dir.path());
-  config.pose_source = PoseSource::kTracker;
   config.creation.max_keyframes_per_subvolume = 2;
   config.maintenance.q_min = 1e4;
   LogLines log;
-  Mapper mapper(config, log.sink());
   RequestLog requests;
-  mapper.setCovarianceRequester(requests.requester());
-  std::string error;
-  ASSERT_TRUE(mapper.start(&error)) << error;
+  const std::unique_ptr<Mapper> started = startTrackerModeMapper(config, &log, &requests);
+  ASSERT_NE(started, nullptr);
+  Mapper& mapper = *started;
   const auto& frames = roomFrames();
   auto frameWithPose = [&](size_t i) {
     ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));

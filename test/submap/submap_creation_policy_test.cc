@@ -134,8 +134,7 @@ TEST(SubmapCreationPolicy, FramesTrackedInAnOlderSubmapStartARevisitSubmap) {
   for (int i = 0; i < 8; ++i) EXPECT_FALSE(renewing.onFrameReference(revisit, other_home));
 
   SubmapCreationPolicyConfig off_config;
-  EXPECT_EQ(off_config.revisit_after_frames, 10);  // on by default
-  off_config.revisit_after_frames = 0;
+  EXPECT_EQ(off_config.revisit_after_frames, 0);  // off by default
   SubmapCreationPolicy off(off_config);
   for (int i = 0; i < 20; ++i) EXPECT_FALSE(off.onFrameReference(active, old_home));
   config.revisit_after_frames = -1;

@@ -34,6 +34,10 @@ struct MapperUnderTest {
     config.mapper.pose_source = pose_source;
     config.mapper.output_dir = output_dir;
     config.mapper.max_pose_wait_s = 0.0;  // a frame without its pose is refused at once
+    // Revisit anchoring on (off by default): frame poses name reference keyframes, and hostile
+    // ones must not start subvolumes anywhere they should not.
+    config.mapper.creation.revisit_after_frames = 2;
+    config.mapper.creation.revisit_max_frames = 3;
     mapper = std::make_unique<Mapper>(config.mapper, [](const std::string&) {});
     std::string error;
     FUZZ_CHECK(mapper->start(&error), error);

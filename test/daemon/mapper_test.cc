@@ -679,6 +679,37 @@ TEST(MapperTest, TrackerModeAnchorsFramesTrackedInAnOlderSubvolumeToIt) {
   }
 }
 
+// A reference keyframe that no subvolume holds, or one of another map epoch than the active
+// subvolume's, never starts a revisit subvolume.
+TEST(MapperTest, RevisitAnchoringIgnoresUnknownAndOtherEpochReferences) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  config.creation.max_keyframes_per_subvolume = 1;
+  config.creation.revisit_after_frames = 1;
+  LogLines log;
+  RequestLog requests;
+  const std::unique_ptr<Mapper> started = startTrackerModeMapper(config, &log, &requests);
+  ASSERT_NE(started, nullptr);
+  Mapper& mapper = *started;
+  const auto& frames = roomFrames();
+  const std::optional<int64_t> epoch1 = epochKey(1, 0);
+  ASSERT_TRUE(epoch1.has_value());
+  ASSERT_TRUE(mapper.onKeyframe(0, utimeOf(frames[0]), frames[0].T_G_C));       // subvolume 0
+  ASSERT_TRUE(mapper.onKeyframe(*epoch1, utimeOf(frames[1]), frames[1].T_G_C));  // 1: new map
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  for (size_t i = 1; i < 5; ++i) {
+    ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));
+    TimedPose pose = groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C);
+    pose.epoch = 1;
+    pose.reference_keyframe = i % 2 == 0 ? 0 : 12345;  // epoch 0's keyframe, or unknown
+    ASSERT_TRUE(mapper.onFramePose(pose));
+    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  }
+  EXPECT_EQ(mapper.collection().submapIds(), (std::vector<SubmapId>{0, 1}));
+  EXPECT_EQ(mapper.status().frames_integrated, 4u);
+  EXPECT_EQ(log.countContaining("tracked in an older subvolume"), 0u);
+}
+
 std::vector<uint64_t> landmarkRange(uint64_t begin, uint64_t end) {
   std::vector<uint64_t> ids;
   for (uint64_t i = begin; i < end; ++i) ids.push_back(i);

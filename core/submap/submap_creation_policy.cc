@@ -58,6 +58,11 @@ bool SubmapCreationPolicy::onKeyframe(const Submap* active, bool starts_new_map,
     reason = Reason::kTrackingJump;
   } else if (active == nullptr || active->isFinished() || pending_ == Pending::kNoActiveSubmap) {
     reason = Reason::kNoActiveSubmap;
+  } else if (revisit_anchor_ >= 0 && active->anchorKeyframe() == revisit_anchor_) {
+    // A revisit subvolume holds frames tracked against its home only: a new keyframe means
+    // the tracker now tracks against its own new map, whose poses the home's anchor does not
+    // follow (a loop correction moves the new keyframes, not the home).
+    reason = Reason::kRevisitEnded;
   } else if (pending_ == Pending::kKeyframeLimit || needsNewSubmap(*active, false)) {
     reason = Reason::kKeyframeLimit;
   } else if (keyframe_position) {
@@ -131,6 +136,8 @@ const char* SubmapCreationPolicy::reasonName(Reason reason) {
       return "anchor distance";
     case Reason::kRevisitFrames:
       return "tracked in an older subvolume";
+    case Reason::kRevisitEnded:
+      return "new keyframe after a revisit";
   }
   return "none";
 }

@@ -146,8 +146,10 @@ class SubmapCreationPolicy {
   /// is `active`, or shares its anchor, or that has no home, clears the votes. When `active`
   /// is the revisit submap this rule started last (and no keyframe started another since),
   /// the frames at home are counted: the revisit_max_frames-th after its start returns true
-  /// with the same home (a fresh revisit submap). Always false when revisit_after_frames is
-  /// 0. Not thread-safe.
+  /// with the same home (a fresh revisit submap). A keyframe while that revisit submap is
+  /// active starts a new submap (onKeyframe, kRevisitEnded): a revisit submap holds only
+  /// frames tracked against its home. Always false when revisit_after_frames is 0. Not
+  /// thread-safe.
   bool onFrameReference(const Submap& active, const std::optional<ReferenceHome>& home);
 
   /// Why the last onKeyframe() or onFrameReference() that returned true created a submap
@@ -161,6 +163,7 @@ class SubmapCreationPolicy {
     kRevisit,         ///< near an older anchor (revisit_anchor_distance_m)
     kAnchorDistance,  ///< far from the active anchor (max_anchor_distance_m)
     kRevisitFrames,   ///< frames tracked in an older subvolume (revisit_after_frames)
+    kRevisitEnded,    ///< a keyframe while the active submap is a revisit submap
   };
   /// Not thread-safe.
   Reason lastReason() const { return last_reason_; }
@@ -179,7 +182,8 @@ class SubmapCreationPolicy {
 
   const SubmapCreationPolicyConfig& config() const { return config_; }
   /// "no active submap", "new map", "tracking jump", "keyframe limit", "revisit",
-  /// "anchor distance", "tracked in an older subvolume" ("none" for kNone).
+  /// "anchor distance", "tracked in an older subvolume", "new keyframe after a revisit"
+  /// ("none" for kNone).
   static const char* reasonName(Reason reason);
 
  private:

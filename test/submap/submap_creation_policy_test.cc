@@ -129,8 +129,12 @@ TEST(SubmapCreationPolicy, FramesTrackedInAnOlderSubmapStartARevisitSubmap) {
   EXPECT_EQ(renewing.lastReason(), Reason::kRevisitFrames);
   for (int i = 0; i < 3; ++i) EXPECT_FALSE(renewing.onFrameReference(revisit, other_home));
   EXPECT_TRUE(renewing.onFrameReference(revisit, other_home));
-  // A keyframe that starts a submap ends the revisit: its frames at home are not counted.
-  EXPECT_TRUE(renewing.onKeyframe(nullptr));
+  // A keyframe while the revisit submap is active starts a new submap: the revisit ends, and
+  // frames at home in it are no longer counted.
+  EXPECT_TRUE(renewing.onKeyframe(&revisit));
+  EXPECT_EQ(renewing.lastReason(), Reason::kRevisitEnded);
+  EXPECT_STREQ(SubmapCreationPolicy::reasonName(renewing.lastReason()),
+               "new keyframe after a revisit");
   for (int i = 0; i < 8; ++i) EXPECT_FALSE(renewing.onFrameReference(revisit, other_home));
 
   SubmapCreationPolicyConfig off_config;

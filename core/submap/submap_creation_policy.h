@@ -48,9 +48,9 @@ struct SubmapCreationPolicyConfig {
   /// keyframe) from starting a subvolume per frame. README, "Map maintenance". Measured
   /// (BENCHMARKS.md, "Revisits anchored by the frames' reference keyframes") with 10: on the
   /// hall over three runs fusion keeps 64-69 % of the off size at q_min 1e4 and 60-62 % at 3e3
-  /// instead of 93-95 %, at the same RMSE; on the town one run of three had a 10-16 % higher
-  /// RMSE with it (frames tracked against old keyframes before the loop closed, anchored to
-  /// them). Default 0 (off) until that is understood.
+  /// instead of 93-95 %, at the same RMSE; on the town the two runs with the SLAM waited for
+  /// had a 7-16 % higher RMSE with it and no smaller map, about the bench's own spread.
+  /// Default 0 (off) until the town shows no cost.
   int revisit_after_frames = 0;
   /// With revisit_after_frames: a revisit submap (one started by that rule) whose frames keep
   /// being tracked against its home takes at most this many frames (>= 1); the next one

@@ -103,6 +103,15 @@ bool FusionScheduler::addSubvolumeSharingAnchor(int64_t subvolume, int64_t home)
   return true;
 }
 
+void FusionScheduler::lockForFusion(const FusionPair& pair) {
+  const PairKey key{pair.older, pair.newer};
+  retry_at_.erase(key);
+  rejections_.erase(key);
+  fusing_.insert(pair.older);
+  fusing_.insert(pair.newer);
+  ++fusing_pairs_;
+}
+
 bool FusionScheduler::fusedWithoutCovariance(int64_t older, int64_t newer) const {
   const int64_t anchor = anchors_.at(newer);
   if (anchors_.at(older) == anchor) return true;
@@ -154,12 +163,8 @@ std::vector<FusionPair> FusionScheduler::takeSameAnchorPairs(int64_t active_subv
     }
   }
   for (const FusionPair& pair : pairs) {
-    fusing_.insert(pair.older);
-    fusing_.insert(pair.newer);
-    ++fusing_pairs_;
+    lockForFusion(pair);
     ++stats_.same_anchor;
-    retry_at_.erase(PairKey{pair.older, pair.newer});
-    rejections_.erase(PairKey{pair.older, pair.newer});
   }
   std::sort(pairs.begin(), pairs.end(), [](const FusionPair& x, const FusionPair& y) {
     return std::pair{x.older, x.newer} < std::pair{y.older, y.newer};
@@ -289,11 +294,7 @@ std::vector<FusionPair> FusionScheduler::onReply(int64_t request_id,
         fusing_.contains(pair.older) || fusing_.contains(pair.newer)) {
       continue;
     }
-    retry_at_.erase(key);
-    rejections_.erase(key);
-    fusing_.insert(pair.older);
-    fusing_.insert(pair.newer);
-    ++fusing_pairs_;
+    lockForFusion(pair);
     ++stats_.accepted;
     accepted.push_back(pair);
   }

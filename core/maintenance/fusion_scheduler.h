@@ -222,6 +222,9 @@ class FusionScheduler {
     double sent_s = 0.0;
   };
   using PairKey = std::pair<int64_t, int64_t>;  // (older, newer)
+  // A pair handed on for fusion: both are locked until onFused / onFusionFailed, and its
+  // back-off is forgotten.
+  void lockForFusion(const FusionPair& pair);
   // True for a pair takeSameAnchorPairs fuses without a covariance (both known).
   bool fusedWithoutCovariance(int64_t older, int64_t newer) const;
 

@@ -1,6 +1,6 @@
+#include "daemon/common/utime_ns.h"
 #include "daemon/mapper/frame_integration.h"
 
-#include <algorithm>
 #include <exception>
 #include <optional>
 #include <utility>
@@ -208,9 +208,7 @@ void FrameIntegration::processFrame(PendingFrame pending, const Transformationd&
     {
       std::lock_guard<std::mutex> lock(*policy_mutex_);
       active = collection_->activeSubmap();
-      // Clamped: a time stamp from the bus beyond +-292 years would overflow in nanoseconds.
-      const int64_t time_ns =
-          std::clamp<int64_t>(frame.utime, INT64_MIN / 1000, INT64_MAX / 1000) * 1000;
+      const int64_t time_ns = utimeToNs(frame.utime);
       action = policy_->onFramePose(active.get(), jump && attempt == 0, time_ns);
       if (action == SubmapCreationPolicy::FrameAction::kIntegrate && attempt == 0) {
         active = applyRevisitRule(std::move(active), reference_keyframe, time_ns);

@@ -1,3 +1,4 @@
+#include "daemon/common/utime_ns.h"
 #include "daemon/mapper/map_maintenance.h"
 
 #include <algorithm>
@@ -205,7 +206,7 @@ void MapMaintenance::applyKeyframe(KeyframeId id, int64_t utime, const Transform
       // Clamped: a keyframe time stamp from the bus beyond +-292 years overflows in ns.
       reason = policy_->lastReason();
       created = collection_->createSubmap(
-          T_G_K, id, std::clamp<int64_t>(utime, INT64_MIN / 1000, INT64_MAX / 1000) * 1000);
+          T_G_K, id, utimeToNs(utime));
       joined = created->id();
     } else {
       active->addKeyframe(id);

@@ -1,3 +1,4 @@
+#include "daemon/common/utime_ns.h"
 #include "daemon/tracker/tracker_node.h"
 
 #include <algorithm>
@@ -477,9 +478,7 @@ void TrackerNode::processFrame(TrackerFrame& frame) {
   TrackingResult result;
   const Clock::time_point start = Clock::now();
   try {
-    // Clamped: a time stamp from the bus beyond +-292 years would overflow in nanoseconds.
-    const int64_t timestamp_ns =
-        std::clamp<int64_t>(frame.utime, INT64_MIN / 1000, INT64_MAX / 1000) * 1000;
+    const int64_t timestamp_ns = utimeToNs(frame.utime);
     const uint64_t id = static_cast<uint64_t>(frame.frame_id);
     result = stereo ? system.trackStereo(id, timestamp_ns, frame.image, frame.right, T_C_G_initial)
                     : system.trackRgbd(id, timestamp_ns, frame.image, frame.depth, T_C_G_initial);

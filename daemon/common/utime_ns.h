@@ -1,0 +1,14 @@
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+
+namespace cblox {
+
+/// A bus time stamp in microseconds as nanoseconds, clamped to +-292 years first: a hostile
+/// stamp would overflow int64 when multiplied. Thread-safe (pure).
+inline int64_t utimeToNs(int64_t utime) {
+  return std::clamp<int64_t>(utime, INT64_MIN / 1000, INT64_MAX / 1000) * 1000;
+}
+
+}  // namespace cblox

@@ -53,14 +53,18 @@ struct InputError : std::runtime_error {
 // alternate; relative names are relative to the list's folder.
 std::vector<ImagePair> readImageList(const std::string& path) {
   std::string error;
-  const cv::FileStorage fs = openOpenCvStorage(path, &error);
-  if (!fs.isOpened()) throw InputError(error + " (expected an OpenCV image list)");
-  const cv::FileNode list = fs.getFirstTopLevelNode();
-  if (list.empty() || !list.isSeq()) throw InputError(path + ": not an OpenCV image list");
+  const std::optional<YAML::Node> root = readOpenCvStorage(path, &error);
+  if (!root) throw InputError(error + " (expected an OpenCV image list)");
+  if (root->size() == 0) throw InputError(path + ": not an OpenCV image list");
+  const YAML::Node list = root->begin()->second;
+  if (!list.IsSequence()) throw InputError(path + ": not an OpenCV image list");
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
   std::vector<std::string> names;
-  for (const cv::FileNode& node : list) {
-    const std::filesystem::path name = static_cast<std::string>(node);
+  for (const YAML::Node& node : list) {
+    if (!node.IsScalar() || node.Scalar().empty()) {
+      throw InputError(path + ": image " + std::to_string(names.size()) + " is not a file name");
+    }
+    const std::filesystem::path name = node.Scalar();
     names.push_back(name.is_absolute() ? name.string() : (folder / name).string());
   }
   if (names.size() % 2 != 0 || names.empty()) {

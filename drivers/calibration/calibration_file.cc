@@ -3,13 +3,9 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <initializer_list>
 #include <optional>
-#include <sstream>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "core/io/text_matrix.h"
 #include "drivers/calibration/opencv_storage.h"
@@ -152,128 +148,131 @@ CamchainEntry readCamchainCamera(const YAML::Node& node, const std::string& key)
 }
 
 // ---------------------------------------------------------------------------------------------
-// OpenCV FileStorage
+// OpenCV FileStorage (read by readOpenCvStorage, never by OpenCV's parsers)
 
-cv::Mat readMat(const cv::FileStorage& fs, std::initializer_list<const char*> names,
-                std::string* found) {
+// The first of `names` present, as a matrix (`*found` its name); nullopt with `*found` empty
+// when none is present.
+std::optional<OpenCvMatrix> readMatrix(const YAML::Node& root, const std::string& path,
+                                       std::initializer_list<const char*> names,
+                                       std::string* found) {
   for (const char* name : names) {
-    const cv::FileNode node = fs[name];
-    if (node.empty()) continue;
-    // OpenCV allocates rows x cols before it counts the data: a matrix declaring more elements
-    // than it lists would allocate up to 2^64 bytes. Refused here (readOpenCvChecked names
-    // the file).
-    if (node.isMap() && !node["rows"].empty() && !node["cols"].empty()) {
-      const int64_t rows = static_cast<int>(node["rows"]);
-      const int64_t cols = static_cast<int>(node["cols"]);
-      if (rows < 0 || cols < 0 || rows * cols > static_cast<int64_t>(node["data"].size())) {
-        CV_Error(cv::Error::StsBadSize, std::string(name) + ": rows x cols exceeds its data");
-      }
+    const YAML::Node node = root[name];
+    if (!node) continue;
+    OpenCvMatrix m;
+    if (const std::string e = readOpenCvMatrix(node, &m); !e.empty()) {
+      fail(path + "." + name + ": " + e);
     }
-    cv::Mat m;
-    node >> m;
     *found = name;
-    if (m.empty()) return m;
-    m.convertTo(m, CV_64F);
     return m;
   }
   found->clear();
-  return {};
+  return std::nullopt;
 }
 
-cv::Mat requireMat(const cv::FileStorage& fs, const std::string& path,
-                   std::initializer_list<const char*> names, int rows, int cols) {
+// As readMatrix, one of `names` required, finite, and rows x cols unless `rows` is 0.
+OpenCvMatrix requireMatrix(const YAML::Node& root, const std::string& path,
+                           std::initializer_list<const char*> names, int rows, int cols) {
   std::string found;
-  cv::Mat m = readMat(fs, names, &found);
+  const std::optional<OpenCvMatrix> m = readMatrix(root, path, names, &found);
   std::string all;
   for (const char* name : names) all += (all.empty() ? "" : " or ") + std::string(name);
-  if (found.empty()) fail(path + ": " + all + " is missing");
-  if (rows > 0 && (m.rows != rows || m.cols != cols)) {
-    fail(path + "." + found + ": expected a " + std::to_string(rows) + "x" +
-         std::to_string(cols) + " matrix, got " + std::to_string(m.rows) + "x" +
-         std::to_string(m.cols));
+  if (!m) fail(path + ": " + all + " is missing");
+  if (rows > 0 && (m->rows != rows || m->cols != cols)) {
+    fail(path + "." + found + ": expected a " + std::to_string(rows) + "x" + std::to_string(cols) +
+         " matrix, got " + std::to_string(m->rows) + "x" + std::to_string(m->cols));
   }
-  for (int r = 0; r < m.rows; ++r) {
-    for (int c = 0; c < m.cols; ++c) {
-      if (!std::isfinite(m.at<double>(r, c))) fail(path + "." + found + ": not finite");
-    }
+  for (const double v : m->values) {
+    if (!std::isfinite(v)) fail(path + "." + found + ": not finite");
   }
-  return m;
+  return *m;
 }
 
-std::optional<cv::Size> readImageSize(const cv::FileStorage& fs) {
-  const cv::FileNode w = fs["image_width"], h = fs["image_height"];
-  if (!w.empty() && !h.empty()) return cv::Size(static_cast<int>(w), static_cast<int>(h));
+// A whole number in 1..16384 (an image side), else nullopt.
+std::optional<int> imageSide(std::optional<double> v) {
+  if (!v || !(*v >= 1 && *v <= 16384) || std::floor(*v) != *v) return std::nullopt;
+  return static_cast<int>(*v);
+}
+
+std::optional<int> imageSide(const YAML::Node& node) {
+  return imageSide(node.IsScalar() ? parseOpenCvNumber(node.Scalar()) : std::nullopt);
+}
+
+// image_width and image_height, or imageSize / image_size / size as [w, h] or a 2-element
+// matrix. nullopt when absent or not two image sides.
+std::optional<std::pair<int, int>> readImageSize(const YAML::Node& root) {
+  const YAML::Node w = root["image_width"], h = root["image_height"];
+  if (w && h) {
+    const std::optional<int> width = imageSide(w), height = imageSide(h);
+    if (width && height) return std::make_pair(*width, *height);
+    return std::nullopt;
+  }
   for (const char* name : {"imageSize", "image_size", "size"}) {
-    const cv::FileNode node = fs[name];
-    if (node.empty()) continue;
-    if (node.isSeq() && node.size() == 2) {
-      return cv::Size(static_cast<int>(node[0]), static_cast<int>(node[1]));
+    const YAML::Node node = root[name];
+    if (!node) continue;
+    if (node.IsSequence() && node.size() == 2) {
+      const std::optional<int> width = imageSide(node[0]), height = imageSide(node[1]);
+      if (width && height) return std::make_pair(*width, *height);
+      return std::nullopt;
     }
-    cv::Mat m;
-    node >> m;
-    if (m.total() == 2) {
-      m.convertTo(m, CV_64F);
-      return cv::Size(static_cast<int>(m.at<double>(0)), static_cast<int>(m.at<double>(1)));
+    OpenCvMatrix m;
+    if (readOpenCvMatrix(node, &m).empty() && m.values.size() == 2) {
+      const std::optional<int> width = imageSide(m.values[0]), height = imageSide(m.values[1]);
+      if (width && height) return std::make_pair(*width, *height);
     }
+    return std::nullopt;
   }
   return std::nullopt;
 }
 
-CameraCalibration openCvCamera(const cv::Mat& K, const cv::Mat& D, cv::Size size,
-                               DistortionModel model, const std::string& where) {
+CameraCalibration openCvCamera(const OpenCvMatrix& K, const std::optional<OpenCvMatrix>& D,
+                               std::pair<int, int> size, DistortionModel model,
+                               const std::string& where) {
   CameraCalibration camera;
   try {
-    Eigen::Matrix3d k;
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) k(r, c) = K.at<double>(r, c);
-    }
-    camera.intrinsics = PinholeCamera::fromK(k, size.width, size.height);
+    const Eigen::Matrix3d k =
+        Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(K.values.data());
+    camera.intrinsics = PinholeCamera::fromK(k, size.first, size.second);
   } catch (const std::invalid_argument& e) {
     fail(where + ": " + e.what());
   }
   camera.distortion = model;
-  if (!D.empty()) {
-    const cv::Mat d = D.isContinuous() ? D : D.clone();
-    camera.distortion_coefficients.assign(d.ptr<double>(), d.ptr<double>() + d.total());
-  }
+  if (D) camera.distortion_coefficients = D->values;
   camera.distortion_key = where;
   if (camera.distortion_coefficients.empty()) camera.distortion = DistortionModel::kNone;
   if (const std::string e = validate(camera); !e.empty()) fail(where + ": " + e);
   return camera;
 }
 
-cv::FileStorage openStorage(const std::string& path) {
+YAML::Node openStorage(const std::string& path) {
   std::string error;
-  cv::FileStorage fs = openOpenCvStorage(path, &error);
-  if (!fs.isOpened()) fail(error);
-  return fs;
+  std::optional<YAML::Node> root = readOpenCvStorage(path, &error);
+  if (!root) fail(error);
+  return *root;
 }
 
-StereoCameraCalibration readOpenCv(const std::string& path, bool stereo) {
-  cv::FileStorage fs = openStorage(path);
-  const std::optional<cv::Size> size = readImageSize(fs);
-  if (!size || size->width < 1 || size->height < 1 || size->width > 16384 ||
-      size->height > 16384) {
+StereoCameraCalibration readOpenCv(YAML::Node root, const std::string& path, bool stereo) {
+  const std::optional<std::pair<int, int>> size = readImageSize(root);
+  if (!size) {
     fail(path + ": image_width and image_height (or imageSize: [w, h]) missing or invalid");
   }
   DistortionModel model = DistortionModel::kRadTan;
-  if (!fs["distortion_model"].empty()) {
-    model = parseDistortionModel(static_cast<std::string>(fs["distortion_model"]),
-                                 path + ".distortion_model");
+  if (const YAML::Node name = root["distortion_model"]) {
+    if (!name.IsScalar()) fail(path + ".distortion_model: expected a name");
+    model = parseDistortionModel(name.Scalar(), path + ".distortion_model");
   }
   StereoCameraCalibration calibration;
   calibration.source = path;
   std::string found;
-  const cv::Mat K1 = requireMat(fs, path, {"M1", "K1", "cameraMatrix1"}, 3, 3);
-  cv::Mat D1 = readMat(fs, {"D1", "distCoeffs1"}, &found);
+  const OpenCvMatrix K1 = requireMatrix(root, path, {"M1", "K1", "cameraMatrix1"}, 3, 3);
+  const std::optional<OpenCvMatrix> D1 = readMatrix(root, path, {"D1", "distCoeffs1"}, &found);
   calibration.left = openCvCamera(K1, D1, *size, model, path + ".D1");
   if (!stereo) return calibration;
-  const cv::Mat K2 = requireMat(fs, path, {"M2", "K2", "cameraMatrix2"}, 3, 3);
-  cv::Mat D2 = readMat(fs, {"D2", "distCoeffs2"}, &found);
+  const OpenCvMatrix K2 = requireMatrix(root, path, {"M2", "K2", "cameraMatrix2"}, 3, 3);
+  const std::optional<OpenCvMatrix> D2 = readMatrix(root, path, {"D2", "distCoeffs2"}, &found);
   calibration.right = openCvCamera(K2, D2, *size, model, path + ".D2");
 
   std::string extrinsics_path = path;
-  if (fs["R"].empty() && fs["T"].empty()) {
+  if (!root["R"] && !root["T"]) {
     const std::filesystem::path folder = std::filesystem::path(path).parent_path();
     extrinsics_path.clear();
     for (const char* name : {"extrinsics.yml", "extrinsics.yaml", "extrinsics.xml"}) {
@@ -285,31 +284,26 @@ StereoCameraCalibration readOpenCv(const std::string& path, bool stereo) {
     if (extrinsics_path.empty()) {
       fail(path + ": R and T (right camera from left) missing, and no extrinsics.yml beside it");
     }
-    fs = openStorage(extrinsics_path);
+    root = openStorage(extrinsics_path);
   }
-  const cv::Mat R = requireMat(fs, extrinsics_path, {"R"}, 3, 3);
-  const cv::Mat T = requireMat(fs, extrinsics_path, {"T"}, 0, 0);
-  if (T.total() != 3) fail(extrinsics_path + ".T: expected 3 numbers");
+  const OpenCvMatrix R = requireMatrix(root, extrinsics_path, {"R"}, 3, 3);
+  const OpenCvMatrix T = requireMatrix(root, extrinsics_path, {"T"}, 0, 0);
+  if (T.values.size() != 3) fail(extrinsics_path + ".T: expected 3 numbers");
   Eigen::Matrix4d M = Eigen::Matrix4d::Identity();
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) M(r, c) = R.at<double>(r, c);
-    M(r, 3) = T.at<double>(r);
+    for (int c = 0; c < 3; ++c) M(r, c) = R.values[static_cast<size_t>(3 * r + c)];
+    M(r, 3) = T.values[static_cast<size_t>(r)];
   }
   calibration.T_R_L = toRigidTransform(M, extrinsics_path + ".R");
   return calibration;
 }
 
-// readOpenCv, with what FileStorage throws on malformed content as a CalibrationError: a
-// cv::Exception (a matrix whose data does not fill rows x cols, a node of the wrong type) or a
-// standard exception from its parser (std::length_error on some broken YAML).
-StereoCameraCalibration readOpenCvChecked(const std::string& path, bool stereo) {
+// readOpenCv, with a yaml-cpp exception on a tree of unexpected shape as a CalibrationError.
+StereoCameraCalibration readOpenCvChecked(const YAML::Node& root, const std::string& path,
+                                          bool stereo) {
   try {
-    return readOpenCv(path, stereo);
-  } catch (const CalibrationError&) {
-    throw;
-  } catch (const cv::Exception& e) {
-    fail(path + ": cannot read as OpenCV YAML/XML: " + e.msg);
-  } catch (const std::exception& e) {
+    return readOpenCv(root, path, stereo);
+  } catch (const YAML::Exception& e) {
     fail(path + ": cannot read as OpenCV YAML/XML: " + e.what());
   }
 }
@@ -343,31 +337,9 @@ StereoCameraCalibration parseCamchain(const YAML::Node& root, const std::string&
 }
 
 StereoCameraCalibration loadStereoCalibration(const std::string& path, bool stereo) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path + ": cannot open calibration file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  const std::string text = buffer.str();
-  if (text.rfind("<?xml", 0) == 0) return readOpenCvChecked(path, stereo);
-  if (text.rfind("%YAML:", 0) == 0) {
-    // OpenCV's FileStorage YAML, unless it is a camchain saved with OpenCV's header (EuRoC).
-    YAML::Node root;
-    try {
-      root = YAML::Load(yamlDirectiveAsComment(text));
-    } catch (const YAML::Exception&) {
-      // Refused there, before OpenCV parses it, naming yaml-cpp's reason (B15).
-      return readOpenCvChecked(path, stereo);
-    }
-    if (root.IsMap() && root["cam0"]) return parseCamchain(root, path, stereo);
-    return readOpenCvChecked(path, stereo);
-  }
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    fail(path + ": " + e.what());
-  }
-  return parseCamchain(root, path, stereo);
+  const YAML::Node root = openStorage(path);
+  if (root["cam0"]) return parseCamchain(root, path, stereo);
+  return readOpenCvChecked(root, path, stereo);
 }
 
 }  // namespace cblox

@@ -36,7 +36,7 @@ class CalibrationError : public std::runtime_error {
 ///    Kalibr's and EuRoC's other fields (rostopic, sensor_type, comment, rate_hz,
 ///    cam_overlaps, timeshift_cam_imu) are accepted and ignored; anything else is an error.
 ///
-/// 2. OpenCV FileStorage, YAML ("%YAML:1.0") or XML, as written by OpenCV's stereo_calib
+/// 2. OpenCV FileStorage, YAML ("%YAML:1.0"), XML or JSON, as written by OpenCV's stereo_calib
 ///    sample and `cblox-calib calibrate`: camera matrices M1, M2 (or K1, K2), distortion D1,
 ///    D2 (plumb-bob), R and T from cv::stereoCalibrate (p_R = R p_L + T, metres), the image
 ///    size as image_width and image_height (or imageSize / image_size: [w, h]), and an
@@ -44,9 +44,10 @@ class CalibrationError : public std::runtime_error {
 ///    not in the file but an extrinsics.yml|.yaml|.xml sits beside it (the sample's pair of
 ///    files), they are read from there.
 ///
-/// A file whose first line is "%YAML:1.0" or that starts with "<?xml" is read as OpenCV's;
-/// any other is read as a camchain. With `stereo` false only the left camera is read (the
-/// right stays default). Throws CalibrationError naming the file and key. Thread-safe.
+/// The file is read by readOpenCvStorage (opencv_storage.h: YAML, XML or JSON by content,
+/// at most 1 MiB, never by OpenCV's own parsers); a top level with cam0 is a camchain, any
+/// other OpenCV's. With `stereo` false only the left camera is read (the right stays
+/// default). Throws CalibrationError naming the file and key. Thread-safe.
 StereoCameraCalibration loadStereoCalibration(const std::string& path, bool stereo);
 
 /// As loadStereoCalibration, for a camchain already parsed; `where` prefixes messages.

@@ -233,7 +233,7 @@ TEST(CalibrationFileTest, ReadsKalibrCamchain) {
 }
 
 // OpenCV's FileStorage, as its stereo_calib sample writes it: one file with everything, and
-// the sample's own pair of files (intrinsics.yml + extrinsics.yml); YAML and XML.
+// the sample's own pair of files (intrinsics.yml + extrinsics.yml); YAML, XML and JSON.
 TEST(CalibrationFileTest, ReadsOpenCvYamlAndXml) {
   test::TempDir dir("cblox_calibration");
   const cv::Mat M1 = (cv::Mat_<double>(3, 3) << 460, 0, 370, 0, 458, 245, 0, 0, 1);
@@ -243,7 +243,7 @@ TEST(CalibrationFileTest, ReadsOpenCvYamlAndXml) {
   const Eigen::Matrix3d R_e = Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitY()).toRotationMatrix();
   const cv::Mat R = toCv(R_e);
   const cv::Mat T = (cv::Mat_<double>(3, 1) << -0.12, 0.002, 0.001);
-  for (const std::string ext : {".yml", ".xml"}) {
+  for (const std::string ext : {".yml", ".xml", ".json"}) {
     const std::string one = (dir.path() / ("stereo" + ext)).string();
     {
       cv::FileStorage fs(one, cv::FileStorage::WRITE);

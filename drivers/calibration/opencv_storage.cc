@@ -178,15 +178,17 @@ bool readFile(const std::string& path, std::string* text, std::string* error) {
     *error = "cannot open";
     return false;
   }
-  text->resize(kMaxFileBytes + 1);
-  in.read(text->data(), static_cast<std::streamsize>(text->size()));
-  text->resize(static_cast<size_t>(in.gcount()));
+  // In pieces, so that a small file costs a small buffer and a large one stops at the limit.
+  char piece[1 << 16];
+  while (in.read(piece, sizeof piece) || in.gcount() > 0) {
+    text->append(piece, static_cast<size_t>(in.gcount()));
+    if (text->size() > kMaxFileBytes) {
+      *error = "over " + std::to_string(kMaxFileBytes) + " bytes: too large for a calibration file";
+      return false;
+    }
+  }
   if (in.bad()) {
     *error = "cannot read";
-    return false;
-  }
-  if (text->size() > kMaxFileBytes) {
-    *error = "over " + std::to_string(kMaxFileBytes) + " bytes: too large for a calibration file";
     return false;
   }
   if (const size_t nul = text->find('\0'); nul != std::string::npos) {

@@ -34,7 +34,10 @@
 // Mappers integrate every frame (no time budget, waited for) so the comparison does not
 // depend on the machine's load; with --sync-slam (the default) the SLAM's local mapping and
 // loop closing are waited for after every frame too (ORB-SLAM2 run offline), so the
-// tracker's poses do not depend on it either (--no-sync-slam: as in real time). --out writes DIR/maintenance_<scene>.json and
+// tracker's poses do not depend on it either, and the mappers run on the input clock
+// (MaintenanceClock::kInput) with each frame's keyframes applied before the frame and its
+// covariance requests answered and applied after it: a run is a function of its inputs, so
+// two runs print the same figures (--no-sync-slam: as in real time). --out writes DIR/maintenance_<scene>.json and
 // DIR/maintenance_<scene>_sweep.png (map size against RMSE for every variant). For every
 // fusion variant it also prints the answered pairs: q (median, share >= q_min) and the
 // distance between the two keyframes asked about, so the reason for rejections is visible.
@@ -102,8 +105,9 @@ struct Variant {
   FusionSchedulerStats fusion;
 };
 
-MapperConfig baseConfig(float voxel, const std::filesystem::path& out) {
+MapperConfig baseConfig(float voxel, const std::filesystem::path& out, bool deterministic) {
   MapperConfig config;
+  if (deterministic) config.maintenance_clock = MaintenanceClock::kInput;
   config.layer = LayerConfig{voxel, 8};
   config.integrator.truncation_distance_m = 3.0f * voxel;
   config.integrator.max_integration_time_s = 0.0;  // every frame whole: load-independent
@@ -264,7 +268,7 @@ int run(int argc, char** argv) {
     v->pair_keyframes = pair_keyframes;
     v->revisit_m = revisit_m.value_or(revisit_distance);
     v->revisit_frames = frames.value_or(revisit_frames);
-    MapperConfig config = baseConfig(voxel, work);
+    MapperConfig config = baseConfig(voxel, work, sync_slam);
     if (kind == Kind::kGroundTruth || kind == Kind::kNaive) {
       config.pose_source = PoseSource::kGroundTruth;          // poses fed as given, never corrected
       config.creation.max_keyframes_per_subvolume = 1 << 30;  // one volume
@@ -417,6 +421,25 @@ int run(int argc, char** argv) {
   auto waitAll = [&] {
     for (auto& v : variants) v->mapper->waitUntilIdle(std::chrono::seconds(120));
   };
+  // Until no covariance request is outstanding and every mapper is idle: a reply can start a
+  // fusion and the next request. Stops when a round answers nothing (a request the service
+  // dropped would otherwise be waited for forever).
+  auto settle = [&] {
+    size_t outstanding_before = SIZE_MAX;
+    while (true) {
+      waitAll();
+      size_t outstanding = 0;
+      for (auto& v : variants) {
+        std::lock_guard<std::mutex> lock(v->pairs_mutex);
+        outstanding += v->requested.size();
+      }
+      if (outstanding == 0 || outstanding == outstanding_before) return;
+      outstanding_before = outstanding;
+      for (auto& v : variants) {
+        if (v->covariance) v->covariance->waitUntilIdle();
+      }
+    }
+  };
 
   const size_t total = info.frame_count.value_or(0);
   const auto start = Clock::now();
@@ -429,6 +452,7 @@ int run(int argc, char** argv) {
                          frame.right, frame.T_G_C->inverse());
     if (sync_slam) slam.waitUntilIdle();  // keyframes and corrections of this frame are out
     deliver();
+    if (sync_slam) waitAll();  // ... and applied before the frame is integrated
     const int64_t utime = frame.timestamp_ns / 1000;
     DepthFrame depth;
     depth.utime = utime;
@@ -459,7 +483,11 @@ int run(int argc, char** argv) {
       v->mapper->onFramePose(pose);
       v->mapper->onDepthFrame(depth);
     }
-    waitAll();
+    if (sync_slam) {
+      settle();
+    } else {
+      waitAll();
+    }
     ++n;
     if (n % 50 == 0) {
       const double s = std::chrono::duration<double>(Clock::now() - start).count();

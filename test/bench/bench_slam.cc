@@ -6,11 +6,14 @@
 // keyframe poses, before the first loop closure and at the end.
 //
 //   cblox-bench-slam [--scene room|hall|town] [--trajectory loop] [--laps 2] [--frames N]
-//                    [--rate HZ] [--one-core] [--vocabulary FILE] [--out DIR]
+//                    [--rate HZ] [--one-core] [--vocabulary FILE] [--config TRACKER_YAML]
+//                    [--out DIR]
 //
 // Frames are rendered first (progress printed), then fed at --rate (default: the source's
 // rate, so local mapping gets real-time slack; 0 = as fast as possible). --one-core
 // extracts the left and right images on the tracking thread (the "one core" figure).
+// --config takes the SLAM settings (frames, tracker, local_mapping, loop_closing, ...) of a
+// tracker.yaml instead of the defaults, so a setting can be measured before it is shipped.
 // --out writes DIR/slam_<scene>.json and DIR/slam_<scene>_trajectory.png.
 // A loop is "false" when the constraint it added is wrong: the final estimated pose of the
 // query keyframe relative to the candidate differs from the true relative pose by more than
@@ -39,6 +42,7 @@
 #include "core/eval/trajectory_plot.h"
 #include "core/tracking/slam_system.h"
 #include "daemon/common/cli.h"
+#include "daemon/tracker/tracker_config.h"
 #include "drivers/open_frame_source.h"
 
 namespace cblox {
@@ -79,7 +83,7 @@ Ate ate(const StampedTrajectory& truth, const StampedTrajectory& estimate) {
 }
 
 int run(int argc, char** argv) {
-  std::string scene = "room", trajectory = "loop", vocabulary_path, out_dir;
+  std::string scene = "room", trajectory = "loop", vocabulary_path, out_dir, config_path;
   int laps = 2;
   size_t max_frames = 0;
   double rate = -1.0;
@@ -98,6 +102,9 @@ int run(int argc, char** argv) {
   app.add_option("--rate", rate, "frames fed per second (default: the source's; 0: no wait)");
   app.add_flag("--one-core", one_core, "extract both images on the tracking thread");
   app.add_option("--vocabulary", vocabulary_path, "vocabulary file")->capture_default_str();
+  app.add_option("--config", config_path,
+                 "a tracker.yaml: its SLAM settings replace the defaults (camera settings unused)")
+      ->type_name("FILE");
   app.add_option("--out", out_dir, "writes DIR/slam_<scene>.json and the trajectory picture")
       ->type_name("DIR");
   if (const std::optional<int> code = parseCommandLine(app, argc, argv)) return *code;
@@ -136,7 +143,15 @@ int run(int argc, char** argv) {
   const RectifiedStereoCalibration& calibration = *info.stereo;
   const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
   SlamSystemConfig config;
-  config.frames.parallel_stereo_extraction = !one_core;
+  if (!config_path.empty()) {
+    try {
+      config = loadTrackerConfig(YAML::LoadFile(config_path)).tracker.slam;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: %s\n", config_path.c_str(), e.what());
+      return 2;
+    }
+  }
+  if (one_core) config.frames.parallel_stereo_extraction = false;
   SlamSystem slam(camera, config, &*vocabulary);
   std::mutex mutex;
   std::vector<LoopClosureEvent> loops;

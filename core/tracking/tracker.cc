@@ -35,6 +35,22 @@ const char* trackingStateName(TrackingState state) {
   return "?";
 }
 
+const char* keyframeReasonName(KeyframeReason reason) {
+  switch (reason) {
+    case KeyframeReason::kNone:
+      return "none";
+    case KeyframeReason::kMaxFrames:
+      return "max_frames";
+    case KeyframeReason::kClosePoints:
+      return "close_points";
+    case KeyframeReason::kWeakTracking:
+      return "weak_tracking";
+    case KeyframeReason::kMapperIdle:
+      return "mapper_idle";
+  }
+  return "?";
+}
+
 Tracker::Tracker(SparseMap* map, const TrackingCamera& camera, const ScalePyramid& pyramid,
                  const TrackerConfig& config, const KeyframeDatabase* database, KeyframeSink* sink)
     : map_(map),
@@ -59,7 +75,7 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
   TrackingResult result;
   current_ = Frame(frame_id, timestamp_ns, std::move(features));
   current_index_ = ++frames_processed_;
-  bool create_keyframe = false;
+  KeyframeReason create_keyframe = KeyframeReason::kNone;
   {
     std::shared_lock<std::shared_mutex> lock(map_->mutex());
     if (map_->changeIndex() != map_change_index_) {
@@ -114,9 +130,10 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
       result.initialized = true;
       result.T_C_G = current_.T_C_G;
     }
-  } else if (create_keyframe) {
+  } else if (create_keyframe != KeyframeReason::kNone) {
     std::unique_lock<std::shared_mutex> lock(map_->mutex());
     result.new_keyframe = createKeyframe();
+    if (result.new_keyframe != nullptr) result.keyframe_reason = create_keyframe;
   }
   if (result.new_keyframe != nullptr && sink_ != nullptr)
     sink_->insertKeyframe(result.new_keyframe);
@@ -377,12 +394,12 @@ bool Tracker::trackLocalMap(TrackingResult* result) {
   return true;
 }
 
-bool Tracker::needNewKeyframe(int inliers) const {
+KeyframeReason Tracker::needNewKeyframe(int inliers) const {
   const size_t num_keyframes = map_->numKeyframes();
   const uint64_t max_frames = static_cast<uint64_t>(config_.max_frames_between_keyframes);
   if (ever_relocalized_ && current_index_ < last_relocalization_index_ + max_frames &&
       num_keyframes > max_frames) {
-    return false;
+    return KeyframeReason::kNone;
   }
   const int min_observations = num_keyframes <= 2 ? 2 : 3;
   const int reference_matches = reference_keyframe_ != nullptr
@@ -407,15 +424,19 @@ bool Tracker::needNewKeyframe(int inliers) const {
       current_index_ >=
           last_keyframe_index_ + static_cast<uint64_t>(config_.min_frames_between_keyframes) &&
       idle;
-  const bool c1c = inliers < reference_matches * 0.25 || need_close;
+  const bool weak = inliers < reference_matches * 0.25;
   const bool c2 = (inliers < reference_matches * ratio || need_close) && inliers > 15;
-  if (!((c1a || c1b || c1c) && c2)) return false;
-  if (idle) return true;
+  if (!((c1a || c1b || weak || need_close) && c2)) return KeyframeReason::kNone;
+  const KeyframeReason reason = c1a          ? KeyframeReason::kMaxFrames
+                                : need_close ? KeyframeReason::kClosePoints
+                                : weak       ? KeyframeReason::kWeakTracking
+                                             : KeyframeReason::kMapperIdle;
+  if (idle) return reason;
   if (sink_ != nullptr) {
     sink_->interruptBundleAdjustment();
-    return sink_->queuedKeyframes() < 3;
+    return sink_->queuedKeyframes() < 3 ? reason : KeyframeReason::kNone;
   }
-  return true;
+  return reason;
 }
 
 Keyframe* Tracker::createKeyframe() {

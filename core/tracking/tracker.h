@@ -25,6 +25,19 @@ enum class TrackingState {
 
 const char* trackingStateName(TrackingState state);
 
+/// Which of ORB-SLAM2's keyframe conditions let a keyframe through (c1 of NeedNewKeyFrame;
+/// c2, fewer inliers than reference_ratio of the reference keyframe's tracked landmarks or
+/// close points needed, holds in every case).
+enum class KeyframeReason : uint8_t {
+  kNone,          ///< no keyframe from this frame
+  kMaxFrames,     ///< max_frames_between_keyframes frames since the last keyframe
+  kClosePoints,   ///< too few tracked close points and enough untracked ones
+  kWeakTracking,  ///< fewer inliers than a quarter of the reference keyframe's landmarks
+  kMapperIdle,    ///< min_frames_between_keyframes passed and local mapping was idle
+};
+/// "none", "max_frames", "close_points", "weak_tracking", "mapper_idle". Thread-safe.
+const char* keyframeReasonName(KeyframeReason reason);
+
 /// What tracking one frame gave.
 struct TrackingResult {
   TrackingState state = TrackingState::kNotInitialized;
@@ -38,6 +51,8 @@ struct TrackingResult {
   bool map_corrected = false;
   /// A keyframe made from this frame (already in the map and handed to the sink).
   Keyframe* new_keyframe = nullptr;
+  /// Why the keyframe was made (kNone without one, and for the map's first keyframe).
+  KeyframeReason keyframe_reason = KeyframeReason::kNone;
   /// The keyframe the frame was tracked against when state is kOk: of the local map's
   /// keyframes, the one sharing the most landmarks with the frame (ORB-SLAM2's reference
   /// keyframe), or the keyframe made from this frame; -1 otherwise.
@@ -93,7 +108,7 @@ class Tracker {
   int optimizeCurrentPose();
   void updateLocalMap();
   int searchLocalMap();
-  bool needNewKeyframe(int inliers) const;
+  KeyframeReason needNewKeyframe(int inliers) const;
   Keyframe* createKeyframe();
   void replaceRetiredInLastFrame();
   // The last frame's pose follows its reference keyframe's (moved by local BA or loop

@@ -164,6 +164,7 @@ int run(int argc, char** argv) {
   StampedTrajectory truth, online, before_loop;
   std::map<uint64_t, Transformationd> truth_by_frame;
   std::vector<double> frame_ms, track_ms;
+  std::map<std::string, size_t> keyframe_reasons;  // keyframes made, by KeyframeReason
   size_t lost = 0;
   TrackingState last_state = TrackingState::kNotInitialized;
   const double cpu_start = cpuSeconds();
@@ -184,6 +185,7 @@ int run(int argc, char** argv) {
     frame_ms.push_back(
         std::chrono::duration<double, std::milli>(Clock::now() - frame_start).count());
     track_ms.push_back(r.time_ms);
+    if (r.new_keyframe != nullptr) ++keyframe_reasons[keyframeReasonName(r.keyframe_reason)];
     if (r.state != last_state || r.relocalized) {
       // Every change of state, with the tracker's reason, so a lost stretch can be found.
       std::fprintf(stderr, "\nframe %zu: %s%s%s%s\n", i, trackingStateName(r.state),
@@ -266,6 +268,10 @@ int run(int argc, char** argv) {
       "median %.1f ms%s\n",
       percentile(frame_ms, 0.5), percentile(frame_ms, 0.95), percentile(track_ms, 0.5),
       one_core ? " (one core)" : " (left/right extraction on 2 threads)");
+  std::printf("  keyframes made by reason:");
+  for (const auto& [name, count] : keyframe_reasons) std::printf(" %s %zu", name.c_str(), count);
+  std::printf(" (none: the first); culled %lu\n",
+              static_cast<unsigned long>(slam.localMappingStats().keyframes_culled));
   std::printf("  local BA: %zu runs, median %.1f ms, p95 %.1f ms\n", ba_ms.size(),
               percentile(ba_ms, 0.5), percentile(ba_ms, 0.95));
   std::printf(
@@ -291,6 +297,7 @@ int run(int argc, char** argv) {
         {"path_m", path},
         {"lost", lost},
         {"keyframes", slam.map().numKeyframes()},
+        {"keyframe_reasons", keyframe_reasons},
         {"one_core", one_core},
         {"frame_ms_median", percentile(frame_ms, 0.5)},
         {"frame_ms_p95", percentile(frame_ms, 0.95)},

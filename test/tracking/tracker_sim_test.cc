@@ -20,12 +20,13 @@ namespace {
 
 struct RunStats {
   int frames = 0, ok = 0, keyframes = 0;
+  std::vector<std::pair<int, KeyframeReason>> keyframe_frames;  // frame index, reason
   double max_translation_error = 0.0, max_rotation_error_deg = 0.0, path_length = 0.0;
   std::vector<double> track_ms;
 };
 
 RunStats runTracker(const std::string& spec, const std::string& trajectory, size_t frames,
-                    bool local_mapping) {
+                    bool local_mapping, const TrackerConfig& config = TrackerConfig{}) {
   SourceConfig options;
   options.trajectory = trajectory;
   options.max_frames = frames;
@@ -41,7 +42,7 @@ RunStats runTracker(const std::string& spec, const std::string& trajectory, size
   LocalMapper mapper(&map, camera, builder.pyramid(), LocalMapperConfig{});
   std::thread mapping_thread;
   if (local_mapping) mapping_thread = std::thread([&] { mapper.run(); });
-  Tracker tracker(&map, camera, builder.pyramid(), TrackerConfig{}, nullptr,
+  Tracker tracker(&map, camera, builder.pyramid(), config, nullptr,
                   local_mapping ? &mapper : nullptr);
   CaptureFrame frame;
   std::optional<Eigen::Vector3d> last_position;
@@ -52,7 +53,12 @@ RunStats runTracker(const std::string& spec, const std::string& trajectory, size
                                            frame.timestamp_ns, features, T_C_G_true);
     ++stats.frames;
     stats.track_ms.push_back(r.time_ms);
-    if (r.new_keyframe != nullptr) ++stats.keyframes;
+    if (r.new_keyframe != nullptr) {
+      ++stats.keyframes;
+      stats.keyframe_frames.emplace_back(stats.frames - 1, r.keyframe_reason);
+    } else {
+      EXPECT_EQ(r.keyframe_reason, KeyframeReason::kNone) << "frame " << frame.frame_id;
+    }
     if (last_position) stats.path_length += (frame.T_G_C->translation() - *last_position).norm();
     last_position = frame.T_G_C->translation();
     if (r.state != TrackingState::kOk) {
@@ -99,6 +105,36 @@ TEST(TrackerSimTest, TracksTheRoomLoopCloseToTheExactPoses) {
   EXPECT_LT(s.max_translation_error, 0.02 * s.path_length);
   EXPECT_LT(s.max_rotation_error_deg, 1.0);
   EXPECT_GT(s.keyframes, 2);
+}
+
+// Each keyframe says which condition made it: with min_frames_between_keyframes and
+// max_frames_between_keyframes both 8 ("mapper idle" then never holds before the frame
+// count does), the room's keyframes come from the frame count (exactly 8 frames after the
+// previous one, or later: c2, fewer inliers than 75 % of the reference keyframe's, must hold
+// too) or from the tracking itself (sooner).
+TEST(TrackerSimTest, KeyframesSayWhichConditionMadeThem) {
+  TrackerConfig config;
+  config.min_frames_between_keyframes = 8;
+  config.max_frames_between_keyframes = 8;
+  const RunStats s = runTracker("sim:room", "loop", 80, false, config);
+  ASSERT_EQ(s.ok, 80);
+  ASSERT_GE(s.keyframe_frames.size(), 2u);
+  EXPECT_EQ(s.keyframe_frames.front(), std::make_pair(0, KeyframeReason::kNone));  // the first
+  int by_count = 0;
+  for (size_t k = 1; k < s.keyframe_frames.size(); ++k) {
+    const auto [frame, reason] = s.keyframe_frames[k];
+    const int since = frame - s.keyframe_frames[k - 1].first;
+    EXPECT_NE(reason, KeyframeReason::kNone) << "frame " << frame;
+    EXPECT_NE(reason, KeyframeReason::kMapperIdle) << "frame " << frame;
+    if (reason == KeyframeReason::kMaxFrames) {
+      EXPECT_GE(since, 8) << "frame " << frame;
+      ++by_count;
+    } else {
+      EXPECT_LT(since, 8) << "frame " << frame << ": " << keyframeReasonName(reason);
+    }
+  }
+  EXPECT_GT(by_count, 0);
+  EXPECT_STREQ(keyframeReasonName(KeyframeReason::kClosePoints), "close_points");
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -23,6 +24,9 @@ std::string LocalMapperConfig::validate() const {
     error << "fuse_radius must be > 0, got " << fuse_radius;
   } else if (!(redundant_ratio > 0.0 && redundant_ratio <= 1.0)) {
     error << "redundant_ratio must be in (0, 1], got " << redundant_ratio;
+  } else if (local_ba_max_keyframes < 0) {
+    error << "local_ba_max_keyframes must be >= 0 (0 = all covisible), got "
+          << local_ba_max_keyframes;
   } else if (std::string e = cblox::validate(bundle_adjustment); !e.empty()) {
     error << "bundle_adjustment: " << e;
   } else if (std::string t = triangulation.validate(); !t.empty()) {
@@ -197,18 +201,25 @@ void LocalMapper::localBundleAdjustment(Keyframe* keyframe) {
   std::vector<std::shared_ptr<Landmark>> landmarks;
   std::vector<std::pair<Keyframe*, uint32_t>> observation_of;  // per BA observation
   int change_index = 0;
+  size_t window_size = 0;
   {
     std::shared_lock<std::shared_mutex> lock(map_->mutex());
     if (keyframe->bad() || map_->numKeyframes() <= 2) return;
     change_index = map_->changeIndex();
-    // Window: the keyframe and all its covisible keyframes.
+    // Window: the keyframe and its covisible keyframes, by shared landmarks (all of them, or
+    // the best local_ba_max_keyframes).
     std::vector<Keyframe*> window{keyframe};
     keyframe->ba_local_for_keyframe = keyframe->id;
+    const size_t max_window = config_.local_ba_max_keyframes > 0
+                                  ? static_cast<size_t>(config_.local_ba_max_keyframes) + 1
+                                  : SIZE_MAX;
     for (Keyframe* k : keyframe->covisibleByWeight()) {
+      if (window.size() >= max_window) break;
       if (k->bad() || k->ba_local_for_keyframe == keyframe->id) continue;
       k->ba_local_for_keyframe = keyframe->id;
       window.push_back(k);
     }
+    window_size = window.size();
     for (Keyframe* k : window) {
       for (Landmark* l : k->landmarks()) {
         if (l == nullptr || l->bad() || l->ba_local_for_keyframe == keyframe->id) continue;
@@ -299,6 +310,7 @@ void LocalMapper::localBundleAdjustment(Keyframe* keyframe) {
     ++stats_.bundle_adjustments;
     if (result.aborted) ++stats_.bundle_adjustments_aborted;
     stats_.last_ba_ms = result.time_ms;
+    stats_.largest_ba_window = std::max(stats_.largest_ba_window, window_size);
   }
   if (on_poses_ && !changed.empty()) on_poses_(changed);
 }

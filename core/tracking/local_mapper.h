@@ -35,8 +35,11 @@ struct LocalMapperConfig {
   int fuse_neighbours = 10;
   int fuse_second_neighbours = 5;
   float fuse_radius = 3.0f;
-  /// Local BA over the new keyframe and its covisible keyframes (all of them); the
-  /// keyframes outside that see the window's landmarks are held fixed.
+  /// Local BA over the new keyframe and its covisible keyframes; the keyframes outside that
+  /// see the window's landmarks are held fixed. At most this many covisible keyframes, the
+  /// ones sharing the most landmarks with the new keyframe, are optimised (0 = all of them,
+  /// as ORB-SLAM2); the others that see the window's landmarks are held fixed.
+  int local_ba_max_keyframes = 0;
   BundleAdjustmentConfig bundle_adjustment;
   /// Keyframe culling: a keyframe whose close landmarks are >= this fraction seen by at
   /// least 3 other keyframes at the same or a finer scale is culled (ORB-SLAM2: 0.9).
@@ -67,6 +70,7 @@ struct LocalMapperStats {
   uint64_t bundle_adjustments_aborted = 0;
   uint64_t bundle_adjustments_discarded = 0;  ///< stale after a loop correction
   double last_ba_ms = 0.0;
+  size_t largest_ba_window = 0;  ///< most keyframes optimised (not fixed) by one local BA
 };
 
 /// ORB-SLAM2's local mapping for stereo / RGB-D: for every keyframe the tracker inserted,

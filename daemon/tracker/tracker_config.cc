@@ -140,7 +140,8 @@ void loadLocalMapping(const YAML::Node& node, LocalMapperConfig* m) {
                     {"cull_keyframes", &m->cull_keyframes},
                     {"redundant_ratio", &m->redundant_ratio},
                     {"create_new_landmarks", &m->create_new_landmarks},
-                    {"triangulation_neighbours", &m->triangulation.neighbours}},
+                    {"triangulation_neighbours", &m->triangulation.neighbours},
+                    {"local_ba_max_keyframes", &m->local_ba_max_keyframes}},
                    {"bundle_adjustment"})) {
     return;
   }

@@ -38,11 +38,12 @@ struct MapperUnderTest {
     // ones must not start subvolumes anywhere they should not.
     config.mapper.creation.revisit_after_frames = 2;
     config.mapper.creation.revisit_max_frames = 3;
-    // A small memory cap (about 500 blocks): the map these mappers build over a whole run
+    // A small memory cap (about 120 blocks): the map these mappers build over a whole run
     // stays small, and its stages (near-only, full) are reached by hostile frames too. Without
     // it the map grew over the run and each export_mesh command, which fuses every subvolume
-    // (about 10 us per voxel sample under the sanitizers), took minutes late in a run.
-    config.mapper.memory_cap.cap_mb = 4;
+    // (5-15 us per voxel sample under the sanitizers), took minutes late in a run; at 4 MiB
+    // exports still held the target at about 100 executions per second.
+    config.mapper.memory_cap.cap_mb = 1;
     mapper = std::make_unique<Mapper>(config.mapper, [](const std::string&) {});
     std::string error;
     FUZZ_CHECK(mapper->start(&error), error);

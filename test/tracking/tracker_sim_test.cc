@@ -23,10 +23,12 @@ struct RunStats {
   std::vector<std::pair<int, KeyframeReason>> keyframe_frames;  // frame index, reason
   double max_translation_error = 0.0, max_rotation_error_deg = 0.0, path_length = 0.0;
   std::vector<double> track_ms;
+  LocalMapperStats mapping;
 };
 
 RunStats runTracker(const std::string& spec, const std::string& trajectory, size_t frames,
-                    bool local_mapping, const TrackerConfig& config = TrackerConfig{}) {
+                    bool local_mapping, const TrackerConfig& config = TrackerConfig{},
+                    const LocalMapperConfig& mapping_config = LocalMapperConfig{}) {
   SourceConfig options;
   options.trajectory = trajectory;
   options.max_frames = frames;
@@ -39,7 +41,7 @@ RunStats runTracker(const std::string& spec, const std::string& trajectory, size
   const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
   FrameBuilder builder(camera, FrameBuilderConfig{}, nullptr);
   SparseMap map;
-  LocalMapper mapper(&map, camera, builder.pyramid(), LocalMapperConfig{});
+  LocalMapper mapper(&map, camera, builder.pyramid(), mapping_config);
   std::thread mapping_thread;
   if (local_mapping) mapping_thread = std::thread([&] { mapper.run(); });
   Tracker tracker(&map, camera, builder.pyramid(), config, nullptr,
@@ -79,6 +81,7 @@ RunStats runTracker(const std::string& spec, const std::string& trajectory, size
     mapper.stop();
     mapping_thread.join();
     const LocalMapperStats ms = mapper.stats();
+    stats.mapping = ms;
     std::printf(
         "local mapping: %lu keyframes, %lu BAs (%lu aborted, last %.1f ms), %lu landmarks "
         "culled, %lu fused\n",
@@ -135,6 +138,25 @@ TEST(TrackerSimTest, KeyframesSayWhichConditionMadeThem) {
   }
   EXPECT_GT(by_count, 0);
   EXPECT_STREQ(keyframeReasonName(KeyframeReason::kClosePoints), "close_points");
+}
+
+// local_ba_max_keyframes bounds the keyframes one local BA optimises: the new keyframe and its
+// best covisible ones. On the room every keyframe sees most others, so without the bound the
+// window grows past it.
+TEST(TrackerSimTest, LocalBundleAdjustmentWindowIsBounded) {
+  TrackerConfig tracking;
+  tracking.max_frames_between_keyframes = 5;  // keyframes often: a window to bound
+  LocalMapperConfig bounded;
+  bounded.local_ba_max_keyframes = 3;
+  const RunStats all = runTracker("sim:room", "loop", 90, true, tracking);
+  const RunStats few = runTracker("sim:room", "loop", 90, true, tracking, bounded);
+  ASSERT_GT(all.mapping.bundle_adjustments, 0u);
+  ASSERT_GT(few.mapping.bundle_adjustments, 0u);
+  EXPECT_GT(all.mapping.largest_ba_window, 4u);
+  EXPECT_EQ(few.mapping.largest_ba_window, 4u);  // the new keyframe and 3 covisible ones
+  LocalMapperConfig negative;
+  negative.local_ba_max_keyframes = -1;
+  EXPECT_NE(negative.validate().find("local_ba_max_keyframes"), std::string::npos);
 }
 
 }  // namespace

@@ -210,11 +210,6 @@ std::optional<int64_t> readCount(const YAML::Node& node) {
 
 }  // namespace
 
-std::string yamlDirectiveAsComment(std::string text) {
-  text.replace(0, std::min(text.find('\n'), text.size()), 1, '#');
-  return text;
-}
-
 std::optional<YAML::Node> readOpenCvStorage(const std::string& path, std::string* error) {
   std::string text;
   if (!readFile(path, &text, error)) {

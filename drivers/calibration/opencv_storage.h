@@ -46,8 +46,4 @@ std::string readOpenCvMatrix(const YAML::Node& node, OpenCvMatrix* matrix);
 /// .Inf, -.Inf (any case). nullopt for anything else, including trailing characters.
 std::optional<double> parseOpenCvNumber(std::string_view text);
 
-/// OpenCV YAML text ("%YAML:1.0" on its first line, a directive yaml-cpp does not know) with
-/// that line turned into a comment, so yaml-cpp reads the rest with its line numbers.
-std::string yamlDirectiveAsComment(std::string text);
-
 }  // namespace cblox

@@ -595,6 +595,18 @@ std::unique_ptr<Mapper> startTrackerModeMapper(MapperConfig config, LogLines* lo
   return mapper;
 }
 
+// Integrates room frame i with its true pose, as the tracker reports a frame tracked in map
+// `epoch` against keyframe `reference` (mapper key), and waits until the mapper is idle.
+void integrateTrackedFrame(Mapper& mapper, size_t i, int64_t reference, int32_t epoch = 0) {
+  const auto& frames = roomFrames();
+  ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));
+  TimedPose pose = groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C);
+  pose.epoch = epoch;
+  pose.reference_keyframe = reference;
+  ASSERT_TRUE(mapper.onFramePose(pose));
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+}
+
 // subvolumes.revisit_after_frames: frames tracked against a keyframe of an older subvolume
 // (TimedPose::reference_keyframe) start, after that many in a row, a subvolume anchored at that
 // subvolume's anchor (logged with its reason); a single stray frame does not. A pose batch
@@ -614,11 +626,7 @@ TEST(MapperTest, TrackerModeAnchorsFramesTrackedInAnOlderSubvolumeToIt) {
   const auto& frames = roomFrames();
   ASSERT_GE(frames.size(), 12u);
   auto frameWithReference = [&](size_t i, KeyframeId reference) {
-    ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));
-    TimedPose pose = groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C);
-    pose.reference_keyframe = reference;
-    ASSERT_TRUE(mapper.onFramePose(pose));
-    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+    integrateTrackedFrame(mapper, i, reference);
   };
   auto keyframe = [&](KeyframeId id, size_t i) {
     ASSERT_TRUE(mapper.onKeyframe(id, utimeOf(frames[i]), frames[i].T_G_C));
@@ -698,12 +706,7 @@ TEST(MapperTest, RevisitAnchoringIgnoresUnknownAndOtherEpochReferences) {
   ASSERT_TRUE(mapper.onKeyframe(*epoch1, utimeOf(frames[1]), frames[1].T_G_C));  // 1: new map
   ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
   for (size_t i = 1; i < 5; ++i) {
-    ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));
-    TimedPose pose = groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C);
-    pose.epoch = 1;
-    pose.reference_keyframe = i % 2 == 0 ? 0 : 12345;  // epoch 0's keyframe, or unknown
-    ASSERT_TRUE(mapper.onFramePose(pose));
-    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+    integrateTrackedFrame(mapper, i, i % 2 == 0 ? 0 : 12345, 1);  // epoch 0's keyframe, or unknown
   }
   EXPECT_EQ(mapper.collection().submapIds(), (std::vector<SubmapId>{0, 1}));
   EXPECT_EQ(mapper.status().frames_integrated, 4u);

@@ -130,6 +130,86 @@ uint8_t roundChannel(float value) {
   return static_cast<uint8_t>(std::lround(std::clamp(value, 0.0f, 255.0f)));
 }
 
+// Target voxels are visited in cubic cells of this many voxels a side; a cell whose samples
+// can read no observed source block is skipped whole.
+constexpr int kFusionCellVoxels = 4;
+
+// Whether a cell of target voxels can read an observed source block. The samples of the
+// cell's voxel centres g (q = A g + c, affine) lie in the box spanned by its corner voxels'
+// q; every corner a sample reads lies in [floor(q_min), floor(q_max) + 1]. The box is widened
+// by a margin far above the float rounding of q as fuseLayers steps it (a few ulps of |q|),
+// so a skipped cell is one whose every sample would fail: skipping changes no voxel.
+struct CellReach {
+  const Eigen::Matrix3d& A;
+  const Eigen::Vector3d& c;
+  int source_log2;
+  const absl::flat_hash_set<uint64_t>* observed;
+
+  bool mayReachObservedSource(const GlobalVoxelIndex& first, int cell) const {
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+    Eigen::Vector3d hi = -lo;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Eigen::Vector3d g =
+          (first + GridIndex(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1) * (cell - 1))
+              .cast<double>();
+      const Eigen::Vector3d q = A * g + c;
+      lo = lo.cwiseMin(q);
+      hi = hi.cwiseMax(q);
+    }
+    constexpr double kLimit = 1 << 30;  // beyond: no shortcut, every voxel is sampled
+    BlockIndex b_lo, b_hi;
+    int64_t count = 1;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double margin = 1e-3 + 1e-5 * std::max(std::abs(lo[axis]), std::abs(hi[axis]));
+      const double v_lo = std::floor(lo[axis] - margin);
+      const double v_hi = std::floor(hi[axis] + margin) + 1.0;
+      if (!(v_lo > -kLimit && v_hi < kLimit)) return true;
+      b_lo[axis] = static_cast<int>(v_lo) >> source_log2;
+      b_hi[axis] = static_cast<int>(v_hi) >> source_log2;
+      count *= b_hi[axis] - b_lo[axis] + 1;
+    }
+    if (count > 64) return true;  // a coarse target over a fine source: just sample
+    for (int z = b_lo.z(); z <= b_hi.z(); ++z) {
+      for (int y = b_lo.y(); y <= b_hi.y(); ++y) {
+        for (int x = b_lo.x(); x <= b_hi.x(); ++x) {
+          const BlockIndex index(x, y, z);
+          if (gridIndexInRange(index) && observed->contains(packGridIndex(index))) return true;
+        }
+      }
+    }
+    return false;
+  }
+};
+
+// Cell `linear` of a block holding cells_per_side^3 cells, in x-fastest order.
+GridIndex cellCorner(int linear, int cells_per_side) {
+  return GridIndex(linear % cells_per_side, (linear / cells_per_side) % cells_per_side,
+                   linear / (cells_per_side * cells_per_side));
+}
+
+// Merges one sample (d_s, w_s, colour_s) into a target voxel, as documented at fuseLayers.
+void mergeSample(float d_s, float w_s, const Eigen::Vector3f& color_s,
+                 const SubmapFusionConfig& config, TsdfVoxel* voxel) {
+  if (voxel->weight <= 0.0f) {
+    voxel->distance = d_s;
+    voxel->weight = std::min(w_s, config.max_weight);
+    if (config.use_color) {
+      voxel->color =
+          Color{roundChannel(color_s.x()), roundChannel(color_s.y()), roundChannel(color_s.z())};
+    }
+    return;
+  }
+  const float w_t = voxel->weight;
+  const float w = w_t + w_s;
+  voxel->distance = (voxel->distance * w_t + d_s * w_s) / w;
+  if (config.use_color) {
+    const Eigen::Vector3f color_t(voxel->color.r, voxel->color.g, voxel->color.b);
+    const Eigen::Vector3f mixed = (color_t * w_t + color_s * w_s) / w;
+    voxel->color = Color{roundChannel(mixed.x()), roundChannel(mixed.y()), roundChannel(mixed.z())};
+  }
+  voxel->weight = std::min(w, config.max_weight);
+}
+
 bool hasObservedVoxel(const Block& block, float min_weight) {
   for (int i = 0; i < block.numVoxels(); ++i) {
     if (block.voxel(i).weight >= min_weight) return true;
@@ -164,6 +244,7 @@ SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T
 
   // Target blocks covering the sampleable region of every observed source block.
   absl::flat_hash_set<uint64_t> target_keys;
+  absl::flat_hash_set<uint64_t> observed_source;  // the observed source blocks' keys
   constexpr double kEpsilonVoxels = 1e-4;
   // The global voxel indices of the blocks kGridIndexMin .. kGridIndexMax (exact in double).
   const double min_voxel = std::ldexp(static_cast<double>(kGridIndexMin), n_t_log2);
@@ -171,6 +252,7 @@ SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T
   for (const auto& [key, block] : source.blocks()) {
     if (!hasObservedVoxel(*block, config.min_weight)) continue;
     ++stats.source_blocks;
+    observed_source.insert(key);
     const Eigen::Vector3d q_lo = (block->index() * n_s).cast<double>();
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
     Eigen::Vector3d hi = -lo;
@@ -228,51 +310,41 @@ SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T
   std::vector<uint8_t> block_used(blocks.size(), 0);
   std::vector<size_t> fused_in_block(blocks.size(), 0);
   std::vector<size_t> fused_per_thread(static_cast<size_t>(config.num_threads), 0);
+  std::vector<size_t> sampled_per_thread(static_cast<size_t>(config.num_threads), 0);
   std::atomic<size_t> next_block{0};
   const int n_t = target->voxelsPerSide();
+  const int cell = std::min(n_t, kFusionCellVoxels);
+  const int cells_per_block = (n_t / cell) * (n_t / cell) * (n_t / cell);
+  const CellReach reach{A, c, source.voxelsPerSideLog2(), &observed_source};
   runThreadTeam(config.num_threads, [&](int thread_id) {
     SourceSampler sampler(source, config.min_weight, config.min_sample_coverage);
-    size_t fused = 0;
+    size_t fused = 0, sampled = 0;
     for (;;) {
       const size_t b = next_block.fetch_add(1, std::memory_order_relaxed);
       if (b >= blocks.size()) break;
       Block& block = *blocks[b];
-      const Eigen::Vector3f q0 = (A * (block.index() * n_t).cast<double>() + c).cast<float>();
+      const GlobalVoxelIndex first = block.index() * n_t;
+      const Eigen::Vector3f q0 = (A * first.cast<double>() + c).cast<float>();
       size_t fused_here = 0;
       bool interior_here = false;
-      int linear = 0;
-      for (int z = 0; z < n_t; ++z) {
-        for (int y = 0; y < n_t; ++y) {
-          const Eigen::Vector3f q_row =
-              q0 + A_f.col(2) * static_cast<float>(z) + A_f.col(1) * static_cast<float>(y);
-          for (int x = 0; x < n_t; ++x, ++linear) {
-            const Eigen::Vector3f q = q_row + A_f.col(0) * static_cast<float>(x);
-            float d_s = 0.0f, w_s = 0.0f;
-            Eigen::Vector3f color_s;
-            bool complete = false;
-            if (!sampler.sample(q, &d_s, &w_s, &color_s, &complete)) continue;
-            interior_here = interior_here || complete;
-            TsdfVoxel& voxel = block.voxel(linear);
-            if (voxel.weight <= 0.0f) {
-              voxel.distance = d_s;
-              voxel.weight = std::min(w_s, config.max_weight);
-              if (config.use_color) {
-                voxel.color = Color{roundChannel(color_s.x()), roundChannel(color_s.y()),
-                                    roundChannel(color_s.z())};
-              }
-            } else {
-              const float w_t = voxel.weight;
-              const float w = w_t + w_s;
-              voxel.distance = (voxel.distance * w_t + d_s * w_s) / w;
-              if (config.use_color) {
-                const Eigen::Vector3f color_t(voxel.color.r, voxel.color.g, voxel.color.b);
-                const Eigen::Vector3f mixed = (color_t * w_t + color_s * w_s) / w;
-                voxel.color = Color{roundChannel(mixed.x()), roundChannel(mixed.y()),
-                                    roundChannel(mixed.z())};
-              }
-              voxel.weight = std::min(w, config.max_weight);
+      for (int linear_cell = 0; linear_cell < cells_per_block; ++linear_cell) {
+        const GridIndex corner = cellCorner(linear_cell, n_t / cell) * cell;
+        if (!reach.mayReachObservedSource(first + corner, cell)) continue;
+        sampled += static_cast<size_t>(cell) * cell * cell;
+        for (int z = corner.z(); z < corner.z() + cell; ++z) {
+          for (int y = corner.y(); y < corner.y() + cell; ++y) {
+            const Eigen::Vector3f q_row =
+                q0 + A_f.col(2) * static_cast<float>(z) + A_f.col(1) * static_cast<float>(y);
+            for (int x = corner.x(); x < corner.x() + cell; ++x) {
+              const Eigen::Vector3f q = q_row + A_f.col(0) * static_cast<float>(x);
+              float d_s = 0.0f, w_s = 0.0f;
+              Eigen::Vector3f color_s;
+              bool complete = false;
+              if (!sampler.sample(q, &d_s, &w_s, &color_s, &complete)) continue;
+              interior_here = interior_here || complete;
+              mergeSample(d_s, w_s, color_s, config, &block.voxel((z * n_t + y) * n_t + x));
+              ++fused_here;
             }
-            ++fused_here;
           }
         }
       }
@@ -284,8 +356,10 @@ SubmapFusionStats fuseLayers(const TsdfLayer& source, const Transformationd& T_T
       fused += fused_here;
     }
     fused_per_thread[static_cast<size_t>(thread_id)] = fused;
+    sampled_per_thread[static_cast<size_t>(thread_id)] = sampled;
   });
   for (const size_t fused : fused_per_thread) stats.voxels_fused += fused;
+  for (const size_t sampled : sampled_per_thread) stats.voxels_sampled += sampled;
 
   for (size_t b = 0; b < blocks.size(); ++b) {
     if (!newly_allocated[b]) continue;

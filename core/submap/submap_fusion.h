@@ -42,6 +42,7 @@ struct SubmapFusionStats {
   size_t target_blocks_visited = 0;    ///< target blocks whose voxels were sampled
   size_t target_blocks_allocated = 0;  ///< target blocks newly allocated and kept
   size_t voxels_fused = 0;             ///< target voxels updated
+  size_t voxels_sampled = 0;           ///< target voxels sampled (the others were skipped)
   double seconds = 0.0;                ///< wall time
 
   SubmapFusionStats& operator+=(const SubmapFusionStats& o) {
@@ -49,6 +50,7 @@ struct SubmapFusionStats {
     target_blocks_visited += o.target_blocks_visited;
     target_blocks_allocated += o.target_blocks_allocated;
     voxels_fused += o.voxels_fused;
+    voxels_sampled += o.voxels_sampled;
     seconds += o.seconds;
     return *this;
   }
@@ -62,7 +64,11 @@ struct SubmapFusionStats {
 ///   spanned from the centre of voxel (first - 1,1,1) to the first voxel centre of its
 ///   +1,+1,+1 neighbour (every cell with a corner in the block) is mapped into T; every
 ///   target block overlapping the axis-aligned bounding box of that cube is allocated if
-///   missing and each of its voxels is sampled once.
+///   missing and each of its voxels is sampled once, except where a cube of 4^3 target
+///   voxels can read no observed source block (the bounding box of its samples, widened well
+///   beyond float rounding, meets none): those samples would all fail and are skipped, so the
+///   result is the same (voxels_sampled counts the rest). Around a sparse source (isolated
+///   blocks under a rotation) most visited voxels are skipped this way.
 /// - Sample: the target voxel centre p_T goes to p_S = T_T_S^-1 * p_T; with q = p_S / s - 1/2
 ///   (s: source voxel size; voxel i has its centre at q = i), base = floor(q), f = q - base,
 ///   the 8 corners base + o, o in {0,1}^3, have trilinear coefficients

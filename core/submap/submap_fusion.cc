@@ -146,6 +146,16 @@ struct CellReach {
   const absl::flat_hash_set<uint64_t>* observed;
 
   bool mayReachObservedSource(const GlobalVoxelIndex& first, int cell) const {
+    constexpr double kLimit = 1 << 30;  // beyond: no shortcut, every voxel is sampled
+    // Inside a dense source the block at the cell's centre decides at once.
+    const Eigen::Vector3d centre =
+        A * (first.cast<double>() + Eigen::Vector3d::Constant(0.5 * (cell - 1))) + c;
+    if (centre.cwiseAbs().maxCoeff() < kLimit) {
+      const BlockIndex index(static_cast<int>(std::floor(centre.x())) >> source_log2,
+                             static_cast<int>(std::floor(centre.y())) >> source_log2,
+                             static_cast<int>(std::floor(centre.z())) >> source_log2);
+      if (gridIndexInRange(index) && observed->contains(packGridIndex(index))) return true;
+    }
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
     Eigen::Vector3d hi = -lo;
     for (int corner = 0; corner < 8; ++corner) {
@@ -156,7 +166,6 @@ struct CellReach {
       lo = lo.cwiseMin(q);
       hi = hi.cwiseMax(q);
     }
-    constexpr double kLimit = 1 << 30;  // beyond: no shortcut, every voxel is sampled
     BlockIndex b_lo, b_hi;
     int64_t count = 1;
     for (int axis = 0; axis < 3; ++axis) {

@@ -3,6 +3,7 @@
 # Extra arguments are passed to CMake's configure step.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/ccache_env.sh
 BUILD_DIR=${BUILD_DIR:-build}
 WERROR=OFF
 if [[ "${CI:-}" == "true" ]]; then WERROR=ON; fi

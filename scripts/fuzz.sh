@@ -16,6 +16,7 @@
 # Environment: CCACHE_DISABLE=1 for a cold build; FUZZ_FLAGS for more libFuzzer flags.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/ccache_env.sh
 BUILD_DIR=build-fuzz
 CI_TOTAL_SECONDS=90
 mode=ci

@@ -12,6 +12,7 @@
 # Usage: scripts/tsan.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/ccache_env.sh
 BUILD_DIR=build-tsan
 RELEASE_DIR=${RELEASE_DIR:-build}
 WERROR=OFF

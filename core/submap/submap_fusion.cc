@@ -135,8 +135,9 @@ uint8_t roundChannel(float value) {
 constexpr int kFusionCellVoxels = 4;
 
 // Whether a cell of target voxels can read an observed source block. The samples of the
-// cell's voxel centres g (q = A g + c, affine) lie in the box spanned by its corner voxels'
-// q; every corner a sample reads lies in [floor(q_min), floor(q_max) + 1]. The box is widened
+// cell's voxel centres g (q = A g + c, affine) lie in the box q(centre) +- |A| h (h: the
+// cell's half extent, |A| element-wise: the bounding box of the cube's image); every corner a
+// sample reads lies in [floor(q_min), floor(q_max) + 1]. The box is widened
 // by a margin far above the float rounding of q as fuseLayers steps it (a few ulps of |q|),
 // so a skipped cell is one whose every sample would fail: skipping changes no voxel.
 struct CellReach {
@@ -147,25 +148,18 @@ struct CellReach {
 
   bool mayReachObservedSource(const GlobalVoxelIndex& first, int cell) const {
     constexpr double kLimit = 1 << 30;  // beyond: no shortcut, every voxel is sampled
+    const double h = 0.5 * (cell - 1);
+    const Eigen::Vector3d centre = A * (first.cast<double>() + Eigen::Vector3d::Constant(h)) + c;
     // Inside a dense source the block at the cell's centre decides at once.
-    const Eigen::Vector3d centre =
-        A * (first.cast<double>() + Eigen::Vector3d::Constant(0.5 * (cell - 1))) + c;
     if (centre.cwiseAbs().maxCoeff() < kLimit) {
       const BlockIndex index(static_cast<int>(std::floor(centre.x())) >> source_log2,
                              static_cast<int>(std::floor(centre.y())) >> source_log2,
                              static_cast<int>(std::floor(centre.z())) >> source_log2);
       if (gridIndexInRange(index) && observed->contains(packGridIndex(index))) return true;
     }
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-    Eigen::Vector3d hi = -lo;
-    for (int corner = 0; corner < 8; ++corner) {
-      const Eigen::Vector3d g =
-          (first + GridIndex(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1) * (cell - 1))
-              .cast<double>();
-      const Eigen::Vector3d q = A * g + c;
-      lo = lo.cwiseMin(q);
-      hi = hi.cwiseMax(q);
-    }
+    const Eigen::Vector3d half_extent = A.cwiseAbs().rowwise().sum() * h;
+    const Eigen::Vector3d lo = centre - half_extent;
+    const Eigen::Vector3d hi = centre + half_extent;
     BlockIndex b_lo, b_hi;
     int64_t count = 1;
     for (int axis = 0; axis < 3; ++axis) {

@@ -132,9 +132,10 @@ pids+=("$spy_pid")
 wait_for 30 "$spy_pid" "$work/ready" || fail "lcm-spy did not show its window"
 echo "lcm-spy window up after $((SECONDS - start)) s"
 
-# Every channel, 5 times a second for up to 20 s: lcm-spy subscribes just after its window
-# shows, so the first round may come too early; the probe waits for 2 messages a channel.
-"$publisher" "$url" 100 200 > "$work/publisher.log" 2>&1 &
+# Every channel, 5 times a second for 6 s: lcm-spy subscribes just after its window shows,
+# so the first round may come too early; the probe waits for 2 messages a channel, then for
+# the bus to go quiet before it reads the counts and opens a viewer (LcmSpyProbe.java, 2b).
+"$publisher" "$url" 30 200 > "$work/publisher.log" 2>&1 &
 pids+=("$!")
 wait_for 45 "$spy_pid" "$work/table.tsv" || fail "the probe wrote no table (lcm-spy ended or hung)"
 echo "lcm-spy table read after $((SECONDS - start)) s"

@@ -23,7 +23,9 @@
 //   CBLOX_SPY_PROBE_OPEN      a channel whose viewer (the decoded fields of its last
 //                             message) to open, by double-clicking its row, before the
 //                             screenshot; it is placed right of the table
-// The table file is written last (atomically): its presence means the probe is done. When
+// The table written is the one read once every channel has its messages and the bus has been
+// quiet for 1.5 s, before the viewer opens (see step 2b). The table file is written last
+// (atomically): its presence means the probe is done. When
 // waiting times out the probe still writes everything it has, so the test shows what was
 // missing.
 import java.awt.Component;
@@ -126,6 +128,22 @@ public final class LcmSpyProbe {
     }
     if (!allSeen(rows, channels, minMsgs)) log("timed out waiting for the channels");
 
+    // 2b. Wait until the publisher has finished (no count changes for 1.5 s). These are the
+    //     counts the test checks: they are read before any viewer opens, because lcm-spy's
+    //     Spy.createViewer publishes cd.viewer before calling its setViewport, and a message
+    //     arriving in between makes ObjectPanel.setObject throw a NullPointerException that
+    //     lcm-spy counts as undecodable (seen once in CI on CBLOX_STEREO). A viewer opened
+    //     on a quiet bus shows the last message (createViewer passes cd.last).
+    long quietSince = System.nanoTime();
+    while (System.nanoTime() < deadline && System.nanoTime() - quietSince < 1_500_000_000L) {
+      Thread.sleep(250);
+      List<List<String>> now = readTable(table);
+      if (!counts(now).equals(counts(rows))) quietSince = System.nanoTime();
+      rows = now;
+    }
+    if (System.nanoTime() - quietSince < 1_500_000_000L) log("the bus did not go quiet");
+    final List<List<String>> checked = rows;
+
     // 3. Optionally open lcm-spy's viewer of one channel as a user does (a double click on
     //    its row, through the X server) and place it right of the table.
     Frame viewer = openChannel.isEmpty() ? null : openViewer(frame, table, openChannel);
@@ -137,7 +155,11 @@ public final class LcmSpyProbe {
     SwingUtilities.invokeAndWait(() -> { f.repaint(); if (viewer != null) viewer.repaint(); });
     SwingUtilities.invokeAndWait(() -> {});
     Toolkit.getDefaultToolkit().sync();
-    rows = readTable(table);  // right before the screenshot, so both show the same counts
+    rows = readTable(table);  // right before the screenshot
+    if (!counts(rows).equals(counts(checked))) {
+      log("the counts changed after the checked table was read: " + counts(checked) + " -> " +
+          counts(rows));
+    }
     if (!pngPath.isEmpty()) {
       try {
         Rectangle r = new Rectangle(frame.getLocationOnScreen(), frame.getSize());
@@ -155,9 +177,25 @@ public final class LcmSpyProbe {
 
     if (!decodedPath.isEmpty()) writeAtomically(decodedPath, decodedObjects(table));
     StringBuilder out = new StringBuilder();
-    for (List<String> row : rows) out.append(String.join("\t", row)).append('\n');
+    for (List<String> row : checked) out.append(String.join("\t", row)).append('\n');
     if (!tablePath.isEmpty()) writeAtomically(tablePath, out.toString());
     log("table of " + (rows.size() - 1) + " channels written");
+  }
+
+  /** The "Num Msgs" and "Undecodable" cells of every row (all cells when absent). */
+  private static List<String> counts(List<List<String>> rows) {
+    List<String> out = new ArrayList<>();
+    if (rows.isEmpty()) return out;
+    List<String> header = rows.get(0);
+    int msgs = header.indexOf("Num Msgs"), undecodable = header.indexOf("Undecodable");
+    for (List<String> row : rows.subList(1, rows.size())) {
+      if (msgs < 0 || undecodable < 0 || row.size() <= Math.max(msgs, undecodable)) {
+        out.add(String.join("|", row));
+      } else {
+        out.add(row.get(0) + ":" + row.get(msgs) + "/" + row.get(undecodable));
+      }
+    }
+    return out;
   }
 
   /** Double-clicks the row of `channel` with java.awt.Robot; returns the viewer window. */

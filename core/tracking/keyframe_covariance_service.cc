@@ -6,16 +6,20 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <shared_mutex>
 #include <stdexcept>
 #include <utility>
 
+#include <Eigen/Eigenvalues>
+
 #include "core/covariance/batch_covariance_solver.h"
 #include "core/covariance/constrained_ordering_solver.h"
 #include "core/covariance/kaess_recovery_solver.h"
 #include "core/covariance/sparse_solve_solver.h"
+#include "core/geometry/se3_adjoint.h"
 #include "core/tracking/map_ba_problem.h"
 
 namespace cblox {
@@ -75,6 +79,68 @@ std::vector<ConditionalCovariance> failAll(std::span<const KeyframePair> pairs,
   results.reserve(pairs.size());
   for (const KeyframePair& pair : pairs) results.push_back(failedPair(pair, error));
   return results;
+}
+
+// A keyframe asked about, as the linearization sees it: `block` is the keyframe itself, or
+// for a culled keyframe the first keyframe up its chain of parents that is the gauge or has a
+// block in S, and T_B_K its pose relative to that one (the product of T_parent_this).
+struct ResolvedKeyframe {
+  uint64_t block = 0;
+  bool tied = false;  // culled: moved rigidly with `block`
+  Transformationd T_B_K;
+};
+
+// `id` as a linearization with gauge `gauge` and reduced camera matrix S sees it. Map's
+// shared lock.
+ResolvedKeyframe resolveKeyframe(const SparseMap& map, uint64_t gauge,
+                                 const ReducedCameraMatrix& S, uint64_t id) {
+  ResolvedKeyframe r;
+  r.block = id;
+  const Keyframe* k = map.keyframe(static_cast<KeyframeId>(id));
+  Transformationd T_B_K;
+  // A culled keyframe's parent never changes and parents have smaller ids; the bound only
+  // guards a corrupt graph.
+  for (size_t steps = 0; k != nullptr && k->bad() && steps <= map.allKeyframes().size();
+       ++steps) {
+    if (k->id == static_cast<KeyframeId>(gauge) || S.blockOf(k->id) >= 0) break;
+    T_B_K = k->T_parent_this() * T_B_K;
+    k = k->parent();
+  }
+  if (k == nullptr || k->id == static_cast<KeyframeId>(id)) return r;  // unknown, or itself
+  r.block = static_cast<uint64_t>(k->id);
+  r.tied = true;
+  r.T_B_K = T_B_K;
+  return r;
+}
+
+// The pair's answer for culled keyframes from the answer of their blocks' pair `inner`:
+// delta_I = Ad(T_I_B) delta_B (core/geometry/se3_adjoint.h), so Sigma_{I|J} = Ad Sigma Ad^T;
+// conditioning on J is conditioning on its block, to which it is rigidly tied.
+ConditionalCovariance throughBlocks(const KeyframePair& pair, const ResolvedKeyframe& i,
+                                    const ResolvedKeyframe& j, const ConditionalCovariance& inner) {
+  ConditionalCovariance r = inner;
+  r.i = pair.i;
+  r.j = pair.j;
+  if (!inner.ok && (i.tied || j.tied)) {
+    r.error = "through keyframes " + std::to_string(inner.i) + " and " + std::to_string(inner.j) +
+              " (culled ones are tied to them): " + inner.error;
+    return r;
+  }
+  if (i.tied) {
+    const Eigen::Matrix<double, 6, 6> Ad = adjoint(i.T_B_K.inverse());
+    r.sigma = Ad * inner.sigma * Ad.transpose();
+    r.sigma = (0.5 * (r.sigma + r.sigma.transpose())).eval();
+    const double largest =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(r.sigma, Eigen::EigenvaluesOnly)
+            .eigenvalues()
+            .maxCoeff();
+    if (!(largest > 0.0) || !std::isfinite(largest)) {
+      return failedPair(pair, "Sigma through culled keyframe " + std::to_string(inner.i) +
+                                  " is not positive definite");
+    }
+    r.q = 1.0 / largest;
+  }
+  return r;
 }
 
 }  // namespace
@@ -175,22 +241,19 @@ bool KeyframeCovarianceService::reusable(const Linearization& lin,
       config_.max_linearization_age_s) {
     return false;
   }
-  for (const KeyframePair& pair : request.pairs) {
-    for (const uint64_t id : {pair.i, pair.j}) {
-      if (id != lin.gauge && lin.S().blockOf(id) < 0) return false;
-    }
-  }
-  // No loop closure or global BA since, and no keyframe asked about culled since.
+  // No loop closure or global BA since, and every keyframe asked about has a block in it
+  // (culled ones through the keyframe they are tied to: the ties never change).
   std::shared_lock<std::shared_mutex> map_lock(map_.mutex());
   if (map_.changeIndex() != lin.change_index) return false;
   for (const KeyframePair& pair : request.pairs) {
     for (const uint64_t id : {pair.i, pair.j}) {
-      const Keyframe* k = map_.keyframe(static_cast<KeyframeId>(id));
-      if (k == nullptr || k->bad()) return false;
+      const uint64_t block = resolveKeyframe(map_, lin.gauge, lin.S(), id).block;
+      if (block != lin.gauge && lin.S().blockOf(block) < 0) return false;
     }
   }
   return true;
 }
+
 
 KeyframeCovarianceReply KeyframeCovarianceService::answer(const KeyframeCovarianceRequest& request,
                                                           Linearization& lin) const {
@@ -208,22 +271,44 @@ KeyframeCovarianceReply KeyframeCovarianceService::answer(const KeyframeCovarian
   // Pairs conditioned on the gauge keyframe are answered apart (it has no block in S): given
   // the gauge g (held fixed, so S^-1 is already conditioned on it) the answer is the
   // marginal [S^-1]_ii.
+  // Culled keyframes are asked about through the keyframes they are tied to (resolve).
+  std::vector<std::pair<ResolvedKeyframe, ResolvedKeyframe>> resolved;
+  resolved.reserve(request.pairs.size());
+  {
+    std::shared_lock<std::shared_mutex> map_lock(map_.mutex());
+    for (const KeyframePair& pair : request.pairs) {
+      resolved.emplace_back(resolveKeyframe(map_, lin.gauge, lin.S(), pair.i),
+                            resolveKeyframe(map_, lin.gauge, lin.S(), pair.j));
+    }
+  }
   std::vector<size_t> other_pairs;
   std::vector<KeyframePair> others;
   reply.results.resize(request.pairs.size());
   for (size_t p = 0; p < request.pairs.size(); ++p) {
     const KeyframePair& pair = request.pairs[p];
-    if (pair.j == lin.gauge && pair.i != lin.gauge) {
-      reply.results[p] = lin.solver->marginal(pair);
+    const auto& [i, j] = resolved[p];
+    const KeyframePair blocks{i.block, j.block};
+    if (pair.i != pair.j && i.block == j.block) {
+      // Tied to one keyframe: their relative pose is exact.
+      ConditionalCovariance& r = reply.results[p];
+      r.i = pair.i;
+      r.j = pair.j;
+      r.ok = true;
+      r.sigma.setZero();
+      r.q = std::numeric_limits<double>::max();
+    } else if (blocks.j == lin.gauge && blocks.i != lin.gauge) {
+      reply.results[p] = throughBlocks(pair, i, j, lin.solver->marginal(blocks));
     } else {
       other_pairs.push_back(p);
-      others.push_back(pair);
+      others.push_back(blocks);
     }
   }
   if (!others.empty()) {
     const std::vector<ConditionalCovariance> other_results = lin.solver->compute(others);
     for (size_t k = 0; k < other_pairs.size(); ++k) {
-      reply.results[other_pairs[k]] = other_results[k];
+      const size_t p = other_pairs[k];
+      reply.results[p] =
+          throughBlocks(request.pairs[p], resolved[p].first, resolved[p].second, other_results[k]);
     }
   }
   reply.solve_ms = msSince(solve_start);

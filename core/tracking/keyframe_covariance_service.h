@@ -39,8 +39,8 @@ struct KeyframeCovarianceServiceConfig {
   int niceness = 10;
   /// A linearization (S and the solver's factorisation) answers later requests while it is
   /// at most this old, the map has had no loop closure or global BA since
-  /// (SparseMap::changeIndex), and every keyframe asked about has a block in it and is not
-  /// culled since; otherwise the map is read and linearised again (so errors on ids are
+  /// (SparseMap::changeIndex), and every keyframe asked about has a block in it (a culled
+  /// one through the keyframe it is tied to); otherwise the map is read and linearised again (so errors on ids are
   /// always those of the current map). 0 = a fresh linearization per request.
   /// Local BA moves poses in the meantime: this bounds how stale an answer can be.
   double max_linearization_age_s = 5.0;
@@ -103,7 +103,15 @@ struct KeyframeCovarianceServiceStats {
 /// fixed) gets the marginal covariance of i, [S^-1]_ii: conditioning on the gauge is what S^-1
 /// already is (ConditionalCovarianceSolver::marginal of the configured solver). Other pairs
 /// go to the solver's compute(), and are conditioned on the gauge as well as on j.
-/// Errors are per pair: keyframes unknown to the map, culled, or the gauge keyframe as i
+/// Culled keyframes (local_mapping.cull_keyframes) are answered too: a culled
+/// keyframe K is rigidly tied to B, the first keyframe up its chain of parents that is in the
+/// linearization, by T_B_K (the product of T_parent_this; its pose follows B's in every
+/// keyframe pose batch, SparseMap::moveCulledKeyframes), so its tangent is
+/// delta_K = Ad(T_K_B) delta_B and Sigma_{K|J} = Ad Sigma_{B|J} Ad^T (core/geometry/
+/// se3_adjoint.h), q recomputed from it; conditioning on a culled J is conditioning on its B. Two
+/// keyframes tied to the same B (or one tied to the other) have an exactly known relative
+/// pose: ok, sigma 0 and q = the largest finite double (so the mapper fuses them).
+/// Errors are per pair: keyframes unknown to the map, or the gauge keyframe as i
 /// ("not in the BA linearization"), i == j, S not positive definite. A request that arrives
 /// when max_queued_requests are waiting pushes out the oldest, which is answered with every
 /// pair failed ("dropped: service busy").

@@ -294,6 +294,7 @@ void LocalMapper::localBundleAdjustment(Keyframe* keyframe) {
       keyframes[i]->setPose(result.T_C_G[i]);
       changed.emplace_back(keyframes[i]->id, keyframes[i]->T_G_C());
     }
+    map_->moveCulledKeyframes(&changed);
     for (size_t li = 0; li < landmarks.size(); ++li) {
       Landmark* l = landmarks[li].get();
       if (l->bad()) continue;

@@ -56,9 +56,6 @@ struct LocalMapperConfig {
   std::string validate() const;
 };
 
-/// Poses of keyframes (T_G_C) after they changed, for CBLOX_KEYFRAME_POSES.
-using KeyframePoseBatch = std::vector<std::pair<KeyframeId, Transformationd>>;
-
 /// Statistics (atomically readable from any thread).
 struct LocalMapperStats {
   uint64_t keyframes_processed = 0;

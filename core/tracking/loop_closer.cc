@@ -466,6 +466,7 @@ void LoopCloser::correct(Keyframe* keyframe, const Verified& loop) {
     for (Keyframe* k : all) {
       if (!k->bad()) batch.emplace_back(k->id, k->T_G_C());
     }
+    map_->moveCulledKeyframes(&batch);
   }
   event.query = keyframe->id;
   event.candidate = loop.candidate->id;
@@ -523,6 +524,7 @@ void LoopCloser::globalBundleAdjustment(Keyframe* loop_keyframe) {
     }
     map_->bumpChangeIndex();
     for (Keyframe* k : map_->keyframes()) batch.emplace_back(k->id, k->T_G_C());
+    map_->moveCulledKeyframes(&batch);
   }
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);

@@ -77,6 +77,37 @@ void SparseMap::cullKeyframe(Keyframe* keyframe) {
   for (Landmark* l : orphans) retireLandmark(l);
 }
 
+std::optional<KeyframeAncestor> SparseMap::goodAncestor(const Keyframe* keyframe) {
+  KeyframeAncestor result;
+  const Keyframe* k = keyframe;
+  // A culled keyframe's parent never changes (it is no child of anyone), and ids grow
+  // towards the leaves, so the chain is finite; the bound only guards a corrupt graph.
+  for (size_t steps = 0; k != nullptr && k->bad(); ++steps) {
+    if (steps > (size_t{1} << 24)) return std::nullopt;
+    result.T_A_K = k->T_parent_this() * result.T_A_K;
+    k = k->parent();
+  }
+  if (k == nullptr) return std::nullopt;
+  result.ancestor = k;
+  return result;
+}
+
+void SparseMap::moveCulledKeyframes(KeyframePoseBatch* batch) {
+  absl::flat_hash_map<KeyframeId, Transformationd> moved;
+  moved.reserve(batch->size());
+  for (const auto& [id, T_G_C] : *batch) moved.emplace(id, T_G_C);
+  for (const std::unique_ptr<Keyframe>& k : keyframes_) {
+    if (!k->bad() || moved.count(k->id)) continue;
+    const std::optional<KeyframeAncestor> a = goodAncestor(k.get());
+    if (!a) continue;
+    const auto it = moved.find(a->ancestor->id);
+    if (it == moved.end()) continue;
+    const Transformationd T_G_K = it->second * a->T_A_K;
+    k->setPose(T_G_K.inverse());
+    batch->emplace_back(k->id, T_G_K);
+  }
+}
+
 Keyframe* SparseMap::keyframe(KeyframeId id) const {
   return id >= 0 && static_cast<size_t>(id) < keyframes_.size()
              ? keyframes_[static_cast<size_t>(id)].get()

@@ -3,7 +3,9 @@
 #include <cstddef>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <shared_mutex>
+#include <utility>
 #include <vector>
 
 #include <absl/container/flat_hash_map.h>
@@ -14,6 +16,18 @@
 #include "core/tracking/sparse_map_snapshot.h"
 
 namespace cblox {
+
+/// Poses of keyframes (T_G_C) after they changed, for CBLOX_KEYFRAME_POSES.
+using KeyframePoseBatch = std::vector<std::pair<KeyframeId, Transformationd>>;
+
+/// Where a keyframe's pose comes from: `ancestor` is the keyframe itself when it is good, or
+/// the first good keyframe up its chain of parents when it is culled, and T_A_K its pose
+/// relative to that ancestor (the product of the culled keyframes' T_parent_this; identity
+/// for a good keyframe). A culled keyframe is rigidly tied to its ancestor from then on.
+struct KeyframeAncestor {
+  const Keyframe* ancestor = nullptr;
+  Transformationd T_A_K;
+};
 
 /// The sparse SLAM map: keyframes and landmarks, owned here.
 ///
@@ -61,6 +75,17 @@ class SparseMap {
   void replaceLandmark(Landmark* landmark, Landmark* by);
   /// Culls a keyframe (Keyframe::cull) and retires the landmarks it orphaned. Exclusive lock.
   void cullKeyframe(Keyframe* keyframe);
+  /// The good keyframe `keyframe`'s pose follows (see KeyframeAncestor); nullopt for a
+  /// culled keyframe whose chain of parents ends without a good one (a stand-in that
+  /// restore() made for a skipped id, which has no parent). Shared lock.
+  static std::optional<KeyframeAncestor> goodAncestor(const Keyframe* keyframe);
+  /// Keeps culled keyframes' poses on their ancestors (ORB-SLAM2 recovers a culled keyframe's
+  /// pose as its parent's times T_parent_this; here the dense mapper anchors subvolumes on
+  /// keyframes, and a culled anchor must go on moving with the map): every culled keyframe
+  /// whose good ancestor has an entry in `batch` (it just moved) gets the pose
+  /// T_G_A(batch) * T_A_K, stored and appended to the batch. Entries of culled keyframes
+  /// already in the batch are left as they are. Exclusive lock.
+  void moveCulledKeyframes(KeyframePoseBatch* batch);
 
   /// Replaces the content of an empty map (no keyframe ever added) by a snapshot's. The map
   /// then continues with keyframe id max(snapshot.keyframes.size(), next_keyframe_id) and

@@ -1,4 +1,5 @@
 #include "core/geometry/se3.h"
+#include "core/geometry/se3_adjoint.h"
 
 #include <algorithm>
 #include <cmath>
@@ -151,6 +152,26 @@ TEST(SE3, LogExpRoundTripRandomPoses) {
     EXPECT_LE(xi.tail<3>().norm(), kPi + 1e-15);
     EXPECT_TRUE(Transformationd::exp(xi).isApprox(T, 1e-12)) << T;
   }
+}
+
+// T exp(xi) T^-1 == exp(Ad(T) xi) for random poses and twists (any size: the identity is
+// exact, not first order), and Ad of a composition is the product of the adjoints.
+TEST(SE3, AdjointConjugatesTheExponential) {
+  std::mt19937 rng(4);
+  const std::vector<Vec6> twists = randomTwists(200, kPi - 1e-3, 5);
+  for (const Vec6& xi : twists) {
+    const Transformationd T = randomPose(&rng);
+    const Transformationd conjugated = T * Transformationd::exp(xi) * T.inverse();
+    EXPECT_TRUE(conjugated.isApprox(Transformationd::exp(adjoint(T) * xi), 1e-11))
+        << T << " xi " << xi.transpose();
+  }
+  const Transformationd A = randomPose(&rng), B = randomPose(&rng);
+  expectMatNear(adjoint(A * B), adjoint(A) * adjoint(B), 1e-12);
+  expectMatNear(adjoint(A.inverse()), adjoint(A).inverse().eval(), 1e-12);
+  // A pure translation t: rotations pass unchanged, a rotation phi adds t x phi to rho.
+  const Transformationd shift(Eigen::Quaterniond::Identity(), Vec3(1, 2, 3));
+  expectMatNear(adjoint(shift) * makeXi(Vec3::Zero(), Vec3(0, 0, 1)),
+                makeXi(Vec3(2, -1, 0), Vec3(0, 0, 1)), 1e-15);
 }
 
 TEST(SE3, TinyAngle) {

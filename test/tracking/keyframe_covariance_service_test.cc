@@ -12,11 +12,13 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <shared_mutex>
 #include <string>
+#include <utility>
 #include <thread>
 #include <vector>
 
@@ -298,23 +300,35 @@ void AKeptLinearizationAnswersLaterRequests() {
   EXPECT_FALSE(unknown.reused);
   ASSERT_EQ(unknown.results.size(), 1u);
   EXPECT_FALSE(unknown.results[0].ok);
-  // A keyframe culled since: linearised again, and the answer is the current map's error.
+  // A keyframe culled since: the kept linearization still has its block (a culled keyframe
+  // is tied to its parent for good, so that block is still its answer).
   EXPECT_TRUE(ask(first).reused);
   {
     SparseMap& map = const_cast<SparseMap&>(T::slam_->map());
     std::unique_lock<std::shared_mutex> lock(map.mutex());
     map.cullKeyframe(map.keyframe(static_cast<KeyframeId>(ids[3])));
+    ASSERT_TRUE(map.keyframe(static_cast<KeyframeId>(ids[3]))->bad());
   }
   const KeyframeCovarianceReply culled = ask(first);
-  EXPECT_FALSE(culled.reused);
+  EXPECT_TRUE(culled.reused);
   ASSERT_EQ(culled.results.size(), 1u);
-  EXPECT_FALSE(culled.results[0].ok);
-  EXPECT_NE(culled.results[0].error.find("not in the BA linearization"), std::string::npos)
-      << culled.results[0].error;
+  EXPECT_TRUE(culled.results[0].ok) << culled.results[0].error;
+  // Linearised afresh (after a loop closure), it has no block for the culled keyframe and
+  // answers through its parent.
+  {
+    SparseMap& map = const_cast<SparseMap&>(T::slam_->map());
+    std::unique_lock<std::shared_mutex> lock(map.mutex());
+    map.bumpChangeIndex();
+  }
+  const KeyframeCovarianceReply through_parent = ask(first);
+  EXPECT_FALSE(through_parent.reused);
+  ASSERT_EQ(through_parent.results.size(), 1u);
+  EXPECT_TRUE(through_parent.results[0].ok) << through_parent.results[0].error;
+  EXPECT_GT(through_parent.results[0].q, 0.0);
   service.stop();
   const KeyframeCovarianceServiceStats stats = service.stats();
   EXPECT_EQ(stats.linearizations, 4u);
-  EXPECT_EQ(stats.reused, 3u);
+  EXPECT_EQ(stats.reused, 4u);
 
   // Age 0: every request is linearised afresh.
   config.max_linearization_age_s = 0.0;
@@ -334,6 +348,77 @@ void AKeptLinearizationAnswersLaterRequests() {
   EXPECT_EQ(strict_replies.load(), 2);
   EXPECT_EQ(strict.stats().linearizations, 2u);
   EXPECT_EQ(strict.stats().reused, 0u);
+}
+
+// A culled keyframe K is answered through its parent P (to which it is tied by
+// T_parent_this): Sigma_{K|J} = J_KP Sigma_{P|J} J_KP^T, with the Jacobian J_KP of K's
+// left-perturbation tangent with respect to P's taken here by central differences of exp and
+// log (independent of Transformationd::adjoint); given a culled J the answer is the answer
+// given its parent; two keyframes tied together: ok, sigma 0, q the largest double.
+void CulledKeyframesAreAnsweredThroughTheirParent() {
+  using T = KeyframeCovarianceServiceTest;
+  SparseMap& map = const_cast<SparseMap&>(T::slam_->map());
+  const std::vector<uint64_t> ids = T::keyframeIds();
+  ASSERT_GE(ids.size(), 10u);
+  uint64_t k_id = 0, p_id = 0;
+  Transformationd T_P_K;
+  {
+    std::unique_lock<std::shared_mutex> lock(map.mutex());
+    for (size_t n = ids.size() / 2; n + 2 < ids.size() && k_id == 0; ++n) {
+      Keyframe* k = map.keyframe(static_cast<KeyframeId>(ids[n]));
+      if (k->parent() == nullptr || k->parent()->id == 0) continue;
+      map.cullKeyframe(k);
+      if (!k->bad()) continue;  // a loop keyframe is kept
+      k_id = ids[n];
+      p_id = static_cast<uint64_t>(k->parent()->id);
+      T_P_K = k->T_parent_this();
+    }
+  }
+  ASSERT_NE(k_id, 0u) << "no keyframe could be culled";
+  const uint64_t j_id = ids.back() == p_id ? ids[ids.size() - 2] : ids.back();
+  const uint64_t gauge = ids[0];
+  KeyframeCovarianceRequest request;
+  request.pairs = {{k_id, j_id}, {p_id, j_id}, {j_id, k_id}, {j_id, p_id},
+                   {k_id, p_id}, {p_id, k_id}, {k_id, gauge}, {p_id, gauge}};
+
+  // d(delta_K)/d(delta_P) for T_K_G = T_K_P * T_P_G, left perturbations of T_C_G.
+  const Transformationd T_K_P = T_P_K.inverse();
+  const Transformationd T_P_G = map.keyframe(static_cast<KeyframeId>(p_id))->T_C_G();
+  const Transformationd T_K_G = T_K_P * T_P_G;
+  Eigen::Matrix<double, 6, 6> jacobian;
+  const double h = 1e-6;
+  for (int m = 0; m < 6; ++m) {
+    Transformationd::Vec6 e = Transformationd::Vec6::Zero();
+    e[m] = h;
+    const auto tangent = [&](double sign) {
+      return (T_K_P * Transformationd::exp(sign * e) * T_P_G * T_K_G.inverse()).log();
+    };
+    jacobian.col(m) = (tangent(1.0) - tangent(-1.0)) / (2.0 * h);
+  }
+
+  for (const CovarianceMethod method : {CovarianceMethod::kSparseSolve, CovarianceMethod::kBatch}) {
+    SCOPED_TRACE(covarianceMethodName(method));
+    const KeyframeCovarianceReply reply = T::computeWith(method, request);
+    ASSERT_EQ(reply.results.size(), request.pairs.size());
+    for (const ConditionalCovariance& r : reply.results) ASSERT_TRUE(r.ok) << r.error;
+    for (const auto& [culled, parent] : {std::pair<size_t, size_t>{0, 1}, {6, 7}}) {
+      const ConditionalCovariance& r = reply.results[culled];
+      EXPECT_EQ(r.i, k_id);
+      const Eigen::Matrix<double, 6, 6> expected =
+          jacobian * reply.results[parent].sigma * jacobian.transpose();
+      EXPECT_LT(relativeDifference(r.sigma, expected), 1e-6);
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(r.sigma);
+      EXPECT_NEAR(r.q, 1.0 / eigen.eigenvalues().maxCoeff(), 1e-9 * r.q);
+    }
+    // Given the culled keyframe: exactly the answer given its parent.
+    EXPECT_EQ(reply.results[2].j, k_id);
+    EXPECT_EQ(reply.results[2].sigma, reply.results[3].sigma);
+    EXPECT_EQ(reply.results[2].q, reply.results[3].q);
+    for (const size_t tied : {4, 5}) {
+      EXPECT_EQ(reply.results[tied].sigma, (Eigen::Matrix<double, 6, 6>::Zero()));
+      EXPECT_EQ(reply.results[tied].q, std::numeric_limits<double>::max());
+    }
+  }
 }
 
 // One ctest case (the fixture's SLAM run takes most of the time; ctest runs every case in
@@ -358,6 +443,10 @@ TEST_F(KeyframeCovarianceServiceTest, AnswersFromTheLiveRoomMap) {
   {
     SCOPED_TRACE("a kept linearization");
     AKeptLinearizationAnswersLaterRequests();
+  }
+  {
+    SCOPED_TRACE("culled keyframes");
+    CulledKeyframesAreAnsweredThroughTheirParent();
   }
 }
 

@@ -4,7 +4,9 @@
 
 #include "core/tracking/sparse_map.h"
 
+#include <map>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -196,6 +198,62 @@ TEST(SparseMapTest, CullingAKeyframeReparentsItsChildrenAndRetiresOrphans) {
   // The first keyframe is never culled.
   m.map.cullKeyframe(m.keyframes[0]);
   EXPECT_FALSE(m.keyframes[0]->bad());
+}
+
+// Culled keyframes stay on their ancestors: in a chain 0-1-2-3-4 (parents by id), cull 3,
+// then 2, so 3's chain is 3 -> 2 -> 1. Moving keyframe 1 by a known transform moves 2 and 3
+// with it, exactly as T_G_1 * T_1_k; keyframes whose ancestor did not move stay.
+TEST(SparseMapTest, CulledKeyframesFollowTheirGoodAncestorInPoseBatches) {
+  SmallMap m;
+  buildChain(&m, 5);
+  // Rotated poses so the products are not plain sums of x offsets.
+  for (int k = 0; k < 5; ++k) {
+    const Eigen::Quaterniond q(Eigen::AngleAxisd(0.1 * k, Eigen::Vector3d(0.2, 1, 0.3).normalized()));
+    m.keyframes[k]->setPose(Transformationd(q, Eigen::Vector3d(0.3 * k, -0.1 * k, 0.05 * k)));
+  }
+  const Transformationd T_G_2 = m.keyframes[2]->T_G_C(), T_G_3 = m.keyframes[3]->T_G_C();
+  const Transformationd T_G_1 = m.keyframes[1]->T_G_C();
+  m.map.cullKeyframe(m.keyframes[3]);
+  ASSERT_TRUE(m.keyframes[3]->bad());
+  m.map.cullKeyframe(m.keyframes[2]);
+  ASSERT_TRUE(m.keyframes[2]->bad());
+  // 3 keeps its parent 2 (a chain of two culled keyframes); 4 went to 2, then to 1.
+  ASSERT_EQ(m.keyframes[3]->parent(), m.keyframes[2]);
+  ASSERT_EQ(m.keyframes[2]->parent(), m.keyframes[1]);
+  EXPECT_EQ(m.keyframes[4]->parent(), m.keyframes[1]);
+
+  for (const int k : {2, 3}) {
+    const std::optional<KeyframeAncestor> a = SparseMap::goodAncestor(m.keyframes[k]);
+    ASSERT_TRUE(a.has_value());
+    EXPECT_EQ(a->ancestor, m.keyframes[1]);
+    EXPECT_TRUE((T_G_1 * a->T_A_K).isApprox(k == 2 ? T_G_2 : T_G_3, 1e-12));
+  }
+  const std::optional<KeyframeAncestor> self = SparseMap::goodAncestor(m.keyframes[4]);
+  ASSERT_TRUE(self.has_value());
+  EXPECT_EQ(self->ancestor, m.keyframes[4]);
+  EXPECT_TRUE(self->T_A_K.isApprox(Transformationd(), 0.0));
+
+  // Keyframe 1 moves (as a local BA would set it): 2 and 3 follow, 0 and 4 are not added.
+  const Transformationd move =
+      Transformationd::exp((Transformationd::Vec6() << 0.5, -0.2, 0.1, 0.05, 0.2, -0.1).finished());
+  const Transformationd T_G_1_new = move * T_G_1;
+  m.keyframes[1]->setPose(T_G_1_new.inverse());
+  KeyframePoseBatch batch{{1, T_G_1_new}};
+  m.map.moveCulledKeyframes(&batch);
+  ASSERT_EQ(batch.size(), 3u);
+  std::map<KeyframeId, Transformationd> got(batch.begin(), batch.end());
+  ASSERT_EQ(got.count(2), 1u);
+  ASSERT_EQ(got.count(3), 1u);
+  EXPECT_TRUE(got.at(2).isApprox(T_G_1_new * T_G_1.inverse() * T_G_2, 1e-12));
+  EXPECT_TRUE(got.at(3).isApprox(T_G_1_new * T_G_1.inverse() * T_G_3, 1e-12));
+  // Stored as well, so the culled keyframes' poses are current everywhere (checkpoints).
+  EXPECT_TRUE(m.keyframes[2]->T_G_C().isApprox(got.at(2), 1e-12));
+  EXPECT_TRUE(m.keyframes[3]->T_G_C().isApprox(got.at(3), 1e-12));
+
+  // A batch that moves only keyframe 4 moves no culled keyframe.
+  KeyframePoseBatch other{{4, m.keyframes[4]->T_G_C()}};
+  m.map.moveCulledKeyframes(&other);
+  EXPECT_EQ(other.size(), 1u);
 }
 
 TEST(SparseMapTest, ReplacingALandmarkMovesItsObservations) {

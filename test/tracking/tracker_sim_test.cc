@@ -5,6 +5,11 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <shared_mutex>
 #include <string>
 #include <vector>
 
@@ -24,11 +29,17 @@ struct RunStats {
   double max_translation_error = 0.0, max_rotation_error_deg = 0.0, path_length = 0.0;
   std::vector<double> track_ms;
   LocalMapperStats mapping;
+  /// The last pose local mapping published for each keyframe (its pose batches).
+  std::map<KeyframeId, Transformationd> published;
 };
+
+/// Called with the map at the end of a run with local mapping, and the run's stats.
+using MapCheck = std::function<void(const SparseMap&, const RunStats&)>;
 
 RunStats runTracker(const std::string& spec, const std::string& trajectory, size_t frames,
                     bool local_mapping, const TrackerConfig& config = TrackerConfig{},
-                    const LocalMapperConfig& mapping_config = LocalMapperConfig{}) {
+                    const LocalMapperConfig& mapping_config = LocalMapperConfig{},
+                    const MapCheck& check = nullptr) {
   SourceConfig options;
   options.trajectory = trajectory;
   options.max_frames = frames;
@@ -42,6 +53,9 @@ RunStats runTracker(const std::string& spec, const std::string& trajectory, size
   FrameBuilder builder(camera, FrameBuilderConfig{}, nullptr);
   SparseMap map;
   LocalMapper mapper(&map, camera, builder.pyramid(), mapping_config);
+  mapper.setPoseCallback([&stats](const KeyframePoseBatch& batch) {
+    for (const auto& [id, T_G_C] : batch) stats.published.insert_or_assign(id, T_G_C);
+  });
   std::thread mapping_thread;
   if (local_mapping) mapping_thread = std::thread([&] { mapper.run(); });
   Tracker tracker(&map, camera, builder.pyramid(), config, nullptr,
@@ -90,6 +104,7 @@ RunStats runTracker(const std::string& spec, const std::string& trajectory, size
         static_cast<unsigned long>(ms.bundle_adjustments_aborted), ms.last_ba_ms,
         static_cast<unsigned long>(ms.landmarks_culled),
         static_cast<unsigned long>(ms.landmarks_fused));
+    if (check) check(map, stats);
   }
   return stats;
 }
@@ -157,6 +172,45 @@ TEST(TrackerSimTest, LocalBundleAdjustmentWindowIsBounded) {
   LocalMapperConfig negative;
   negative.local_ba_max_keyframes = -1;
   EXPECT_NE(negative.validate().find("local_ba_max_keyframes"), std::string::npos);
+}
+
+// Keyframe culling with the dense mapper's anchors: a culled keyframe stays tied to its first
+// good ancestor, and every pose batch that moves the ancestor carries the culled keyframe's
+// pose too (SparseMap::moveCulledKeyframes), so a subvolume anchored on it goes on moving with
+// the map. With a keyframe about every 2 frames many are redundant and culled; at the end, the last
+// published pose of every culled keyframe is its ancestor's current pose times T_A_K.
+TEST(TrackerSimTest, CulledKeyframesFollowTheirAncestorInThePublishedPoses) {
+  TrackerConfig tracking;
+  tracking.max_frames_between_keyframes = 2;
+  tracking.reference_ratio = 0.99;  // c2 holds at almost every frame: keyframes every 2 frames
+  LocalMapperConfig culling;
+  culling.cull_keyframes = true;
+  size_t culled_checked = 0;
+  const RunStats s =
+      runTracker("sim:room", "loop", 120, true, tracking, culling,
+                 [&](const SparseMap& map, const RunStats& run) {
+                   std::shared_lock<std::shared_mutex> lock(map.mutex());
+                   for (const std::unique_ptr<Keyframe>& k : map.allKeyframes()) {
+                     if (!k->bad()) continue;
+                     const std::optional<KeyframeAncestor> a = SparseMap::goodAncestor(k.get());
+                     ASSERT_TRUE(a.has_value()) << "keyframe " << k->id;
+                     const auto published = run.published.find(k->id);
+                     const auto ancestor = run.published.find(a->ancestor->id);
+                     // Never moved since the cull (its ancestor neither): nothing to follow.
+                     if (ancestor == run.published.end()) continue;
+                     if (published == run.published.end()) continue;  // never published
+                     const Transformationd expected = a->ancestor->T_G_C() * a->T_A_K;
+                     EXPECT_TRUE(published->second.isApprox(expected, 1e-9)) << "keyframe " << k->id;
+                     EXPECT_TRUE(k->T_G_C().isApprox(expected, 1e-9)) << "keyframe " << k->id;
+                     ++culled_checked;
+                   }
+                 });
+  EXPECT_EQ(s.ok, 120);
+  EXPECT_GT(s.mapping.keyframes_culled, 0u);
+  EXPECT_GT(culled_checked, 0u);
+  std::printf("[ measured ] %d keyframes made, %lu culled, %zu followed their ancestor\n",
+              s.keyframes, static_cast<unsigned long>(s.mapping.keyframes_culled),
+              culled_checked);
 }
 
 }  // namespace

@@ -165,6 +165,9 @@ int run(int argc, char** argv) {
   std::map<uint64_t, Transformationd> truth_by_frame;
   std::vector<double> frame_ms, track_ms;
   std::map<std::string, size_t> keyframe_reasons;  // keyframes made, by KeyframeReason
+  // Inliers of every tracked frame, and of the frames that made a keyframe, by reason.
+  std::vector<double> inliers;
+  std::map<std::string, std::vector<double>> keyframe_inliers;
   size_t lost = 0;
   TrackingState last_state = TrackingState::kNotInitialized;
   const double cpu_start = cpuSeconds();
@@ -185,7 +188,11 @@ int run(int argc, char** argv) {
     frame_ms.push_back(
         std::chrono::duration<double, std::milli>(Clock::now() - frame_start).count());
     track_ms.push_back(r.time_ms);
-    if (r.new_keyframe != nullptr) ++keyframe_reasons[keyframeReasonName(r.keyframe_reason)];
+    if (r.new_keyframe != nullptr) {
+      ++keyframe_reasons[keyframeReasonName(r.keyframe_reason)];
+      keyframe_inliers[keyframeReasonName(r.keyframe_reason)].push_back(r.inliers);
+    }
+    if (r.state == TrackingState::kOk) inliers.push_back(r.inliers);
     if (r.state != last_state || r.relocalized) {
       // Every change of state, with the tracker's reason, so a lost stretch can be found.
       std::fprintf(stderr, "\nframe %zu: %s%s%s%s\n", i, trackingStateName(r.state),
@@ -272,6 +279,13 @@ int run(int argc, char** argv) {
   for (const auto& [name, count] : keyframe_reasons) std::printf(" %s %zu", name.c_str(), count);
   std::printf(" (none: the first); culled %lu\n",
               static_cast<unsigned long>(slam.localMappingStats().keyframes_culled));
+  std::printf("  inliers of tracked frames: median %.0f, p5 %.0f; of the frames that made",
+              percentile(inliers, 0.5), percentile(inliers, 0.05));
+  for (const auto& [name, values] : keyframe_inliers) {
+    std::printf(" %s %.0f (p5 %.0f)", name.c_str(), percentile(values, 0.5),
+                percentile(values, 0.05));
+  }
+  std::printf(" keyframes\n");
   std::printf("  local BA: %zu runs, median %.1f ms, p95 %.1f ms\n", ba_ms.size(),
               percentile(ba_ms, 0.5), percentile(ba_ms, 0.95));
   std::printf(

@@ -3,6 +3,7 @@
 
 #include "core/tracking/tracker.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -153,6 +154,29 @@ TEST(TrackerSimTest, KeyframesSayWhichConditionMadeThem) {
   }
   EXPECT_GT(by_count, 0);
   EXPECT_STREQ(keyframeReasonName(KeyframeReason::kClosePoints), "close_points");
+}
+
+// close_points_max_inliers gates the close-point rule by the frame's inliers: with the rule
+// made to hold at every frame (tracked_close_min above any count, untracked_close_min 0),
+// the room's keyframes come from it; allowed only below 1 inlier, it never fires.
+TEST(TrackerSimTest, ClosePointRuleOnlyBelowTheInlierGate) {
+  TrackerConfig config;
+  config.tracked_close_min = 1000000;
+  config.untracked_close_min = 0;
+  const auto count = [](const RunStats& s, KeyframeReason reason) {
+    return std::count_if(s.keyframe_frames.begin(), s.keyframe_frames.end(),
+                         [&](const auto& k) { return k.second == reason; });
+  };
+  const RunStats always = runTracker("sim:room", "loop", 40, false, config);
+  config.close_points_max_inliers = 1;
+  const RunStats gated = runTracker("sim:room", "loop", 40, false, config);
+  ASSERT_EQ(always.ok, 40);
+  ASSERT_EQ(gated.ok, 40);
+  EXPECT_GT(count(always, KeyframeReason::kClosePoints), 10);
+  EXPECT_EQ(count(gated, KeyframeReason::kClosePoints), 0);
+  EXPECT_LT(gated.keyframes, always.keyframes);
+  config.close_points_max_inliers = -1;
+  EXPECT_NE(config.validate().find("close_points_max_inliers"), std::string::npos);
 }
 
 // local_ba_max_keyframes bounds the keyframes one local BA optimises: the new keyframe and its

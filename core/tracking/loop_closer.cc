@@ -62,9 +62,42 @@ LoopCloser::LoopCloser(SparseMap* map, KeyframeDatabase* database, const Trackin
 
 void LoopCloser::insertKeyframe(Keyframe* keyframe) { queue_.push(keyframe); }
 
-void LoopCloser::stop() { queue_.stop(); }
+LoopCloser::~LoopCloser() { abortGlobalBundleAdjustment(); }
 
-void LoopCloser::waitUntilIdle() { queue_.waitUntilIdle(); }
+void LoopCloser::stop() {
+  queue_.stop();
+  abortGlobalBundleAdjustment();
+}
+
+void LoopCloser::waitUntilIdle() {
+  queue_.waitUntilIdle();
+  std::unique_lock<std::mutex> lock(gba_mutex_);
+  gba_cv_.wait(lock, [this] { return !gba_running_; });
+}
+
+void LoopCloser::abortGlobalBundleAdjustment() {
+  std::thread running;
+  {
+    std::lock_guard<std::mutex> lock(gba_mutex_);
+    running = std::move(gba_thread_);
+  }
+  if (!running.joinable()) return;
+  abort_gba_ = true;
+  running.join();  // not under gba_mutex_: the thread takes it when it ends
+  abort_gba_ = false;
+}
+
+void LoopCloser::startGlobalBundleAdjustment(Keyframe* loop_keyframe) {
+  abortGlobalBundleAdjustment();
+  std::lock_guard<std::mutex> lock(gba_mutex_);
+  gba_running_ = true;
+  gba_thread_ = std::thread([this, loop_keyframe] {
+    globalBundleAdjustment(loop_keyframe);
+    std::lock_guard<std::mutex> done(gba_mutex_);
+    gba_running_ = false;
+    gba_cv_.notify_all();
+  });
+}
 
 void LoopCloser::run() {
   while (queue_.waitForWork()) processOne();
@@ -86,8 +119,9 @@ bool LoopCloser::processOne() {
   }
   if (!candidates.empty()) {
     if (const std::optional<Verified> loop = verify(keyframe, candidates)) {
+      abortGlobalBundleAdjustment();  // its result would be stale after the correction
       correct(keyframe, *loop);
-      if (config_.global_bundle_adjustment) globalBundleAdjustment(loop->candidate);
+      if (config_.global_bundle_adjustment) startGlobalBundleAdjustment(loop->candidate);
     } else {
       std::lock_guard<std::mutex> lock(stats_mutex_);
       ++stats_.loops_rejected;
@@ -490,11 +524,16 @@ void LoopCloser::globalBundleAdjustment(Keyframe* loop_keyframe) {
   const std::vector<std::shared_ptr<Landmark>>& landmarks = map_problem.landmarks;
   const int change_index = map_problem.change_index;
   if (problem.observations.empty()) return;
-  const BundleAdjustmentResult result = bundleAdjust(problem, config_.global_ba);
+  const BundleAdjustmentResult result = bundleAdjust(problem, config_.global_ba, &abort_gba_);
+  const auto abandon = [this] {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.global_bundle_adjustments_abandoned;
+  };
+  if (result.aborted) return abandon();
   KeyframePoseBatch batch;
   {
     std::unique_lock<std::shared_mutex> lock(map_->mutex());
-    if (map_->changeIndex() != change_index || !result.success) return;  // stale
+    if (map_->changeIndex() != change_index || !result.success) return abandon();  // stale
     std::map<const Keyframe*, Transformationd> old_T_C_G;
     for (size_t i = 0; i < keyframes.size(); ++i) {
       old_T_C_G[keyframes[i]] = keyframes[i]->T_C_G();

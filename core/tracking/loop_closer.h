@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <thread>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -76,6 +77,9 @@ struct LoopCloserStats {
   uint64_t loops_rejected_drift = 0;
   uint64_t loops_closed = 0;
   uint64_t global_bundle_adjustments = 0;
+  /// Global BAs stopped by a newer loop or by stop(), or whose result was stale (the map
+  /// was corrected meanwhile) and not applied.
+  uint64_t global_bundle_adjustments_abandoned = 0;
   double last_correction_ms = 0.0;
   double last_global_ba_ms = 0.0;
 };
@@ -89,7 +93,11 @@ struct LoopCloserStats {
 ///
 /// Threads: insertKeyframe from the local mapping thread; run() on the loop closing thread.
 /// The correction holds the map's exclusive lock (tracking waits, as in ORB-SLAM2) and bumps
-/// SparseMap::changeIndex(), which makes an in-flight local BA discard its result.
+/// SparseMap::changeIndex(), which makes an in-flight local BA discard its result. The global
+/// BA after a correction runs on a thread of its own (ORB-SLAM2's RunGlobalBundleAdjustment),
+/// so the loop closing thread goes on checking keyframes meanwhile (on 1000 keyframes a
+/// global BA takes seconds); a newer loop correction aborts it first, and a result the map
+/// has moved past (changeIndex) is not applied.
 class LoopCloser {
  public:
   using LoopCallback = std::function<void(const LoopClosureEvent&)>;
@@ -108,8 +116,11 @@ class LoopCloser {
   /// Processes the oldest queued keyframe; false when there was none.
   bool processOne();
   void run();
+  /// Stops the queue and aborts and joins a running global BA.
   void stop();
+  /// Until no keyframe is queued or in hand and no global BA runs.
   void waitUntilIdle();
+  ~LoopCloser();
   LoopCloserStats stats() const;
 
  private:
@@ -129,6 +140,10 @@ class LoopCloser {
   bool plausibleCorrection(const Keyframe& keyframe, const Keyframe& candidate,
                            const Transformationd& T_C_G) const;
   void correct(Keyframe* keyframe, const Verified& loop);
+  /// Aborts and joins the running global BA, if any.
+  void abortGlobalBundleAdjustment();
+  /// Starts globalBundleAdjustment on its own thread (after aborting a running one).
+  void startGlobalBundleAdjustment(Keyframe* loop_keyframe);
   void globalBundleAdjustment(Keyframe* loop_keyframe);
 
   SparseMap* map_;
@@ -152,6 +167,13 @@ class LoopCloser {
 
   mutable std::mutex stats_mutex_;
   LoopCloserStats stats_;
+
+  // The global BA thread: started and joined by the loop closing thread (and stop()).
+  std::mutex gba_mutex_;
+  std::condition_variable gba_cv_;
+  bool gba_running_ = false;  // guarded by gba_mutex_
+  std::atomic<bool> abort_gba_{false};
+  std::thread gba_thread_;
 };
 
 }  // namespace cblox

@@ -418,7 +418,8 @@ KeyframeReason Tracker::needNewKeyframe(int inliers) const {
   }
   const bool need_close =
       tracked_close < config_.tracked_close_min && untracked_close > config_.untracked_close_min &&
-      (config_.close_points_max_inliers <= 0 || inliers < config_.close_points_max_inliers);
+      current_index_ >=
+          last_keyframe_index_ + static_cast<uint64_t>(config_.close_points_min_frames);
   const double ratio = num_keyframes < 2 ? 0.4 : config_.reference_ratio;
   const bool c1a = current_index_ >= last_keyframe_index_ + max_frames;
   const bool c1b =

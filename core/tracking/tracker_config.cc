@@ -28,9 +28,8 @@ std::string TrackerConfig::validate() const {
   positive("min_relocalization_matches", min_relocalization_matches);
   positive("pnp_iterations", pnp_iterations);
   positive("pnp_reprojection_error_px", pnp_reprojection_error_px);
-  if (error.tellp() == 0 && close_points_max_inliers < 0) {
-    error << "close_points_max_inliers must be >= 0 (0: no limit), got "
-          << close_points_max_inliers;
+  if (error.tellp() == 0 && close_points_min_frames < 0) {
+    error << "close_points_min_frames must be >= 0, got " << close_points_min_frames;
   }
   if (error.tellp() == 0 && min_frames_between_keyframes < 0) {
     error << "min_frames_between_keyframes must be >= 0, got " << min_frames_between_keyframes;

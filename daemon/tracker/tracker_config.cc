@@ -111,7 +111,7 @@ void loadTracking(const YAML::Node& node, TrackerConfig* t) {
                    {"reference_ratio", &t->reference_ratio},
                    {"tracked_close_min", &t->tracked_close_min},
                    {"untracked_close_min", &t->untracked_close_min},
-                   {"close_points_max_inliers", &t->close_points_max_inliers},
+                   {"close_points_min_frames", &t->close_points_min_frames},
                    {"last_frame_search_radius", &t->last_frame_search_radius},
                    {"local_map_search_radius", &t->local_map_search_radius},
                    {"relocalized_search_radius", &t->relocalized_search_radius},

@@ -290,10 +290,12 @@ int run(int argc, char** argv) {
               percentile(ba_ms, 0.5), percentile(ba_ms, 0.95));
   std::printf(
       "  loops: %zu closed (%zu false), %lu rejected after verification (%lu candidates by "
-      "the drift gate); correction median %.1f ms; global BA %lu (last %.0f ms)\n",
+      "the drift gate); correction median %.1f ms; global BA %lu (last %.0f ms, on its own "
+      "thread; %lu abandoned)\n",
       loops.size(), false_loops, static_cast<unsigned long>(lc.loops_rejected),
       static_cast<unsigned long>(lc.loops_rejected_drift), percentile(correction_ms, 0.5),
-      static_cast<unsigned long>(lc.global_bundle_adjustments), lc.last_global_ba_ms);
+      static_cast<unsigned long>(lc.global_bundle_adjustments), lc.last_global_ba_ms,
+      static_cast<unsigned long>(lc.global_bundle_adjustments_abandoned));
   std::printf("  CPU: %.2f cores over %.1f s\n", cpu_s / wall_s, wall_s);
   std::printf(
       "  ATE RMSE: frames before the first loop %.4f m (%.2f %% of path), all frames as "

@@ -64,9 +64,15 @@ TEST(SlamLoopTest, ClosesTheRoomLoopAndCorrectsTheKeyframes) {
     }
   }
   slam.waitUntilIdle();
+  // The global BA of each loop runs on its own thread; waitUntilIdle waited for it, and it
+  // was either applied or abandoned (a newer loop, or a map moved past it).
+  const LoopCloserStats loop_stats = slam.loopClosingStats();
   slam.stop();
   EXPECT_EQ(lost, 0);
   ASSERT_GE(loops.size(), 1u);
+  EXPECT_GE(loop_stats.global_bundle_adjustments, 1u);
+  EXPECT_EQ(loop_stats.global_bundle_adjustments + loop_stats.global_bundle_adjustments_abandoned,
+            loops.size());
   // Every loop joins keyframes that truly see the same place.
   for (const LoopClosureEvent& e : loops) {
     const Transformationd& q = truth.at(slam.map().keyframe(e.query)->frame_id);

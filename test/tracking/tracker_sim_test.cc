@@ -156,10 +156,11 @@ TEST(TrackerSimTest, KeyframesSayWhichConditionMadeThem) {
   EXPECT_STREQ(keyframeReasonName(KeyframeReason::kClosePoints), "close_points");
 }
 
-// close_points_max_inliers gates the close-point rule by the frame's inliers: with the rule
-// made to hold at every frame (tracked_close_min above any count, untracked_close_min 0),
-// the room's keyframes come from it; allowed only below 1 inlier, it never fires.
-TEST(TrackerSimTest, ClosePointRuleOnlyBelowTheInlierGate) {
+// close_points_min_frames gates the close-point rule by the frames since the last keyframe:
+// with the rule made to hold at every frame (tracked_close_min above any count,
+// untracked_close_min 0), the room's keyframes come from it, some 1 frame apart; gated at 5
+// frames, every close-point keyframe comes at least 5 frames after the one before.
+TEST(TrackerSimTest, ClosePointRuleOnlyAfterTheFrameGap) {
   TrackerConfig config;
   config.tracked_close_min = 1000000;
   config.untracked_close_min = 0;
@@ -167,16 +168,26 @@ TEST(TrackerSimTest, ClosePointRuleOnlyBelowTheInlierGate) {
     return std::count_if(s.keyframe_frames.begin(), s.keyframe_frames.end(),
                          [&](const auto& k) { return k.second == reason; });
   };
+  const auto minGap = [](const RunStats& s) {
+    int gap = 1000;
+    for (size_t k = 1; k < s.keyframe_frames.size(); ++k) {
+      if (s.keyframe_frames[k].second != KeyframeReason::kClosePoints) continue;
+      gap = std::min(gap, s.keyframe_frames[k].first - s.keyframe_frames[k - 1].first);
+    }
+    return gap;
+  };
   const RunStats always = runTracker("sim:room", "loop", 40, false, config);
-  config.close_points_max_inliers = 1;
+  config.close_points_min_frames = 5;
   const RunStats gated = runTracker("sim:room", "loop", 40, false, config);
   ASSERT_EQ(always.ok, 40);
   ASSERT_EQ(gated.ok, 40);
   EXPECT_GT(count(always, KeyframeReason::kClosePoints), 10);
-  EXPECT_EQ(count(gated, KeyframeReason::kClosePoints), 0);
+  EXPECT_LT(minGap(always), 5);
+  EXPECT_GT(count(gated, KeyframeReason::kClosePoints), 0);
+  EXPECT_GE(minGap(gated), 5);
   EXPECT_LT(gated.keyframes, always.keyframes);
-  config.close_points_max_inliers = -1;
-  EXPECT_NE(config.validate().find("close_points_max_inliers"), std::string::npos);
+  config.close_points_min_frames = -1;
+  EXPECT_NE(config.validate().find("close_points_min_frames"), std::string::npos);
 }
 
 // local_ba_max_keyframes bounds the keyframes one local BA optimises: the new keyframe and its

@@ -254,7 +254,6 @@ bool KeyframeCovarianceService::reusable(const Linearization& lin,
   return true;
 }
 
-
 KeyframeCovarianceReply KeyframeCovarianceService::answer(const KeyframeCovarianceRequest& request,
                                                           Linearization& lin) const {
   KeyframeCovarianceReply reply;
@@ -268,10 +267,7 @@ KeyframeCovarianceReply KeyframeCovarianceService::answer(const KeyframeCovarian
   const auto solve_start = std::chrono::steady_clock::now();
   reply.linearization_age_ms =
       std::chrono::duration<double, std::milli>(solve_start - lin.built).count();
-  // Pairs conditioned on the gauge keyframe are answered apart (it has no block in S): given
-  // the gauge g (held fixed, so S^-1 is already conditioned on it) the answer is the
-  // marginal [S^-1]_ii.
-  // Culled keyframes are asked about through the keyframes they are tied to (resolve).
+  // Culled keyframes are asked about through the keyframes they are tied to.
   std::vector<std::pair<ResolvedKeyframe, ResolvedKeyframe>> resolved;
   resolved.reserve(request.pairs.size());
   {
@@ -297,6 +293,8 @@ KeyframeCovarianceReply KeyframeCovarianceService::answer(const KeyframeCovarian
       r.sigma.setZero();
       r.q = std::numeric_limits<double>::max();
     } else if (blocks.j == lin.gauge && blocks.i != lin.gauge) {
+      // Given the gauge (held fixed, so S^-1 is already conditioned on it, and it has no
+      // block in S) the answer is the marginal [S^-1]_ii.
       reply.results[p] = throughBlocks(pair, i, j, lin.solver->marginal(blocks));
     } else {
       other_pairs.push_back(p);

@@ -183,6 +183,7 @@ bool Tracker::initialize(const std::optional<Transformationd>& T_C_G_initial,
   }
   reference_keyframe_ = keyframe;
   last_keyframe_index_ = current_index_;
+  last_keyframe_rotation_ = current_.T_C_G->rotation();
   local_keyframes_ = {keyframe};
   result->new_keyframe = keyframe;
   result->inliers = current_.numInlierMatches();
@@ -416,10 +417,14 @@ KeyframeReason Tracker::needNewKeyframe(int inliers) const {
       ++untracked_close;
     }
   }
-  const bool need_close =
-      tracked_close < config_.tracked_close_min && untracked_close > config_.untracked_close_min &&
+  const bool after_gap =
       current_index_ >=
-          last_keyframe_index_ + static_cast<uint64_t>(config_.close_points_min_frames);
+          last_keyframe_index_ + static_cast<uint64_t>(config_.close_points_min_frames) ||
+      (config_.close_points_turn_deg > 0.0 &&
+       current_.T_C_G->rotation().angularDistance(last_keyframe_rotation_) >
+           config_.close_points_turn_deg * M_PI / 180.0);
+  const bool need_close = tracked_close < config_.tracked_close_min &&
+                          untracked_close > config_.untracked_close_min && after_gap;
   const double ratio = num_keyframes < 2 ? 0.4 : config_.reference_ratio;
   const bool c1a = current_index_ >= last_keyframe_index_ + max_frames;
   const bool c1b =
@@ -478,6 +483,7 @@ Keyframe* Tracker::createKeyframe() {
   reference_keyframe_ = keyframe;
   current_.reference_keyframe = keyframe;
   last_keyframe_index_ = current_index_;
+  last_keyframe_rotation_ = current_.T_C_G->rotation();
   return keyframe;
 }
 

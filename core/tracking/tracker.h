@@ -127,6 +127,7 @@ class Tracker {
   uint64_t frames_processed_ = 0;  // counter behind the keyframe decision
   uint64_t current_index_ = 0;     // frames_processed_ of the current frame
   uint64_t last_keyframe_index_ = 0;
+  Eigen::Quaterniond last_keyframe_rotation_ = Eigen::Quaterniond::Identity();  // R_C_G when it was made
   uint64_t last_relocalization_index_ = 0;
   bool ever_relocalized_ = false;
   int map_change_index_ = 0;

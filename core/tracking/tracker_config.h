@@ -29,6 +29,10 @@ struct TrackerConfig {
   /// frames' inliers do not tell the two cases apart: the town's close-point keyframes had
   /// 212 inliers at the median, the room's 149.)
   int close_points_min_frames = 0;
+  /// ... unless the camera has turned more than this many degrees since the last keyframe
+  /// (0 = the gap always holds): at a turn the view changes in a few frames, and a gap that
+  /// held there lost the town's 12 m-radius turn (BENCHMARKS.md).
+  double close_points_turn_deg = 0.0;
   /// Projection search windows (pixels, times the level's scale): against the last frame
   /// (7 for stereo in ORB-SLAM2, doubled when too few matches), against the local map (1;
   /// 5 just after relocalization).

@@ -110,6 +110,7 @@ TEST(TrackerConfigTest, CommentedKeysOfTheShippedYamlAreTheDefaults) {
   EXPECT_EQ(t.tracked_close_min, t0.tracked_close_min);
   EXPECT_EQ(t.untracked_close_min, t0.untracked_close_min);
   EXPECT_EQ(t.close_points_min_frames, t0.close_points_min_frames);
+  EXPECT_EQ(t.close_points_turn_deg, t0.close_points_turn_deg);
   EXPECT_EQ(t.last_frame_search_radius, t0.last_frame_search_radius);
   EXPECT_EQ(t.local_map_search_radius, t0.local_map_search_radius);
   EXPECT_EQ(t.relocalized_search_radius, t0.relocalized_search_radius);

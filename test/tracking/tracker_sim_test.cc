@@ -27,6 +27,7 @@ namespace {
 struct RunStats {
   int frames = 0, ok = 0, keyframes = 0;
   std::vector<std::pair<int, KeyframeReason>> keyframe_frames;  // frame index, reason
+  std::vector<Eigen::Quaterniond> rotations;  // estimated R_C_G of every frame (identity if lost)
   double max_translation_error = 0.0, max_rotation_error_deg = 0.0, path_length = 0.0;
   std::vector<double> track_ms;
   LocalMapperStats mapping;
@@ -70,6 +71,7 @@ RunStats runTracker(const std::string& spec, const std::string& trajectory, size
                                            frame.timestamp_ns, features, T_C_G_true);
     ++stats.frames;
     stats.track_ms.push_back(r.time_ms);
+    stats.rotations.push_back(r.T_C_G ? r.T_C_G->rotation() : Eigen::Quaterniond::Identity());
     if (r.new_keyframe != nullptr) {
       ++stats.keyframes;
       stats.keyframe_frames.emplace_back(stats.frames - 1, r.keyframe_reason);
@@ -188,6 +190,37 @@ TEST(TrackerSimTest, ClosePointRuleOnlyAfterTheFrameGap) {
   EXPECT_LT(gated.keyframes, always.keyframes);
   config.close_points_min_frames = -1;
   EXPECT_NE(config.validate().find("close_points_min_frames"), std::string::npos);
+}
+
+// close_points_turn_deg waives the gap once the camera has turned that much since the last
+// keyframe: with the close-point rule holding at every frame and a gap of 19 frames, the
+// room's orbit (turning up to 1 degree a frame) makes close-point keyframes inside the gap,
+// each one turned more than 2 degrees from the keyframe before (the rule compares the same
+// estimated poses the run returns); without the waiver it makes fewer keyframes.
+TEST(TrackerSimTest, ClosePointGapIsWaivedWhileTheCameraTurns) {
+  TrackerConfig config;
+  config.tracked_close_min = 1000000;
+  config.untracked_close_min = 0;
+  config.close_points_min_frames = 19;
+  config.close_points_turn_deg = 2.0;
+  const RunStats s = runTracker("sim:room", "orbit", 40, false, config);
+  ASSERT_EQ(s.ok, 40);
+  int waived = 0;
+  for (size_t k = 1; k < s.keyframe_frames.size(); ++k) {
+    const auto& [frame, reason] = s.keyframe_frames[k];
+    const int previous = s.keyframe_frames[k - 1].first;
+    if (reason != KeyframeReason::kClosePoints || frame - previous >= 19) continue;
+    ++waived;
+    const double turned_deg =
+        s.rotations[frame].angularDistance(s.rotations[previous]) * 180.0 / M_PI;
+    EXPECT_GT(turned_deg, 2.0) << "keyframe at frame " << frame << ", the last at " << previous;
+  }
+  EXPECT_GT(waived, 0);
+  config.close_points_turn_deg = 0.0;
+  const RunStats gated = runTracker("sim:room", "orbit", 40, false, config);
+  EXPECT_LT(gated.keyframes, s.keyframes);
+  config.close_points_turn_deg = -1.0;
+  EXPECT_NE(config.validate().find("close_points_turn_deg"), std::string::npos);
 }
 
 // local_ba_max_keyframes bounds the keyframes one local BA optimises: the new keyframe and its

@@ -96,20 +96,14 @@ ResolvedKeyframe resolveKeyframe(const SparseMap& map, uint64_t gauge,
                                  const ReducedCameraMatrix& S, uint64_t id) {
   ResolvedKeyframe r;
   r.block = id;
-  const Keyframe* k = map.keyframe(static_cast<KeyframeId>(id));
-  Transformationd T_B_K;
-  // A culled keyframe's parent never changes and parents have smaller ids; the bound only
-  // guards a corrupt graph.
-  for (size_t steps = 0; k != nullptr && k->bad() && steps <= map.allKeyframes().size();
-       ++steps) {
-    if (k->id == static_cast<KeyframeId>(gauge) || S.blockOf(k->id) >= 0) break;
-    T_B_K = k->T_parent_this() * T_B_K;
-    k = k->parent();
-  }
-  if (k == nullptr || k->id == static_cast<KeyframeId>(id)) return r;  // unknown, or itself
-  r.block = static_cast<uint64_t>(k->id);
+  const std::optional<KeyframeAncestor> a = SparseMap::goodAncestor(
+      map.keyframe(static_cast<KeyframeId>(id)), [&](const Keyframe& k) {
+        return k.id == static_cast<KeyframeId>(gauge) || S.blockOf(k.id) >= 0;
+      });
+  if (!a || a->ancestor->id == static_cast<KeyframeId>(id)) return r;  // unknown, or itself
+  r.block = static_cast<uint64_t>(a->ancestor->id);
   r.tied = true;
-  r.T_B_K = T_B_K;
+  r.T_B_K = a->T_A_K;
   return r;
 }
 

@@ -88,7 +88,6 @@ void LoopCloser::abortGlobalBundleAdjustment() {
 }
 
 void LoopCloser::startGlobalBundleAdjustment(Keyframe* loop_keyframe) {
-  abortGlobalBundleAdjustment();
   std::lock_guard<std::mutex> lock(gba_mutex_);
   gba_running_ = true;
   gba_thread_ = std::thread([this, loop_keyframe] {

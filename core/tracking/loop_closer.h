@@ -142,7 +142,8 @@ class LoopCloser {
   void correct(Keyframe* keyframe, const Verified& loop);
   /// Aborts and joins the running global BA, if any.
   void abortGlobalBundleAdjustment();
-  /// Starts globalBundleAdjustment on its own thread (after aborting a running one).
+  /// Starts globalBundleAdjustment on its own thread. None may be running: the caller aborts
+  /// a running one before the loop correction that would make its result stale.
   void startGlobalBundleAdjustment(Keyframe* loop_keyframe);
   void globalBundleAdjustment(Keyframe* loop_keyframe);
 

@@ -77,12 +77,13 @@ void SparseMap::cullKeyframe(Keyframe* keyframe) {
   for (Landmark* l : orphans) retireLandmark(l);
 }
 
-std::optional<KeyframeAncestor> SparseMap::goodAncestor(const Keyframe* keyframe) {
+std::optional<KeyframeAncestor> SparseMap::goodAncestor(
+    const Keyframe* keyframe, const std::function<bool(const Keyframe&)>& stop) {
   KeyframeAncestor result;
   const Keyframe* k = keyframe;
   // A culled keyframe's parent never changes (it is no child of anyone), and ids grow
   // towards the leaves, so the chain is finite; the bound only guards a corrupt graph.
-  for (size_t steps = 0; k != nullptr && k->bad(); ++steps) {
+  for (size_t steps = 0; k != nullptr && k->bad() && !(stop && stop(*k)); ++steps) {
     if (steps > (size_t{1} << 24)) return std::nullopt;
     result.T_A_K = k->T_parent_this() * result.T_A_K;
     k = k->parent();

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -77,8 +78,11 @@ class SparseMap {
   void cullKeyframe(Keyframe* keyframe);
   /// The good keyframe `keyframe`'s pose follows (see KeyframeAncestor); nullopt for a
   /// culled keyframe whose chain of parents ends without a good one (a stand-in that
-  /// restore() made for a skipped id, which has no parent). Shared lock.
-  static std::optional<KeyframeAncestor> goodAncestor(const Keyframe* keyframe);
+  /// restore() made for a skipped id, which has no parent). With `stop`, the walk also ends
+  /// at the first keyframe of the chain (`keyframe` included) for which it holds, culled or
+  /// not. Shared lock.
+  static std::optional<KeyframeAncestor> goodAncestor(
+      const Keyframe* keyframe, const std::function<bool(const Keyframe&)>& stop = nullptr);
   /// Keeps culled keyframes' poses on their ancestors (ORB-SLAM2 recovers a culled keyframe's
   /// pose as its parent's times T_parent_this; here the dense mapper anchors subvolumes on
   /// keyframes, and a culled anchor must go on moving with the map): every culled keyframe

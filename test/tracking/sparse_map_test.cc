@@ -228,6 +228,16 @@ TEST(SparseMapTest, CulledKeyframesFollowTheirGoodAncestorInPoseBatches) {
     EXPECT_EQ(a->ancestor, m.keyframes[1]);
     EXPECT_TRUE((T_G_1 * a->T_A_K).isApprox(k == 2 ? T_G_2 : T_G_3, 1e-12));
   }
+  // A stop predicate ends the walk early, at a culled keyframe (2 for 3) or at the start.
+  const auto stopAt2 = [](const Keyframe& k) { return k.id == 2; };
+  const std::optional<KeyframeAncestor> at2 = SparseMap::goodAncestor(m.keyframes[3], stopAt2);
+  ASSERT_TRUE(at2.has_value());
+  EXPECT_EQ(at2->ancestor, m.keyframes[2]);
+  EXPECT_TRUE((T_G_2 * at2->T_A_K).isApprox(T_G_3, 1e-12));
+  const std::optional<KeyframeAncestor> start = SparseMap::goodAncestor(m.keyframes[2], stopAt2);
+  ASSERT_TRUE(start.has_value());
+  EXPECT_EQ(start->ancestor, m.keyframes[2]);
+  EXPECT_TRUE(start->T_A_K.isApprox(Transformationd(), 0.0));
   const std::optional<KeyframeAncestor> self = SparseMap::goodAncestor(m.keyframes[4]);
   ASSERT_TRUE(self.has_value());
   EXPECT_EQ(self->ancestor, m.keyframes[4]);

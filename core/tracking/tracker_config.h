@@ -23,16 +23,16 @@ struct TrackerConfig {
   /// untracked_close_min close features could become landmarks (100 / 70).
   int tracked_close_min = 100;
   int untracked_close_min = 70;
-  /// The close-point rule only once this many frames have passed since the last keyframe;
-  /// 0 = at any frame (ORB-SLAM2). On a street at speed the close road and walls are new in
-  /// every frame, and the rule alone made a keyframe every 2.7 frames (BENCHMARKS.md). (The
-  /// frames' inliers do not tell the two cases apart: the town's close-point keyframes had
-  /// 212 inliers at the median, the room's 149.)
-  int close_points_min_frames = 0;
-  /// ... unless the camera has turned more than this many degrees since the last keyframe
+  /// The close-point rule only once this many frames have passed since the last keyframe
+  /// (0 = at any frame, ORB-SLAM2's). On a street at speed the close road and walls are new
+  /// in every frame, and without the gap the rule alone made a keyframe every 2.7 frames
+  /// (BENCHMARKS.md). (The frames' inliers do not tell the two cases apart: the town's
+  /// close-point keyframes had 212 inliers at the median, the room's 149.)
+  int close_points_min_frames = 8;
+  /// ... or once the camera has turned more than this many degrees since the last keyframe
   /// (0 = the gap always holds): at a turn the view changes in a few frames, and a gap that
   /// held there lost the town's 12 m-radius turn (BENCHMARKS.md).
-  double close_points_turn_deg = 0.0;
+  double close_points_turn_deg = 5.0;
   /// Projection search windows (pixels, times the level's scale): against the last frame
   /// (7 for stereo in ORB-SLAM2, doubled when too few matches), against the local map (1;
   /// 5 just after relocalization).

@@ -166,6 +166,8 @@ TEST(TrackerSimTest, ClosePointRuleOnlyAfterTheFrameGap) {
   TrackerConfig config;
   config.tracked_close_min = 1000000;
   config.untracked_close_min = 0;
+  config.close_points_min_frames = 0;  // ORB-SLAM2's rule, no gap and no turn
+  config.close_points_turn_deg = 0.0;
   const auto count = [](const RunStats& s, KeyframeReason reason) {
     return std::count_if(s.keyframe_frames.begin(), s.keyframe_frames.end(),
                          [&](const auto& k) { return k.second == reason; });

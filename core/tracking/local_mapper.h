@@ -68,6 +68,12 @@ struct LocalMapperStats {
   uint64_t bundle_adjustments_discarded = 0;  ///< stale after a loop correction
   double last_ba_ms = 0.0;
   size_t largest_ba_window = 0;  ///< most keyframes optimised (not fixed) by one local BA
+  /// The last local BA's size: keyframes optimised (the gauge, keyframe 0, counts as fixed
+  /// when it is in the window) and held fixed, landmarks, observations.
+  size_t last_ba_free_keyframes = 0;
+  size_t last_ba_fixed_keyframes = 0;
+  size_t last_ba_landmarks = 0;
+  size_t last_ba_observations = 0;
 };
 
 /// ORB-SLAM2's local mapping for stereo / RGB-D: for every keyframe the tracker inserted,

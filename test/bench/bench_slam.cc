@@ -156,6 +156,8 @@ int run(int argc, char** argv) {
   std::mutex mutex;
   std::vector<LoopClosureEvent> loops;
   std::vector<double> ba_ms;
+  // The sampled local BAs' sizes: free and fixed keyframes, landmarks, observations.
+  std::vector<double> ba_free, ba_fixed, ba_landmarks, ba_observations;
   slam.setLoopCallback([&](const LoopClosureEvent& e) {
     std::lock_guard<std::mutex> lock(mutex);
     loops.push_back(e);
@@ -215,6 +217,10 @@ int run(int argc, char** argv) {
     if (ls.bundle_adjustments != last_ba) {
       last_ba = ls.bundle_adjustments;
       ba_ms.push_back(ls.last_ba_ms);
+      ba_free.push_back(static_cast<double>(ls.last_ba_free_keyframes));
+      ba_fixed.push_back(static_cast<double>(ls.last_ba_fixed_keyframes));
+      ba_landmarks.push_back(static_cast<double>(ls.last_ba_landmarks));
+      ba_observations.push_back(static_cast<double>(ls.last_ba_observations));
     }
     if ((i + 1) % 100 == 0 || i + 1 == frames.size()) {
       const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
@@ -286,8 +292,12 @@ int run(int argc, char** argv) {
                 percentile(values, 0.05));
   }
   std::printf(" keyframes\n");
-  std::printf("  local BA: %zu runs, median %.1f ms, p95 %.1f ms\n", ba_ms.size(),
-              percentile(ba_ms, 0.5), percentile(ba_ms, 0.95));
+  std::printf(
+      "  local BA: %zu runs, median %.1f ms, p95 %.1f ms; median size %.0f keyframes "
+      "optimised + %.0f fixed, %.0f landmarks, %.0f observations (p95 %.0f)\n",
+      ba_ms.size(), percentile(ba_ms, 0.5), percentile(ba_ms, 0.95), percentile(ba_free, 0.5),
+      percentile(ba_fixed, 0.5), percentile(ba_landmarks, 0.5), percentile(ba_observations, 0.5),
+      percentile(ba_observations, 0.95));
   std::printf(
       "  loops: %zu closed (%zu false), %lu rejected after verification (%lu candidates by "
       "the drift gate); correction median %.1f ms; global BA %lu (last %.0f ms, on its own "
@@ -320,6 +330,10 @@ int run(int argc, char** argv) {
         {"track_ms_median", percentile(track_ms, 0.5)},
         {"local_ba_ms_median", percentile(ba_ms, 0.5)},
         {"local_ba_ms_p95", percentile(ba_ms, 0.95)},
+        {"local_ba_free_keyframes_median", percentile(ba_free, 0.5)},
+        {"local_ba_fixed_keyframes_median", percentile(ba_fixed, 0.5)},
+        {"local_ba_landmarks_median", percentile(ba_landmarks, 0.5)},
+        {"local_ba_observations_median", percentile(ba_observations, 0.5)},
         {"loops", loops.size()},
         {"false_loops", false_loops},
         {"loops_rejected_drift", lc.loops_rejected_drift},

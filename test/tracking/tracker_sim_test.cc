@@ -239,6 +239,13 @@ TEST(TrackerSimTest, LocalBundleAdjustmentWindowIsBounded) {
   ASSERT_GT(few.mapping.bundle_adjustments, 0u);
   EXPECT_GT(all.mapping.largest_ba_window, 4u);
   EXPECT_EQ(few.mapping.largest_ba_window, 4u);  // the new keyframe and 3 covisible ones
+  // The last BA's size: at most the window optimised (fewer when it holds keyframe 0, the
+  // gauge), some keyframes fixed around it, and every landmark observed at least once.
+  EXPECT_GE(few.mapping.last_ba_free_keyframes, 1u);
+  EXPECT_LE(few.mapping.last_ba_free_keyframes, 4u);
+  EXPECT_GE(few.mapping.last_ba_fixed_keyframes, 1u);
+  EXPECT_GT(few.mapping.last_ba_landmarks, 0u);
+  EXPECT_GE(few.mapping.last_ba_observations, few.mapping.last_ba_landmarks);
   LocalMapperConfig negative;
   negative.local_ba_max_keyframes = -1;
   EXPECT_NE(negative.validate().find("local_ba_max_keyframes"), std::string::npos);

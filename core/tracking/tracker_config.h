@@ -28,11 +28,13 @@ struct TrackerConfig {
   /// in every frame, and without the gap the rule alone made a keyframe every 2.7 frames
   /// (BENCHMARKS.md). (The frames' inliers do not tell the two cases apart: the town's
   /// close-point keyframes had 212 inliers at the median, the room's 149.)
-  int close_points_min_frames = 8;
+  int close_points_min_frames = 0;
   /// ... or once the camera has turned more than this many degrees since the last keyframe
   /// (0 = the gap always holds): at a turn the view changes in a few frames, and a gap that
-  /// held there lost the town's 12 m-radius turn (BENCHMARKS.md).
-  double close_points_turn_deg = 5.0;
+  /// held there lost the town's 12 m-radius turn. 8 frames or 5 degrees halved the town's
+  /// keyframes with no frame lost on an idle machine, but lost the turn in one of two runs
+  /// on a loaded one, so both stay 0 by default (BENCHMARKS.md).
+  double close_points_turn_deg = 0.0;
   /// Projection search windows (pixels, times the level's scale): against the last frame
   /// (7 for stereo in ORB-SLAM2, doubled when too few matches), against the local map (1;
   /// 5 just after relocalization).

@@ -292,10 +292,14 @@ int run(int argc, char** argv) {
                 percentile(values, 0.05));
   }
   std::printf(" keyframes\n");
+  const LocalMapperStats lm = slam.localMappingStats();
   std::printf(
-      "  local BA: %zu runs, median %.1f ms, p95 %.1f ms; median size %.0f keyframes "
-      "optimised + %.0f fixed, %.0f landmarks, %.0f observations (p95 %.0f)\n",
-      ba_ms.size(), percentile(ba_ms, 0.5), percentile(ba_ms, 0.95), percentile(ba_free, 0.5),
+      "  local BA: %zu runs (%lu in all, %lu interrupted by the tracker), median %.1f ms, p95 "
+      "%.1f ms; median size %.0f keyframes optimised + %.0f fixed, %.0f landmarks, %.0f "
+      "observations (p95 %.0f)\n",
+      ba_ms.size(), static_cast<unsigned long>(lm.bundle_adjustments),
+      static_cast<unsigned long>(lm.bundle_adjustments_aborted), percentile(ba_ms, 0.5),
+      percentile(ba_ms, 0.95), percentile(ba_free, 0.5),
       percentile(ba_fixed, 0.5), percentile(ba_landmarks, 0.5), percentile(ba_observations, 0.5),
       percentile(ba_observations, 0.95));
   std::printf(
@@ -330,6 +334,8 @@ int run(int argc, char** argv) {
         {"track_ms_median", percentile(track_ms, 0.5)},
         {"local_ba_ms_median", percentile(ba_ms, 0.5)},
         {"local_ba_ms_p95", percentile(ba_ms, 0.95)},
+        {"local_bas", lm.bundle_adjustments},
+        {"local_bas_interrupted", lm.bundle_adjustments_aborted},
         {"local_ba_free_keyframes_median", percentile(ba_free, 0.5)},
         {"local_ba_fixed_keyframes_median", percentile(ba_fixed, 0.5)},
         {"local_ba_landmarks_median", percentile(ba_landmarks, 0.5)},

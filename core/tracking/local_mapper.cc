@@ -306,15 +306,15 @@ void LocalMapper::localBundleAdjustment(Keyframe* keyframe) {
       l->updateNormalAndDepth(pyramid_);
     }
   }
+  const size_t optimised =
+      static_cast<size_t>(std::count_if(problem.keyframes.begin(), problem.keyframes.end(),
+                                        [](const BaKeyframe& k) { return !k.fixed; }));
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.bundle_adjustments;
     if (result.aborted) ++stats_.bundle_adjustments_aborted;
     stats_.last_ba_ms = result.time_ms;
     stats_.largest_ba_window = std::max(stats_.largest_ba_window, window_size);
-    const size_t optimised = static_cast<size_t>(std::count_if(
-        problem.keyframes.begin(), problem.keyframes.end(),
-        [](const BaKeyframe& k) { return !k.fixed; }));
     stats_.last_ba_free_keyframes = optimised;
     stats_.last_ba_fixed_keyframes = problem.keyframes.size() - optimised;
     stats_.last_ba_landmarks = problem.landmarks.size();

@@ -417,14 +417,8 @@ KeyframeReason Tracker::needNewKeyframe(int inliers) const {
       ++untracked_close;
     }
   }
-  const bool after_gap =
-      current_index_ >=
-          last_keyframe_index_ + static_cast<uint64_t>(config_.close_points_min_frames) ||
-      (config_.close_points_turn_deg > 0.0 &&
-       current_.T_C_G->rotation().angularDistance(last_keyframe_rotation_) >
-           config_.close_points_turn_deg * M_PI / 180.0);
   const bool need_close = tracked_close < config_.tracked_close_min &&
-                          untracked_close > config_.untracked_close_min && after_gap;
+                          untracked_close > config_.untracked_close_min && closePointGapPassed();
   const double ratio = num_keyframes < 2 ? 0.4 : config_.reference_ratio;
   const bool c1a = current_index_ >= last_keyframe_index_ + max_frames;
   const bool c1b =
@@ -444,6 +438,16 @@ KeyframeReason Tracker::needNewKeyframe(int inliers) const {
     return sink_->queuedKeyframes() < 3 ? reason : KeyframeReason::kNone;
   }
   return reason;
+}
+
+bool Tracker::closePointGapPassed() const {
+  if (current_index_ >=
+      last_keyframe_index_ + static_cast<uint64_t>(config_.close_points_min_frames)) {
+    return true;
+  }
+  return config_.close_points_turn_deg > 0.0 &&
+         current_.T_C_G->rotation().angularDistance(last_keyframe_rotation_) >
+             config_.close_points_turn_deg * M_PI / 180.0;
 }
 
 Keyframe* Tracker::createKeyframe() {

@@ -109,6 +109,9 @@ class Tracker {
   void updateLocalMap();
   int searchLocalMap();
   KeyframeReason needNewKeyframe(int inliers) const;
+  // The close-point rule's gap: close_points_min_frames since the last keyframe, or a turn of
+  // more than close_points_turn_deg since it.
+  bool closePointGapPassed() const;
   Keyframe* createKeyframe();
   void replaceRetiredInLastFrame();
   // The last frame's pose follows its reference keyframe's (moved by local BA or loop
@@ -127,7 +130,8 @@ class Tracker {
   uint64_t frames_processed_ = 0;  // counter behind the keyframe decision
   uint64_t current_index_ = 0;     // frames_processed_ of the current frame
   uint64_t last_keyframe_index_ = 0;
-  Eigen::Quaterniond last_keyframe_rotation_ = Eigen::Quaterniond::Identity();  // R_C_G when it was made
+  // R_C_G of the current frame when the last keyframe was made (close_points_turn_deg).
+  Eigen::Quaterniond last_keyframe_rotation_ = Eigen::Quaterniond::Identity();
   uint64_t last_relocalization_index_ = 0;
   bool ever_relocalized_ = false;
   int map_change_index_ = 0;

@@ -281,10 +281,11 @@ int run(int argc, char** argv) {
       "median %.1f ms%s\n",
       percentile(frame_ms, 0.5), percentile(frame_ms, 0.95), percentile(track_ms, 0.5),
       one_core ? " (one core)" : " (left/right extraction on 2 threads)");
+  const LocalMapperStats lm = slam.localMappingStats();
   std::printf("  keyframes made by reason:");
   for (const auto& [name, count] : keyframe_reasons) std::printf(" %s %zu", name.c_str(), count);
   std::printf(" (none: the first); culled %lu\n",
-              static_cast<unsigned long>(slam.localMappingStats().keyframes_culled));
+              static_cast<unsigned long>(lm.keyframes_culled));
   std::printf("  inliers of tracked frames: median %.0f, p5 %.0f; of the frames that made",
               percentile(inliers, 0.5), percentile(inliers, 0.05));
   for (const auto& [name, values] : keyframe_inliers) {
@@ -292,7 +293,6 @@ int run(int argc, char** argv) {
                 percentile(values, 0.05));
   }
   std::printf(" keyframes\n");
-  const LocalMapperStats lm = slam.localMappingStats();
   std::printf(
       "  local BA: %zu runs (%lu in all, %lu interrupted by the tracker), median %.1f ms, p95 "
       "%.1f ms; median size %.0f keyframes optimised + %.0f fixed, %.0f landmarks, %.0f "

@@ -5,8 +5,11 @@
 # their checkpoints; the room plays again, 160 frames from the start. The tracker must
 # restore its keyframes, relocalize in them (no new map epoch) and hand out new keyframe ids
 # above the old ones; the mapper must keep its subvolumes and attach new ones for the new
-# part of the loop; and the final mesh must be as accurate as the first run's against the
-# exact scene (a wrong relocalization would misplace the new subvolumes).
+# part of the loop; and the final mesh must be as accurate against the exact scene as that of
+# a pipeline that played the same 160 frames without a restart (a wrong relocalization would
+# misplace the new subvolumes). The first run's 100-frame map is no reference for that: the
+# loop's later frames drift more, so any 160-frame map has a larger median error (at 4cm
+# voxels, idle: 2.9 mm after 100 frames, 6.1 mm after 160 without a restart, 5.5 mm with).
 # Usage: run_resume_test.sh BIN_DIR WORK_DIR
 set -euo pipefail
 bin=$1
@@ -27,18 +30,21 @@ with_checkpoints() {  # with_checkpoints CONFIG DIR > OUT
     in_section && /^  period_s:/ {print "  period_s: 2.0"; next}
     {print}' "$1"
 }
-with_checkpoints "$repo/config/mapper.yaml" "$work/mapper_checkpoint" > mapper.yaml
-with_checkpoints "$repo/config/tracker.yaml" "$work/tracker_checkpoint" > tracker.yaml
-grep -q "tracker_checkpoint" tracker.yaml && grep -q "mapper_checkpoint" mapper.yaml \
-  || fail "could not set the checkpoint directories"
+for prefix in "" reference_; do  # the restarted pipeline's and the reference's
+  with_checkpoints "$repo/config/mapper.yaml" "$work/${prefix}mapper_checkpoint" > "${prefix}mapper.yaml"
+  with_checkpoints "$repo/config/tracker.yaml" "$work/${prefix}tracker_checkpoint" > "${prefix}tracker.yaml"
+  grep -q "${prefix}tracker_checkpoint" "${prefix}tracker.yaml" &&
+    grep -q "${prefix}mapper_checkpoint" "${prefix}mapper.yaml" \
+    || fail "could not set the checkpoint directories"
+done
 "$bin/cblox-capture" --source sim:room --write-scene scene.ply > /dev/null
 
 pids=()
-start_pipeline() {  # start_pipeline NAME
-  "$bin/cblox-mapper" --config mapper.yaml --pose-source tracker --output-dir "$work" \
+start_pipeline() {  # start_pipeline NAME [CONFIG_PREFIX]
+  "$bin/cblox-mapper" --config "${2:-}mapper.yaml" --pose-source tracker --output-dir "$work" \
     --lcm-url "$url" --quiet > "mapper_$1.log" 2>&1 &
   mapper=$!
-  "$bin/cblox-tracker" --config tracker.yaml --initial-pose-from-gt --lcm-url "$url" \
+  "$bin/cblox-tracker" --config "${2:-}tracker.yaml" --initial-pose-from-gt --lcm-url "$url" \
     > "tracker_$1.log" 2>&1 &
   tracker=$!
   pids=($mapper $tracker)
@@ -66,6 +72,12 @@ stopped_line() { grep "tracker: stopped:" "tracker_$1.log" || fail "no final lin
 field() {  # field NAME WORD: the number before WORD in the tracker's final line
   stopped_line "$1" | grep -o "[0-9]* $2" | head -1 | cut -d' ' -f1
 }
+
+# 0. The reference: the same 160 frames without a restart (checkpoints of its own).
+start_pipeline reference reference_
+play reference 160
+stop_pipeline reference
+echo "reference run: $(stopped_line reference)"
 
 # 1. The first run.
 start_pipeline first
@@ -98,24 +110,28 @@ keyframes2=$(field second keyframes)
 (( keyframes2 >= 1 )) || fail "no new keyframe after the restart"
 (( subvolumes2 > subvolumes1 )) || fail "no new subvolume after the restart ($subvolumes1 -> $subvolumes2)"
 
-# 3. The continued map is as accurate as the first run's against the exact scene.
+# 3. The continued map is as accurate as the reference's against the exact scene, and more
+# complete than the first run's.
 voxel=$(awk '/^  voxel_size:/ {print $2; exit}' mapper.yaml)
-for run in first second; do
+for run in reference first second; do
   "$bin/cblox-eval" --gt-mesh scene.ply --mesh "$run.ply" --voxel-size "$voxel" \
     --json "$run.json" > "eval_$run.txt" 2>&1 || fail "cblox-eval $run: $(cat "eval_$run.txt")"
 done
-python3 - << 'PY' || fail "the continued map is less accurate"
+python3 - << 'PY' || fail "the continued map is less accurate than the reference or less complete"
 import json
-first, second = (json.load(open(f"{r}.json"))["mesh"] for r in ("first", "second"))
+reference, first, second = (json.load(open(f"{r}.json"))["mesh"]
+                            for r in ("reference", "first", "second"))
 def fmt(m):
     a = m["accuracy"]
     return f"median {a['median_m'] * 1000:.1f} mm, p90 {a['p90_m'] * 1000:.1f} mm, " \
            f"completeness {m['completeness']['completeness'] * 100:.1f} %"
+print("reference:", fmt(reference))
 print("first run:", fmt(first))
 print("continued:", fmt(second))
-ok = second["accuracy"]["median_m"] <= first["accuracy"]["median_m"] + 0.003 and \
-     second["accuracy"]["p90_m"] <= first["accuracy"]["p90_m"] + 0.006 and \
-     second["completeness"]["completeness"] >= first["completeness"]["completeness"]
+ok = second["accuracy"]["median_m"] <= reference["accuracy"]["median_m"] + 0.003 and \
+     second["accuracy"]["p90_m"] <= reference["accuracy"]["p90_m"] + 0.006 and \
+     second["completeness"]["completeness"] >= first["completeness"]["completeness"] and \
+     second["completeness"]["completeness"] >= 0.95 * reference["completeness"]["completeness"]
 raise SystemExit(0 if ok else 1)
 PY
 trap - EXIT

@@ -7,6 +7,7 @@
 
 #include <ceres/ceres.h>
 
+#include "core/optimization/dense_schur_lm.h"
 #include "core/optimization/se3_manifold.h"
 
 namespace cblox {
@@ -67,6 +68,7 @@ ceres::LinearSolverType linearSolverType(const BundleAdjustmentConfig& config,
     case BaLinearSolver::kIterativeSchur:
       return ceres::ITERATIVE_SCHUR;
     case BaLinearSolver::kAuto:
+    case BaLinearSolver::kNativeDenseSchur:  // not a Ceres solver: solvePass takes it first
       break;
   }
   return num_free_keyframes <= config.dense_schur_max_free_keyframes || !has_sparse
@@ -75,16 +77,69 @@ ceres::LinearSolverType linearSolverType(const BundleAdjustmentConfig& config,
 }
 
 struct PassOutcome {
-  ceres::Solver::Summary summary;
   bool solved = false;  // false if there was nothing to optimise
+  bool usable = true;
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+  int iterations = 0;  // successful + unsuccessful steps
+  std::string message;
 };
+
+// The free keyframes that some active observation sees.
+int countFreeKeyframes(const BundleAdjustmentProblem& problem,
+                       const std::vector<std::uint8_t>& active) {
+  std::vector<std::uint8_t> seen(problem.keyframes.size(), 0);
+  int free = 0;
+  for (size_t i = 0; i < problem.observations.size(); ++i) {
+    const auto k = static_cast<size_t>(problem.observations[i].keyframe);
+    if (!active[i] || seen[k] || problem.keyframes[k].fixed) continue;
+    seen[k] = 1;
+    ++free;
+  }
+  return free;
+}
+
+// One pass by denseSchurLevenbergMarquardt (dense_schur_lm.h).
+PassOutcome solveNativePass(const BundleAdjustmentProblem& problem,
+                            const std::vector<std::uint8_t>& active, bool robust, int iterations,
+                            double time_limit_s, const BundleAdjustmentConfig& config,
+                            BaState* state, const std::atomic<bool>* abort, bool* aborted,
+                            std::string* solver_name) {
+  DenseSchurLmOptions options;
+  options.max_iterations = iterations;
+  options.time_limit_s = time_limit_s;
+  options.robust = robust;
+  options.huber_delta_mono = config.huber_delta_mono;
+  options.huber_delta_stereo = config.huber_delta_stereo;
+  options.function_tolerance = config.solver.function_tolerance;
+  options.gradient_tolerance = config.solver.gradient_tolerance;
+  options.parameter_tolerance = config.solver.parameter_tolerance;
+  options.abort = abort;
+  const DenseSchurLmSummary summary =
+      denseSchurLevenbergMarquardt(problem, active, options, &state->poses, &state->points);
+  *solver_name = kNativeDenseSchurName;
+  *aborted = *aborted || summary.aborted;
+  PassOutcome outcome;
+  outcome.solved = summary.solved;
+  outcome.initial_cost = summary.initial_cost;
+  outcome.final_cost = summary.final_cost;
+  outcome.iterations = summary.successful_steps + summary.unsuccessful_steps;
+  return outcome;
+}
 
 // One Ceres solve over the observations with active[i] != 0.
 PassOutcome solvePass(const BundleAdjustmentProblem& problem,
                       const std::vector<std::uint8_t>& active, bool robust, int iterations,
                       double time_limit_s, const BundleAdjustmentConfig& config, BaModel* model,
-                      BaState* state, ceres::IterationCallback* callback,
+                      BaState* state, const std::atomic<bool>* abort, bool* aborted,
                       std::string* solver_name) {
+  if (config.linear_solver == BaLinearSolver::kNativeDenseSchur ||
+      (config.linear_solver == BaLinearSolver::kAuto &&
+       config.native_max_free_keyframes > 0 &&
+       countFreeKeyframes(problem, active) <= config.native_max_free_keyframes)) {
+    return solveNativePass(problem, active, robust, iterations, time_limit_s, config, state,
+                           abort, aborted, solver_name);
+  }
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -104,6 +159,7 @@ PassOutcome solvePass(const BundleAdjustmentProblem& problem,
   }
   PassOutcome outcome;
   if (ceres_problem.NumResidualBlocks() == 0) return outcome;
+  AbortCallback abort_callback(abort, aborted);
 
   // Landmarks first (eliminated by the Schur solvers), then the poses.
   auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
@@ -128,10 +184,16 @@ PassOutcome solvePass(const BundleAdjustmentProblem& problem,
   options.sparse_linear_algebra_library_type = bestSparseLibrary();
   options.preconditioner_type = ceres::SCHUR_JACOBI;
   options.linear_solver_ordering = ordering;
-  if (callback != nullptr) options.callbacks.push_back(callback);
+  if (abort != nullptr) options.callbacks.push_back(&abort_callback);
   *solver_name = ceres::LinearSolverTypeToString(options.linear_solver_type);
-  ceres::Solve(options, &ceres_problem, &outcome.summary);
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &ceres_problem, &summary);
   outcome.solved = true;
+  outcome.usable = summary.IsSolutionUsable();
+  outcome.initial_cost = summary.initial_cost;
+  outcome.final_cost = summary.final_cost;
+  outcome.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  outcome.message = summary.message;
   return outcome;
 }
 
@@ -194,6 +256,7 @@ std::string validate(const BundleAdjustmentConfig& c) {
     return "huber deltas must be > 0";
   }
   if (c.dense_schur_max_free_keyframes < 0) return "dense_schur_max_free_keyframes must be >= 0";
+  if (c.native_max_free_keyframes < 0) return "native_max_free_keyframes must be >= 0";
   if (const std::string e = validate(c.solver); !e.empty()) return "solver: " + e;
   return {};
 }
@@ -217,8 +280,6 @@ BundleAdjustmentResult bundleAdjust(const BundleAdjustmentProblem& problem,
 
   BundleAdjustmentResult result;
   BaModel model(config);
-  AbortCallback abort_callback(abort, &result.aborted);
-  ceres::IterationCallback* callback = abort != nullptr ? &abort_callback : nullptr;
   const auto remaining_s = [&] {
     return config.solver.max_time_s - std::chrono::duration<double>(Clock::now() - start).count();
   };
@@ -231,12 +292,12 @@ BundleAdjustmentResult bundleAdjust(const BundleAdjustmentProblem& problem,
   }
   PassOutcome pass =
       solvePass(problem, active, true, config.first_pass_iterations, config.solver.max_time_s,
-                config, &model, &state, callback, &result.linear_solver);
-  bool usable = !pass.solved || pass.summary.IsSolutionUsable();
+                config, &model, &state, abort, &result.aborted, &result.linear_solver);
+  bool usable = !pass.solved || pass.usable;
   if (pass.solved) {
-    result.initial_cost = pass.summary.initial_cost;
-    result.final_cost = pass.summary.final_cost;
-    result.iterations += pass.summary.num_successful_steps + pass.summary.num_unsuccessful_steps;
+    result.initial_cost = pass.initial_cost;
+    result.final_cost = pass.final_cost;
+    result.iterations += pass.iterations;
   }
 
   // Pass 2: without the outliers of pass 1.
@@ -247,18 +308,18 @@ BundleAdjustmentResult bundleAdjust(const BundleAdjustmentProblem& problem,
       const BaObservation& o = problem.observations[i];
       active[i] = isInlier(config, o, observationChi2(problem, state, o));
     }
-    pass =
-        solvePass(problem, active, config.robust_loss_in_second_pass, config.second_pass_iterations,
-                  time_left_s, config, &model, &state, callback, &result.linear_solver);
+    pass = solvePass(problem, active, config.robust_loss_in_second_pass,
+                     config.second_pass_iterations, time_left_s, config, &model, &state, abort,
+                     &result.aborted, &result.linear_solver);
     if (pass.solved) {
-      usable = pass.summary.IsSolutionUsable();
-      result.final_cost = pass.summary.final_cost;
-      result.iterations += pass.summary.num_successful_steps + pass.summary.num_unsuccessful_steps;
+      usable = pass.usable;
+      result.final_cost = pass.final_cost;
+      result.iterations += pass.iterations;
     }
   }
   if (!usable) {
     result.success = false;
-    result.message = "Ceres: " + pass.summary.message;
+    result.message = "Ceres: " + pass.message;
   }
 
   // Final classification of every observation at the solution.

@@ -15,8 +15,11 @@
 
 namespace cblox {
 
-/// Bundle adjustment with Ceres (ORB-SLAM2's Optimizer::LocalBundleAdjustment and, with
-/// globalBundleAdjustmentConfig(), GlobalBundleAdjustemnt), on plain structs.
+/// Bundle adjustment (ORB-SLAM2's Optimizer::LocalBundleAdjustment and, with
+/// globalBundleAdjustmentConfig(), GlobalBundleAdjustemnt), on plain structs. Each pass is
+/// solved by our own dense-Schur Levenberg-Marquardt (dense_schur_lm.h) when it has at most
+/// native_max_free_keyframes free keyframes (kAuto) or kNativeDenseSchur is asked for, and
+/// by Ceres otherwise; both minimise the same cost with the same step control.
 ///
 /// Unknowns: keyframe poses T_C_G (world-to-camera, 7 doubles with SE3Manifold: left
 /// perturbation, tangent [rho (m); phi (rad)]) and landmark positions p_G (metres). Residuals:
@@ -84,12 +87,18 @@ enum class BaLinearSolver {
   kDenseSchur,      ///< ceres::DENSE_SCHUR
   kSparseSchur,     ///< ceres::SPARSE_SCHUR with SuiteSparse (Eigen sparse if absent)
   kIterativeSchur,  ///< ceres::ITERATIVE_SCHUR with the SCHUR_JACOBI preconditioner
+  /// Our own Levenberg-Marquardt with a dense Schur complement, no Ceres
+  /// (dense_schur_lm.h): for windows of tens of free keyframes, not whole maps.
+  kNativeDenseSchur,
 };
 
+/// BundleAdjustmentResult::linear_solver of kNativeDenseSchur.
+inline constexpr const char* kNativeDenseSchurName = "NATIVE_DENSE_SCHUR";
+
 struct BundleAdjustmentConfig {
-  /// Ceres iterations of the robust pass (ORB-SLAM2 local BA: 5). >= 1.
+  /// Iterations of the robust pass (ORB-SLAM2 local BA: 5). >= 1.
   int first_pass_iterations = 5;
-  /// Ceres iterations after dropping outliers (ORB-SLAM2 local BA: 10). 0 = no second pass.
+  /// Iterations after dropping outliers (ORB-SLAM2 local BA: 10). 0 = no second pass.
   int second_pass_iterations = 10;
   /// ORB-SLAM2 removes the robust kernel in the second pass (false).
   bool robust_loss_in_second_pass = false;
@@ -104,6 +113,11 @@ struct BundleAdjustmentConfig {
   /// Measured (cblox-bench-optimization, ~4 observations per landmark): DENSE_SCHUR is
   /// faster at 10 and 60 free keyframes, SPARSE_SCHUR at 120 and 250.
   int dense_schur_max_free_keyframes = 80;
+  /// kAuto uses kNativeDenseSchur for a pass with up to this many free keyframes (0: never),
+  /// Ceres above. >= 0. Measured (cblox-bench-optimization, ~4 observations per landmark):
+  /// ours is 5-7x faster than DENSE_SCHUR at 10-60 free keyframes, 1.6x at 120, and slower
+  /// than SPARSE_SCHUR at 250 (its reduced matrix is dense).
+  int native_max_free_keyframes = 120;
   /// Threads, time limit (for both passes together) and tolerances of Ceres.
   CeresSolverConfig solver;
 };
@@ -127,7 +141,7 @@ struct BundleAdjustmentResult {
   /// point behind the camera).
   std::vector<std::uint8_t> outlier;
   int num_outliers = 0;
-  /// Ceres iterations (successful + unsuccessful steps) over both passes.
+  /// Solver iterations (successful + unsuccessful steps) over both passes.
   int iterations = 0;
   /// Ceres cost (1/2 sum rho(chi2)) at the start of pass 1 and at the end of the last pass
   /// (of that pass' problem: without outliers and, by default, without the robust loss).
@@ -137,7 +151,7 @@ struct BundleAdjustmentResult {
   double final_chi2 = 0.0;
   /// Wall-clock time of bundleAdjust, milliseconds.
   double time_ms = 0.0;
-  /// The linear solver used (ceres::LinearSolverTypeToString).
+  /// The linear solver used (ceres::LinearSolverTypeToString, or kNativeDenseSchurName).
   std::string linear_solver;
   /// True if `abort` was raised (pass 2 is then skipped; the result is still usable).
   bool aborted = false;

@@ -66,7 +66,8 @@ void loadBundleAdjustment(const YAML::Node& node, const std::string& path,
                    {"second_pass_iterations", &ba->second_pass_iterations},
                    {"num_threads", &ba->solver.num_threads},
                    {"max_time_s", &ba->solver.max_time_s},
-                   {"dense_schur_max_free_keyframes", &ba->dense_schur_max_free_keyframes}})) {
+                   {"dense_schur_max_free_keyframes", &ba->dense_schur_max_free_keyframes},
+                   {"native_max_free_keyframes", &ba->native_max_free_keyframes}})) {
     throwIfInvalid(path, validate(*ba));
   }
 }

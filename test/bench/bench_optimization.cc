@@ -2,8 +2,11 @@
 //  - motion-only pose optimisation (hand-written LM, ORB-SLAM2's 4 x 10 scheme) with 300
 //    observations (1 px noise, 10% gross outliers);
 //  - local BA of an ORB-SLAM2-like window: 10 free + 10 fixed keyframes, 2000 landmarks,
-//    ~8000 observations (1 px noise, 2% gross outliers), DENSE_SCHUR and SPARSE_SCHUR;
-//  - BA with 10 / 60 / 120 / 250 free keyframes and both Schur solvers (kAuto's crossover);
+//    ~8000 observations (1 px noise, 2% gross outliers), with Ceres' DENSE_SCHUR and
+//    SPARSE_SCHUR and with our own dense-Schur LM (NATIVE_DENSE_SCHUR, dense_schur_lm.h);
+//  - a window of the town's median local BA size (33 free + 55 fixed keyframes, 2400
+//    landmarks, ~13,000 observations), Ceres' DENSE_SCHUR against ours;
+//  - BA with 10 / 60 / 120 / 250 free keyframes and all three solvers (kAuto's crossovers);
 //  - the BA linearization + information matrix of the local window (for core/covariance);
 //  - an SE(3) pose graph of 500 keyframes (loop with covisibility edges and drift).
 //
@@ -59,10 +62,11 @@ void BM_PoseOptimization(benchmark::State& state) {
 
 // A window of `keyframes` keyframes (the first `fixed` fixed) over 2000 landmarks, about 4
 // observations per landmark.
-test::BaScene window(int keyframes, int fixed, double observe_probability) {
+test::BaScene window(int keyframes, int fixed, double observe_probability,
+                     int landmarks = 2000) {
   test::BaSceneOptions options;
   options.keyframes = keyframes;
-  options.landmarks = 2000;
+  options.landmarks = landmarks;
   options.step_m = 0.25;
   options.observe_probability = observe_probability;
   options.pixel_noise = 1.0;
@@ -79,6 +83,17 @@ test::BaScene window(int keyframes, int fixed, double observe_probability) {
 const test::BaScene& localWindow() {
   static const test::BaScene scene = window(20, 10, 0.225);
   return scene;
+}
+
+const test::BaScene& townWindow() {
+  static const test::BaScene scene = window(88, 55, 0.125, 2400);
+  return scene;
+}
+
+// range(0) of the BA benchmarks: 0 Ceres' DENSE_SCHUR, 1 Ceres' SPARSE_SCHUR, 2 ours.
+BaLinearSolver solverOf(int64_t arg) {
+  return arg == 0 ? BaLinearSolver::kDenseSchur
+                  : arg == 1 ? BaLinearSolver::kSparseSchur : BaLinearSolver::kNativeDenseSchur;
 }
 
 void runBundleAdjustment(benchmark::State& state, const test::BaScene& scene,
@@ -100,13 +115,15 @@ void runBundleAdjustment(benchmark::State& state, const test::BaScene& scene,
   state.SetLabel(result.linear_solver);
 }
 
-// range(0) = 0: the default config (kAuto: DENSE_SCHUR here), 1: SPARSE_SCHUR.
 void BM_LocalBundleAdjustment(benchmark::State& state) {
-  runBundleAdjustment(state, localWindow(),
-                      state.range(0) ? BaLinearSolver::kSparseSchur : BaLinearSolver::kAuto);
+  runBundleAdjustment(state, localWindow(), solverOf(state.range(0)));
 }
 
-// range(0) free keyframes (plus 10 fixed), range(1) = 1 for SPARSE_SCHUR.
+void BM_TownBundleAdjustment(benchmark::State& state) {
+  runBundleAdjustment(state, townWindow(), solverOf(state.range(0)));
+}
+
+// range(0) free keyframes (plus 10 fixed), range(1) the solver as above.
 void BM_BundleAdjustmentSolvers(benchmark::State& state) {
   static std::vector<std::pair<int, test::BaScene>> scenes;
   const int free = static_cast<int>(state.range(0));
@@ -117,8 +134,7 @@ void BM_BundleAdjustmentSolvers(benchmark::State& state) {
     scenes.emplace_back(free, window(free + 10, 10, 0.225 * 20.0 / (free + 10)));
     it = scenes.end() - 1;
   }
-  runBundleAdjustment(state, it->second,
-                      state.range(1) ? BaLinearSolver::kSparseSchur : BaLinearSolver::kDenseSchur);
+  runBundleAdjustment(state, it->second, solverOf(state.range(1)));
 }
 
 void BM_LinearizationAndInformation(benchmark::State& state) {
@@ -171,14 +187,19 @@ void BM_PoseGraph(benchmark::State& state) {
 BENCHMARK(BM_PoseOptimization)->Name("pose_optimization/300_obs")->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_LocalBundleAdjustment)
     ->Name("local_ba/10_free_10_fixed")
-    ->ArgName("sparse_schur")
+    ->ArgName("solver")
+    ->DenseRange(0, 2)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TownBundleAdjustment)
+    ->Name("local_ba/town_33_free_55_fixed")
+    ->ArgName("solver")
     ->Arg(0)
-    ->Arg(1)
+    ->Arg(2)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BundleAdjustmentSolvers)
     ->Name("ba_solvers")
-    ->ArgNames({"free_kf", "sparse"})
-    ->ArgsProduct({{10, 60, 120, 250}, {0, 1}})
+    ->ArgNames({"free_kf", "solver"})
+    ->ArgsProduct({{10, 60, 120, 250}, {0, 1, 2}})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LinearizationAndInformation)
     ->Name("ba_linearization/local_window")

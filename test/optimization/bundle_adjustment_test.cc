@@ -50,7 +50,9 @@ TEST(BundleAdjustment, NoiselessObservationsRecoverTheTruth) {
   const test::BaScene scene = perturbedScene(0.0, 101);
   ASSERT_EQ(scene.problem.landmarks.size(), 500u);
   ASSERT_GT(scene.problem.observations.size(), 2500u);
-  const BundleAdjustmentResult r = bundleAdjust(scene.problem, tightConfig());
+  BundleAdjustmentConfig config = tightConfig();
+  config.native_max_free_keyframes = 0;  // kAuto picks Ceres
+  const BundleAdjustmentResult r = bundleAdjust(scene.problem, config);
   ASSERT_TRUE(r.success) << r.message;
   EXPECT_LT(maxPoseError(r, scene), 1e-6);
   EXPECT_LT(maxPointError(r.p_G, scene), 1e-6);
@@ -243,6 +245,123 @@ TEST(BundleAdjustment, RejectsInvalidInputWithAClearMessage) {
   config.solver.max_time_s = -1.0;
   EXPECT_EQ(errorOf(scene.problem, config),
             "bundleAdjust: config: solver: max_time_s must be >= 0 and finite");
+}
+
+
+// Our own dense-Schur Levenberg-Marquardt (dense_schur_lm.h) against Ceres' DENSE_SCHUR.
+BundleAdjustmentConfig nativeConfig(BundleAdjustmentConfig config = {}) {
+  config.linear_solver = BaLinearSolver::kNativeDenseSchur;
+  return config;
+}
+
+TEST(BundleAdjustmentNative, NoiselessObservationsRecoverTheTruth) {
+  const test::BaScene scene = perturbedScene(0.0, 101);
+  const BundleAdjustmentResult r = bundleAdjust(scene.problem, nativeConfig(tightConfig()));
+  ASSERT_TRUE(r.success) << r.message;
+  EXPECT_EQ(r.linear_solver, "NATIVE_DENSE_SCHUR");
+  EXPECT_LT(maxPoseError(r, scene), 1e-6);
+  EXPECT_LT(maxPointError(r.p_G, scene), 1e-6);
+  EXPECT_EQ(r.num_outliers, 0);
+  EXPECT_GT(r.initial_cost, 1e3);
+  EXPECT_LT(r.final_cost, 1e-12);
+  EXPECT_EQ(r.T_C_G[0].rotation().coeffs(), scene.problem.keyframes[0].T_C_G.rotation().coeffs());
+  EXPECT_EQ(r.T_C_G[0].translation(), scene.problem.keyframes[0].T_C_G.translation());
+}
+
+TEST(BundleAdjustmentNative, ConvergesToCeresSolution) {
+  const test::BaScene scene = perturbedScene(0.5, 401);
+  BundleAdjustmentConfig config = tightConfig();
+  config.linear_solver = BaLinearSolver::kDenseSchur;
+  const BundleAdjustmentResult ceres = bundleAdjust(scene.problem, config);
+  const BundleAdjustmentResult native = bundleAdjust(scene.problem, nativeConfig(config));
+  ASSERT_TRUE(native.success);
+  // The same cost: the same initial cost exactly (to rounding), the same minimum.
+  EXPECT_NEAR(native.initial_cost, ceres.initial_cost, 1e-9 * ceres.initial_cost);
+  EXPECT_NEAR(native.final_chi2, ceres.final_chi2, 1e-7 * ceres.final_chi2);
+  EXPECT_EQ(native.outlier, ceres.outlier);
+  for (size_t k = 0; k < scene.T_C_G_true.size(); ++k) {
+    EXPECT_LT(test::poseDistance(native.T_C_G[k], ceres.T_C_G[k]), 1e-7) << k;
+  }
+  EXPECT_LT(maxPointError(native.p_G, scene) - maxPointError(ceres.p_G, scene), 1e-7);
+}
+
+TEST(BundleAdjustmentNative, OrbSlamScheduleMatchesCeresWithOutliers) {
+  // ORB-SLAM2's 5 + 10 iterations, 1 px noise and 3% gross outliers: both stop short of the
+  // minimum, so they agree on the outliers and nearly on the cost.
+  test::BaSceneOptions options;
+  options.pixel_noise = 1.0;
+  options.seed = 211;
+  test::BaScene scene = test::makeGaugedPerturbedBaScene(options, 0.05, 0.02, 0.2);
+  for (size_t i = 0; i < scene.problem.observations.size(); i += 33) {
+    scene.problem.observations[i].u += 35.0;
+  }
+  BundleAdjustmentConfig config;
+  config.linear_solver = BaLinearSolver::kDenseSchur;
+  const BundleAdjustmentResult ceres = bundleAdjust(scene.problem, config);
+  const BundleAdjustmentResult native = bundleAdjust(scene.problem, nativeConfig());
+  ASSERT_TRUE(native.success);
+  EXPECT_LE(native.iterations, 15);
+  EXPECT_NEAR(native.final_chi2, ceres.final_chi2, 0.01 * ceres.final_chi2);
+  size_t differ = 0;
+  for (size_t i = 0; i < native.outlier.size(); ++i) differ += native.outlier[i] != ceres.outlier[i];
+  EXPECT_LE(differ, native.outlier.size() / 200);
+  for (size_t i = 0; i < scene.problem.observations.size(); i += 33) EXPECT_EQ(native.outlier[i], 1);
+  EXPECT_LT(rmsPoseError(native.T_C_G, scene), 1.05 * rmsPoseError(ceres.T_C_G, scene));
+}
+
+TEST(BundleAdjustmentNative, AbortAndTimeLimitStopBeforeTheFirstStep) {
+  const test::BaScene scene = perturbedScene(0.0, 601);
+  const std::atomic<bool> abort{true};
+  BundleAdjustmentResult r = bundleAdjust(scene.problem, nativeConfig(), &abort);
+  EXPECT_TRUE(r.aborted);
+  EXPECT_TRUE(r.success);
+  EXPECT_EQ(r.iterations, 0);
+  for (size_t k = 0; k < scene.problem.keyframes.size(); ++k) {
+    EXPECT_EQ(r.T_C_G[k].translation(), scene.problem.keyframes[k].T_C_G.translation());
+  }
+  BundleAdjustmentConfig config = nativeConfig();
+  config.solver.max_time_s = 1e-9;
+  r = bundleAdjust(scene.problem, config);
+  EXPECT_FALSE(r.aborted);
+  EXPECT_EQ(r.iterations, 0);
+  EXPECT_EQ(r.outlier.size(), scene.problem.observations.size());
+}
+
+TEST(BundleAdjustmentNative, GrossOutliersAndPointsBehindTheCamera) {
+  test::BaScene scene = perturbedScene(0.0, 301);
+  std::vector<std::uint8_t> injected(scene.problem.observations.size(), 0);
+  for (size_t i = 3; i < injected.size(); i += 20) {
+    scene.problem.observations[i].u += (i % 3 ? 25.0 : -40.0);
+    scene.problem.observations[i].v += 30.0;
+    injected[i] = 1;
+  }
+  const Eigen::Vector3d behind = scene.T_C_G_true[3].inverse() * Eigen::Vector3d(0, 0, -5);
+  scene.problem.landmarks[0].p_G = behind;
+  const BundleAdjustmentResult r = bundleAdjust(scene.problem, nativeConfig(tightConfig()));
+  ASSERT_TRUE(r.success);
+  for (size_t i = 0; i < injected.size(); ++i) {
+    const bool of_landmark_0 = scene.problem.observations[i].landmark == 0;
+    EXPECT_EQ(r.outlier[i], of_landmark_0 ? 1 : injected[i]) << "observation " << i;
+  }
+  EXPECT_EQ(r.p_G[0], behind);  // no usable observation: unchanged
+  EXPECT_LT(maxPoseError(r, scene), 1e-6);
+}
+
+TEST(BundleAdjustmentNative, AutoUsesItUpToItsFreeKeyframeLimit) {
+  const test::BaScene scene = perturbedScene(0.5, 411);  // 1 fixed keyframe, the rest free
+  int free = 0;
+  for (const BaKeyframe& k : scene.problem.keyframes) free += k.fixed ? 0 : 1;
+  BundleAdjustmentConfig config;
+  EXPECT_EQ(config.native_max_free_keyframes, 120);
+  EXPECT_EQ(bundleAdjust(scene.problem, config).linear_solver, "NATIVE_DENSE_SCHUR");
+  config.native_max_free_keyframes = 0;
+  EXPECT_EQ(bundleAdjust(scene.problem, config).linear_solver, "DENSE_SCHUR");
+  config.native_max_free_keyframes = free;
+  EXPECT_EQ(bundleAdjust(scene.problem, config).linear_solver, "NATIVE_DENSE_SCHUR");
+  config.native_max_free_keyframes = free - 1;
+  EXPECT_EQ(bundleAdjust(scene.problem, config).linear_solver, "DENSE_SCHUR");
+  config.native_max_free_keyframes = -1;
+  EXPECT_EQ(validate(config), "native_max_free_keyframes must be >= 0");
 }
 
 }  // namespace

@@ -103,14 +103,16 @@ int countFreeKeyframes(const BundleAdjustmentProblem& problem,
 PassOutcome solveNativePass(const BundleAdjustmentProblem& problem,
                             const std::vector<std::uint8_t>& active, bool robust, int iterations,
                             double time_limit_s, const BundleAdjustmentConfig& config,
-                            BaState* state, const std::atomic<bool>* abort, bool* aborted,
+                            const BaModel& model, BaState* state,
+                            const std::atomic<bool>* abort, bool* aborted,
                             std::string* solver_name) {
   DenseSchurLmOptions options;
   options.max_iterations = iterations;
   options.time_limit_s = time_limit_s;
-  options.robust = robust;
-  options.huber_delta_mono = config.huber_delta_mono;
-  options.huber_delta_stereo = config.huber_delta_stereo;
+  if (robust) {
+    options.loss_mono = &model.huber_mono;
+    options.loss_stereo = &model.huber_stereo;
+  }
   options.function_tolerance = config.solver.function_tolerance;
   options.gradient_tolerance = config.solver.gradient_tolerance;
   options.parameter_tolerance = config.solver.parameter_tolerance;
@@ -127,7 +129,8 @@ PassOutcome solveNativePass(const BundleAdjustmentProblem& problem,
   return outcome;
 }
 
-// One Ceres solve over the observations with active[i] != 0.
+// One solve over the observations with active[i] != 0: by solveNativePass when the config
+// asks for it (or kAuto and few enough free keyframes), else by Ceres.
 PassOutcome solvePass(const BundleAdjustmentProblem& problem,
                       const std::vector<std::uint8_t>& active, bool robust, int iterations,
                       double time_limit_s, const BundleAdjustmentConfig& config, BaModel* model,
@@ -137,8 +140,8 @@ PassOutcome solvePass(const BundleAdjustmentProblem& problem,
       (config.linear_solver == BaLinearSolver::kAuto &&
        config.native_max_free_keyframes > 0 &&
        countFreeKeyframes(problem, active) <= config.native_max_free_keyframes)) {
-    return solveNativePass(problem, active, robust, iterations, time_limit_s, config, state,
-                           abort, aborted, solver_name);
+    return solveNativePass(problem, active, robust, iterations, time_limit_s, config, *model,
+                           state, abort, aborted, solver_name);
   }
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;

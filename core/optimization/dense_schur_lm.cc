@@ -1,6 +1,7 @@
 #include "core/optimization/dense_schur_lm.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 
@@ -29,19 +30,19 @@ constexpr double kMaxRadius = 1e16;
 constexpr double kMinRadius = 1e-32;
 constexpr double kMinRelativeDecrease = 1e-3;
 
-// ceres::HuberLoss on s = chi2 with b = delta^2: rho(s) = s (s <= b), 2 sqrt(b s) - b above;
-// the weight is rho'(s).
+// rho(chi2) and its weight rho'(chi2) by the options' loss functions (identity if none).
 struct Loss {
-  bool robust = false;
-  double b_mono = 1.0;
-  double b_stereo = 1.0;
-  double rho(double chi2, int dimension) const {
-    const double b = dimension == 3 ? b_stereo : b_mono;
-    return !robust || chi2 <= b ? chi2 : 2.0 * std::sqrt(b * chi2) - b;
-  }
-  double weight(double chi2, int dimension) const {
-    const double b = dimension == 3 ? b_stereo : b_mono;
-    return !robust || chi2 <= b ? 1.0 : std::sqrt(b / chi2);
+  const ceres::LossFunction* mono = nullptr;
+  const ceres::LossFunction* stereo = nullptr;
+  double rho(double chi2, int dimension) const { return evaluate(chi2, dimension)[0]; }
+  double weight(double chi2, int dimension) const { return evaluate(chi2, dimension)[1]; }
+
+ private:
+  std::array<double, 3> evaluate(double chi2, int dimension) const {
+    std::array<double, 3> rho = {chi2, 1.0, 0.0};
+    const ceres::LossFunction* f = dimension == 3 ? stereo : mono;
+    if (f != nullptr) f->Evaluate(chi2, rho.data());
+    return rho;
   }
 };
 
@@ -275,10 +276,7 @@ DenseSchurLmSummary denseSchurLevenbergMarquardt(const BundleAdjustmentProblem& 
   const Structure s = buildStructure(problem, active);
   if (s.observations.empty()) return summary;
   summary.solved = true;
-  Loss loss;
-  loss.robust = options.robust;
-  loss.b_mono = options.huber_delta_mono * options.huber_delta_mono;
-  loss.b_stereo = options.huber_delta_stereo * options.huber_delta_stereo;
+  const Loss loss{options.loss_mono, options.loss_stereo};
 
   State x;
   x.T_C_G.reserve(poses->size());

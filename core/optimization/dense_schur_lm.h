@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <vector>
 
+#include <ceres/loss_function.h>
 #include <Eigen/Core>
 
 #include "core/optimization/se3_manifold.h"
@@ -17,9 +18,9 @@ struct BundleAdjustmentProblem;
 struct DenseSchurLmOptions {
   int max_iterations = 10;    ///< steps (successful + unsuccessful), >= 1
   double time_limit_s = 0.0;  ///< checked before each step; 0 = none
-  bool robust = true;         ///< Huber loss on chi2 with the deltas below
-  double huber_delta_mono = 1.0;
-  double huber_delta_stereo = 1.0;
+  /// Robust losses on chi2 of mono / stereo observations (not owned); nullptr: none.
+  const ceres::LossFunction* loss_mono = nullptr;
+  const ceres::LossFunction* loss_stereo = nullptr;
   double function_tolerance = 1e-6;   ///< |cost change| <= this * cost: converged
   double gradient_tolerance = 1e-10;  ///< max |gradient| <= this: converged
   double parameter_tolerance = 1e-8;  ///< |step| <= this * (|x| + this): converged
@@ -38,13 +39,13 @@ struct DenseSchurLmSummary {
 /// One pass of bundle adjustment by our own Levenberg-Marquardt with an explicit Schur
 /// complement, without Ceres (g2o's scheme for ORB-SLAM2's local BA). It minimises the cost
 /// Ceres minimises for the same pass in bundle_adjustment.cc: 1/2 sum rho(chi2) over the
-/// observations with active[i] != 0 (rho: Huber on chi2 if `robust`, else identity), over the
+/// observations with active[i] != 0 (rho: the options' loss functions, else identity), over the
 /// poses of the keyframes that are not fixed (left perturbation, tangent [rho; phi] as
 /// SE3Manifold) and the positions of the landmarks those observations see.
 ///
 /// Each step linearizes every active observation (Jacobians of reprojection_error.h), weighs
-/// it by rho'(chi2) (Huber's IRLS weight, which is what Ceres' residual correction amounts to
-/// for Huber), eliminates every landmark (3 x 3 blocks) into the reduced camera matrix,
+/// it by rho'(chi2) (the IRLS weight: for a loss with rho'' <= 0 such as Huber, what Ceres'
+/// residual correction amounts to), eliminates every landmark (3 x 3 blocks) into the reduced camera matrix,
 /// which is DENSE (6 x free keyframes wide, so for local windows, not for whole maps), solves
 /// it by Cholesky (LLT) and back-substitutes the landmarks. Damping and the step control are
 /// Ceres' Levenberg-Marquardt strategy with its defaults: the normal equations' diagonal,

@@ -363,6 +363,14 @@ BuiltinScene makeTown() {
 
   scene.loop_waypoints = {Vector3d(0, 0, 1.6), Vector3d(140, 0, 1.6), Vector3d(140, 140, 1.6),
                           Vector3d(70, 140, 1.6), Vector3d(70, 70, 1.6), Vector3d(0, 70, 1.6)};
+  // 1260 m a lap. The block loop east of x = 70 (420 m), then east again along y = 0 into
+  // it (closure 1), north to the edge of the grid, west, south, east along y = 140, south,
+  // and west along y = 70 back into the block loop (closure 2, 630 m after leaving it).
+  scene.two_loop_waypoints = {
+      Vector3d(70, 0, 1.6),    Vector3d(210, 0, 1.6),   Vector3d(210, 70, 1.6),
+      Vector3d(70, 70, 1.6),   Vector3d(70, 0, 1.6),    Vector3d(140, 0, 1.6),
+      Vector3d(140, 210, 1.6), Vector3d(0, 210, 1.6),   Vector3d(0, 140, 1.6),
+      Vector3d(140, 140, 1.6), Vector3d(140, 70, 1.6),  Vector3d(70, 70, 1.6)};
   scene.orbit_centre = Vector3d(105, 105, 12.0);
   scene.orbit_radius = 35.0;
   scene.orbit_look_at = Vector3d(105, 105, 0.0);
@@ -390,8 +398,9 @@ TrajectoryKind parseTrajectoryKind(const std::string& text) {
   if (text == "orbit") return TrajectoryKind::kOrbit;
   if (text == "lawnmower" || text == "lawn-mower") return TrajectoryKind::kLawnMower;
   if (text == "figure-eight" || text == "figure8") return TrajectoryKind::kFigureEight;
+  if (text == "two-loops") return TrajectoryKind::kTwoLoops;
   throw std::invalid_argument("unknown trajectory '" + text +
-                              "' (known: loop, orbit, lawnmower, figure-eight)");
+                              "' (known: loop, orbit, lawnmower, figure-eight, two-loops)");
 }
 
 StampedTrajectory makeSceneTrajectory(const BuiltinScene& scene, TrajectoryKind kind,
@@ -413,6 +422,12 @@ StampedTrajectory makeSceneTrajectory(const BuiltinScene& scene, TrajectoryKind 
       return followPath(figureEightWaypoints(scene.eight_centre, scene.eight_half_x,
                                              scene.eight_half_y),
                         true, laps, motion);
+    case TrajectoryKind::kTwoLoops:
+      if (scene.two_loop_waypoints.empty()) {
+        throw std::invalid_argument("makeSceneTrajectory: scene '" + scene.name +
+                                    "' has no two-loops route (the town has one)");
+      }
+      return followPath(scene.two_loop_waypoints, true, laps, motion);
   }
   throw std::invalid_argument("makeSceneTrajectory: unknown kind");
 }

@@ -19,6 +19,11 @@ struct BuiltinScene {
   Mesh mesh;  ///< vertex-coloured triangles; every solid object is a closed 2-manifold
   /// A closed path that revisits places (what makes loop closure and subvolume fusion matter).
   std::vector<Eigen::Vector3d> loop_waypoints;
+  /// A second closed route whose every lap closes two loops (empty if the scene has none):
+  /// it drives a small loop, re-enters it (the first closure), leaves it for a wide loop
+  /// and re-enters the small loop again from elsewhere (the second, wide-baseline closure),
+  /// as the paper's city drives l0 / l1 do.
+  std::vector<Eigen::Vector3d> two_loop_waypoints;
   /// Orbit: centre of the circle (its z is the flying height) and the point looked at.
   Eigen::Vector3d orbit_centre = Eigen::Vector3d::Zero();
   double orbit_radius = 1.0;
@@ -56,15 +61,18 @@ BuiltinScene makeIndustrialHall();
 /// sides with house fronts with windows and roofs, trees; a car-like drive around two blocks that returns to its start.
 BuiltinScene makeTown();
 
-/// Trajectory kinds that every built-in scene provides.
-enum class TrajectoryKind { kLoop, kOrbit, kLawnMower, kFigureEight };
+/// Trajectory kinds. Every built-in scene provides the first four; kTwoLoops only the
+/// scenes with two_loop_waypoints (the town).
+enum class TrajectoryKind { kLoop, kOrbit, kLawnMower, kFigureEight, kTwoLoops };
 
-/// Parses "loop", "orbit", "lawnmower" / "lawn-mower", "figure-eight" / "figure8". Throws
-/// std::invalid_argument naming the accepted values otherwise. Thread-safe.
+/// Parses "loop", "orbit", "lawnmower" / "lawn-mower", "figure-eight" / "figure8",
+/// "two-loops". Throws std::invalid_argument naming the accepted values otherwise.
+/// Thread-safe.
 TrajectoryKind parseTrajectoryKind(const std::string& text);
 
 /// Samples the scene's path of that kind with the scene's motion profile (rate overridden
-/// by rate_hz), `laps` times for closed paths. Thread-safe (pure).
+/// by rate_hz), `laps` times for closed paths. Throws std::invalid_argument for kTwoLoops
+/// on a scene without two_loop_waypoints. Thread-safe (pure).
 StampedTrajectory makeSceneTrajectory(const BuiltinScene& scene, TrajectoryKind kind,
                                       double rate_hz, int laps = 1);
 

@@ -21,7 +21,8 @@
 // (SE(3), final keyframe positions to the true ones, as for ATE). --depth-noise K adds the
 // sensor model's depth noise sigma = K z^2 (metres; the stereo images stay clean).
 //
-//   cblox-bench-maintenance [--scene room|hall|town] [--laps 2] [--frames N]
+//   cblox-bench-maintenance [--scene room|hall|town] [--trajectory loop|two-loops]
+//                           [--laps 2] [--frames N]
 //                           [--voxel 0.05] [--keyframes-per-subvolume 10]
 //                           [--max-anchor-distance M] [--revisit-distance R]
 //                           [--revisit-q-min Q,... [--revisit-variant-distance 1]]
@@ -37,10 +38,11 @@
 // tracker's poses do not depend on it either, and the mappers run on the input clock
 // (MaintenanceClock::kInput) with each frame's keyframes applied before the frame and its
 // covariance requests answered and applied after it: a run is a function of its inputs, so
-// two runs print the same figures (--no-sync-slam: as in real time). --out writes DIR/maintenance_<scene>.json and
-// DIR/maintenance_<scene>_sweep.png (map size against RMSE for every variant). For every
-// fusion variant it also prints the answered pairs: q (median, share >= q_min) and the
-// distance between the two keyframes asked about, so the reason for rejections is visible.
+// two runs print the same figures (--no-sync-slam: as in real time). --out writes
+// DIR/maintenance_<scene>.json and DIR/maintenance_<scene>_sweep.png (map size against RMSE
+// for every variant; <scene>_two-loops for that route). For every fusion variant it also
+// prints the answered pairs: q (median, share >= q_min) and the distance between the two
+// keyframes asked about, so the reason for rejections is visible.
 
 #include <algorithm>
 #include <chrono>
@@ -55,6 +57,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -122,6 +126,7 @@ MapperConfig baseConfig(float voxel, const std::filesystem::path& out, bool dete
 int run(int argc, char** argv) {
   std::string scene = "room", out_dir, vocabulary_path;
   int laps = 2;
+  std::string trajectory = "loop";
   size_t max_frames = 0;
   float voxel = 0.05f;
   int keyframes_per_subvolume = MapperConfig{}.creation.max_keyframes_per_subvolume;
@@ -147,7 +152,10 @@ int run(int argc, char** argv) {
       "q_min sweep), each mesh against the exact scene.",
       "cblox-bench-maintenance"};
   app.add_option("--scene", scene, "room | hall | town")->capture_default_str();
-  app.add_option("--laps", laps, "laps of the loop trajectory")->capture_default_str();
+  app.add_option("--trajectory", trajectory,
+                 "the scene's route: loop, or two-loops (the town's second route)")
+      ->capture_default_str();
+  app.add_option("--laps", laps, "laps of the trajectory")->capture_default_str();
   app.add_option("--frames", max_frames, "frames at the most (0: all)")->capture_default_str();
   app.add_option("--voxel", voxel, "voxel size, metres")->capture_default_str();
   app.add_option("--keyframes-per-subvolume", keyframes_per_subvolume,
@@ -227,7 +235,7 @@ int run(int argc, char** argv) {
     return 2;
   }
   SourceConfig options;
-  options.trajectory = "loop";
+  options.trajectory = trajectory;
   options.laps = laps;
   options.max_frames = max_frames;
   options.sim.noise.depth_noise_per_m2 = depth_noise;  // the stereo pair stays clean
@@ -246,7 +254,8 @@ int run(int argc, char** argv) {
   SlamSystem slam(camera, SlamSystemConfig{}, &*vocabulary);
 
   const std::filesystem::path work =
-      std::filesystem::temp_directory_path() / ("cblox_bench_maintenance_" + scene);
+      std::filesystem::temp_directory_path() /
+      ("cblox_bench_maintenance_" + scene + "_" + trajectory + "_" + std::to_string(getpid()));
   std::filesystem::create_directories(work);
   std::vector<std::unique_ptr<Variant>> variants;
   // Covariance answers: errors by message (first 60 characters) and times per request.
@@ -632,11 +641,11 @@ int run(int argc, char** argv) {
     std::printf("\n");
   }
   std::printf(
-      "scene %s x%d, %zu frames (%zu not tracked), %zu keyframes, %llu loops closed, voxel "
+      "scene %s, %s x%d, %zu frames (%zu not tracked), %zu keyframes, %llu loops closed, voxel "
       "%.3f m, "
       "depth noise %.4f z^2, %d keyframes per subvolume, SLAM %s; alignment of the tracker's "
       "frame: %.1f mm, %.3f deg\n",
-      scene.c_str(), laps, n, lost, slam.map().numKeyframes(),
+      scene.c_str(), trajectory.c_str(), laps, n, lost, slam.map().numKeyframes(),
       static_cast<unsigned long long>(slam.loopClosingStats().loops_closed), voxel, depth_noise,
       keyframes_per_subvolume, sync_slam ? "waited for per frame" : "in real time",
       alignment ? 1e3 * alignment->T_A_B.translation().norm() : 0.0,
@@ -667,8 +676,11 @@ int run(int argc, char** argv) {
   }
 
   if (!out_dir.empty()) {
+    // maintenance_<scene>[_<trajectory>]: the loop keeps the names of earlier runs.
+    const std::string stem = trajectory == "loop" ? scene : scene + "_" + trajectory;
     std::filesystem::create_directories(out_dir);
-    nlohmann::ordered_json json = {{"scene", scene},   {"laps", static_cast<size_t>(laps)},
+    nlohmann::ordered_json json = {{"scene", scene},   {"trajectory", trajectory},
+                                   {"laps", static_cast<size_t>(laps)},
                                    {"frames", n},      {"keyframes", slam.map().numKeyframes()},
                                    {"voxel_m", voxel}, {"maps", nlohmann::ordered_json::array()}};
     for (const auto& v : variants) {
@@ -687,7 +699,7 @@ int run(int argc, char** argv) {
                               {"fused_same_anchor", v->fusion.same_anchor},
                               {"rejected_by_q", v->fusion.rejected_by_q}});
     }
-    std::ofstream(out_dir + "/maintenance_" + scene + ".json") << json.dump(2) << "\n";
+    std::ofstream(out_dir + "/maintenance_" + stem + ".json") << json.dump(2) << "\n";
     ScatterPlotConfig plot;
     plot.title = "map maintenance on " + scene + ": size vs accuracy";
     plot.x_label = "map size [TSDF blocks]";
@@ -706,7 +718,7 @@ int run(int argc, char** argv) {
         same->label += ", " + point.label.substr(point.label.find('>') + 2);
       }
     }
-    const std::string path = out_dir + "/maintenance_" + scene + "_sweep.png";
+    const std::string path = out_dir + "/maintenance_" + stem + "_sweep.png";
     if (!writeScatterPlotPng(path, points, plot, &error)) {
       std::fprintf(stderr, "%s\n", error.c_str());
     } else {

@@ -66,5 +66,75 @@ TEST(BuiltinScenesTest, EveryTrajectoryKeepsClearOfTheScene) {
   }
 }
 
+// The town's second route: one lap re-enters its block loop twice, each time driving a
+// stretch it drove before in the same direction (what a loop closure needs), and otherwise
+// keeps to new streets and clear of the houses. The other scenes have no such route.
+TEST(BuiltinScenesTest, TownTwoLoopsRouteClosesTwoLoopsPerLap) {
+  const BuiltinScene town = makeTown();
+  const StampedTrajectory lap = makeSceneTrajectory(town, TrajectoryKind::kTwoLoops, 10.0);
+  ASSERT_GT(lap.size(), 1000u);
+  double length = 0.0;
+  for (size_t i = 1; i < lap.size(); ++i) {
+    length += (lap[i].T_G_C.translation() - lap[i - 1].T_G_C.translation()).norm();
+  }
+  // 1260 m between the waypoints; the 12 turns of 12 m radius cut 5.2 m each.
+  EXPECT_NEAR(length, 1260.0 - 12 * (24.0 - 6.0 * M_PI), 3.0);
+
+  // Revisit: a pose within 1.5 m of one at least 30 s earlier, looking the same way (15 deg).
+  const auto forward = [](const StampedPose& p) -> Eigen::Vector3d {
+    return p.T_G_C.rotationMatrix().col(2);
+  };
+  std::vector<bool> revisit(lap.size(), false);
+  for (size_t i = 0; i < lap.size(); ++i) {
+    for (size_t j = 0; j < i; ++j) {
+      if (lap[i].timestamp_s - lap[j].timestamp_s < 30.0) break;
+      if ((lap[i].T_G_C.translation() - lap[j].T_G_C.translation()).norm() < 1.5 &&
+          forward(lap[i]).dot(forward(lap[j])) > std::cos(15.0 * M_PI / 180.0)) {
+        revisit[i] = true;
+        break;
+      }
+    }
+  }
+  struct Episode {
+    size_t first, last;
+  };
+  std::vector<Episode> episodes;
+  for (size_t i = 0; i < lap.size(); ++i) {
+    if (!revisit[i]) continue;
+    if (!episodes.empty() && episodes.back().last + 1 == i) {
+      episodes.back().last = i;
+    } else {
+      episodes.push_back({i, i});
+    }
+  }
+  ASSERT_EQ(episodes.size(), 2u);
+  const auto at = [&](size_t i) { return lap[i].T_G_C.translation().head<2>(); };
+  // Closure 1: east along y = 0 from the corner (70, 0), to the next crossing at least.
+  EXPECT_LT((at(episodes[0].first) - Eigen::Vector2d(70, 0)).norm(), 20.0);
+  EXPECT_GT(at(episodes[0].last).x(), 130.0);
+  // Closure 2: west along y = 70 from (140, 70), then south to the lap's end at (70, 0).
+  EXPECT_LT((at(episodes[1].first) - Eigen::Vector2d(140, 70)).norm(), 20.0);
+  EXPECT_EQ(episodes[1].last, lap.size() - 1);
+  // The second closure is wide: 630 m of new streets after the first revisit ends.
+  EXPECT_GT(lap[episodes[1].first].timestamp_s - lap[episodes[0].last].timestamp_s,
+            590.0 / town.motion.speed_mps);
+
+  std::string error;
+  const auto raycaster = TriangleMeshRaycaster::create(town.mesh, &error);
+  ASSERT_NE(raycaster, nullptr) << error;
+  double closest = 1e9;
+  for (const StampedPose& pose : lap) {
+    closest = std::min(closest, raycaster->closestPoint(pose.T_G_C.translation()).distance);
+  }
+  EXPECT_GT(closest, 0.8);
+
+  EXPECT_EQ(parseTrajectoryKind("two-loops"), TrajectoryKind::kTwoLoops);
+  for (const char* name : {"room", "hall", "yard"}) {
+    EXPECT_THROW(makeSceneTrajectory(makeBuiltinScene(name), TrajectoryKind::kTwoLoops, 10.0),
+                 std::invalid_argument)
+        << name;
+  }
+}
+
 }  // namespace
 }  // namespace cblox

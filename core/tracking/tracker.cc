@@ -93,13 +93,11 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
         updateLastFramePose();
         const bool just_relocalized =
             ever_relocalized_ && current_index_ < last_relocalization_index_ + 2;
-        if (velocity_ && !just_relocalized) {
-          ok = trackWithMotionModel();
-          if (!ok) ok = trackReferenceKeyframe();
-        } else {
-          ok = trackReferenceKeyframe();
-        }
-        if (!ok) result.reason = "too few matches with the last frame and the reference keyframe";
+        FrameSearchCounts counts;
+        const bool motion = velocity_.has_value() && !just_relocalized;
+        if (motion) ok = trackWithMotionModel(&counts.motion_matches, &counts.motion_inliers);
+        if (!ok) ok = trackReferenceKeyframe(&counts.reference_matches, &counts.reference_inliers);
+        if (!ok) result.reason = frameSearchFailure(counts);
       } else {
         ok = relocalize();
         relocalized = ok;
@@ -234,24 +232,36 @@ int discardOutliers(Frame* frame) {
 }
 }  // namespace
 
-bool Tracker::trackWithMotionModel() {
+bool Tracker::trackWithMotionModel(int* matches, int* inliers) {
   current_.T_C_G = *velocity_ * *last_frame_.T_C_G;
   current_.clearMatches();
   FeatureMatcherConfig matcher;
   matcher.nn_ratio = 0.9f;
-  int matches = searchLastFrame(&current_, last_frame_, config_.last_frame_search_radius, camera_,
-                                pyramid_, matcher);
-  if (matches < config_.min_motion_model_matches) {
+  *matches = searchLastFrame(&current_, last_frame_, config_.last_frame_search_radius, camera_,
+                             pyramid_, matcher);
+  if (*matches < config_.min_motion_model_matches) {
     current_.clearMatches();
-    matches = searchLastFrame(&current_, last_frame_, 2.0f * config_.last_frame_search_radius,
-                              camera_, pyramid_, matcher);
+    *matches = searchLastFrame(&current_, last_frame_, 2.0f * config_.last_frame_search_radius,
+                               camera_, pyramid_, matcher);
   }
-  if (matches < config_.min_motion_model_matches) return false;
+  if (*matches < config_.min_motion_model_matches) return false;
   optimizeCurrentPose();
-  return discardOutliers(&current_) >= config_.min_pose_inliers;
+  *inliers = discardOutliers(&current_);
+  return *inliers >= config_.min_pose_inliers;
 }
 
-bool Tracker::trackReferenceKeyframe() {
+std::string Tracker::frameSearchFailure(const FrameSearchCounts& c) {
+  const auto counts = [](int matches, int inliers) {
+    if (matches < 0) return std::string("not tried");
+    return std::to_string(matches) + " matches" +
+           (inliers >= 0 ? ", " + std::to_string(inliers) + " inliers" : std::string());
+  };
+  return "too few matches with the last frame (" + counts(c.motion_matches, c.motion_inliers) +
+         ") and the reference keyframe (" + counts(c.reference_matches, c.reference_inliers) +
+         ")";
+}
+
+bool Tracker::trackReferenceKeyframe(int* matches, int* inliers) {
   if (reference_keyframe_ == nullptr) return false;
   current_.clearMatches();
   current_.T_C_G = last_frame_.T_C_G ? *last_frame_.T_C_G : reference_keyframe_->T_C_G();
@@ -260,10 +270,10 @@ bool Tracker::trackReferenceKeyframe() {
       !reference_keyframe_->features().feature_vector.empty()) {
     FeatureMatcherConfig matcher;
     matcher.nn_ratio = 0.7f;
-    std::vector<Landmark*> matches;
-    n = searchByBow(*reference_keyframe_, *current_.features, matcher, &matches);
-    for (size_t i = 0; i < matches.size(); ++i) {
-      if (matches[i] != nullptr) current_.landmarks[i] = matches[i]->shared_from_this();
+    std::vector<Landmark*> matched;
+    n = searchByBow(*reference_keyframe_, *current_.features, matcher, &matched);
+    for (size_t i = 0; i < matched.size(); ++i) {
+      if (matched[i] != nullptr) current_.landmarks[i] = matched[i]->shared_from_this();
     }
   } else {
     // No vocabulary: the reference keyframe's landmarks projected at the last pose, in a
@@ -280,9 +290,11 @@ bool Tracker::trackReferenceKeyframe() {
     n = searchLocalLandmarks(&current_, projections, 2.0f * config_.last_frame_search_radius,
                              matcher, pyramid_);
   }
+  *matches = n;
   if (n < config_.min_reference_matches) return false;
   optimizeCurrentPose();
-  return discardOutliers(&current_) >= config_.min_pose_inliers;
+  *inliers = discardOutliers(&current_);
+  return *inliers >= config_.min_pose_inliers;
 }
 
 void Tracker::updateLocalMap() {

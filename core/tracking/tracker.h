@@ -98,8 +98,17 @@ class Tracker {
 
  private:
   bool initialize(const std::optional<Transformationd>& T_C_G_initial, TrackingResult* result);
-  bool trackWithMotionModel();
-  bool trackReferenceKeyframe();
+  /// Match counts of the searches that track a frame before the local map: the last frame at
+  /// the velocity's pose (matches in its last window, inliers after the pose), the reference
+  /// keyframe (by BoW, or projected without a vocabulary). -1: not tried. For the reason
+  /// given when both fail.
+  struct FrameSearchCounts {
+    int motion_matches = -1, motion_inliers = -1;
+    int reference_matches = -1, reference_inliers = -1;
+  };
+  bool trackWithMotionModel(int* matches, int* inliers);
+  bool trackReferenceKeyframe(int* matches, int* inliers);
+  static std::string frameSearchFailure(const FrameSearchCounts& counts);
   bool relocalize();
   /// Matches the keyframe's landmarks not yet matched in the current frame, projected at
   /// its pose, in a window `th` (see searchLocalLandmarks). Returns the new matches.

@@ -3,7 +3,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
-#include "core/covariance/cholmod_support.h"
+#include "core/optimization/cholmod_support.h"
 
 namespace cblox {
 

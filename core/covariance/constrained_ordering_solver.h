@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "core/covariance/cholmod_support.h"
+#include "core/optimization/cholmod_support.h"
 #include "core/covariance/conditional_covariance.h"
 #include "core/covariance/reduced_camera_matrix.h"
 

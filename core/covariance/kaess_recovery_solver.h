@@ -7,7 +7,7 @@
 
 #include <absl/container/flat_hash_map.h>
 
-#include "core/covariance/cholmod_support.h"
+#include "core/optimization/cholmod_support.h"
 #include "core/covariance/conditional_covariance.h"
 #include "core/covariance/reduced_camera_matrix.h"
 

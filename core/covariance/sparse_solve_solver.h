@@ -9,7 +9,7 @@
 #include <Eigen/Core>
 #include <Eigen/StdVector>
 
-#include "core/covariance/cholmod_support.h"
+#include "core/optimization/cholmod_support.h"
 #include "core/covariance/conditional_covariance.h"
 #include "core/covariance/reduced_camera_matrix.h"
 

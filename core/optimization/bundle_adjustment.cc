@@ -1,13 +1,14 @@
 #include "core/optimization/bundle_adjustment.h"
 
 #include <chrono>
+#include <optional>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
 
 #include <ceres/ceres.h>
 
-#include "core/optimization/dense_schur_lm.h"
+#include "core/optimization/schur_lm.h"
 #include "core/optimization/se3_manifold.h"
 
 namespace cblox {
@@ -68,7 +69,8 @@ ceres::LinearSolverType linearSolverType(const BundleAdjustmentConfig& config,
     case BaLinearSolver::kIterativeSchur:
       return ceres::ITERATIVE_SCHUR;
     case BaLinearSolver::kAuto:
-    case BaLinearSolver::kNativeDenseSchur:  // not a Ceres solver: solvePass takes it first
+    case BaLinearSolver::kNativeDenseSchur:  // not Ceres solvers: solvePass takes them first
+    case BaLinearSolver::kNativeSparseSchur:
       break;
   }
   return num_free_keyframes <= config.dense_schur_max_free_keyframes || !has_sparse
@@ -99,14 +101,15 @@ int countFreeKeyframes(const BundleAdjustmentProblem& problem,
   return free;
 }
 
-// One pass by denseSchurLevenbergMarquardt (dense_schur_lm.h).
+// One pass by schurLevenbergMarquardt (schur_lm.h).
 PassOutcome solveNativePass(const BundleAdjustmentProblem& problem,
-                            const std::vector<std::uint8_t>& active, bool robust, int iterations,
-                            double time_limit_s, const BundleAdjustmentConfig& config,
-                            const BaModel& model, BaState* state,
-                            const std::atomic<bool>* abort, bool* aborted,
+                            const std::vector<std::uint8_t>& active, ReducedMatrix reduced_matrix,
+                            bool robust, int iterations, double time_limit_s,
+                            const BundleAdjustmentConfig& config, const BaModel& model,
+                            BaState* state, const std::atomic<bool>* abort, bool* aborted,
                             std::string* solver_name) {
-  DenseSchurLmOptions options;
+  SchurLmOptions options;
+  options.reduced_matrix = reduced_matrix;
   options.max_iterations = iterations;
   options.time_limit_s = time_limit_s;
   if (robust) {
@@ -117,9 +120,10 @@ PassOutcome solveNativePass(const BundleAdjustmentProblem& problem,
   options.gradient_tolerance = config.solver.gradient_tolerance;
   options.parameter_tolerance = config.solver.parameter_tolerance;
   options.abort = abort;
-  const DenseSchurLmSummary summary =
-      denseSchurLevenbergMarquardt(problem, active, options, &state->poses, &state->points);
-  *solver_name = kNativeDenseSchurName;
+  const SchurLmSummary summary =
+      schurLevenbergMarquardt(problem, active, options, &state->poses, &state->points);
+  *solver_name =
+      reduced_matrix == ReducedMatrix::kDense ? kNativeDenseSchurName : kNativeSparseSchurName;
   *aborted = *aborted || summary.aborted;
   PassOutcome outcome;
   outcome.solved = summary.solved;
@@ -129,19 +133,40 @@ PassOutcome solveNativePass(const BundleAdjustmentProblem& problem,
   return outcome;
 }
 
-// One solve over the observations with active[i] != 0: by solveNativePass when the config
-// asks for it (or kAuto and few enough free keyframes), else by Ceres.
+// Our own solver's reduced matrix for a pass, or nullopt for Ceres: as the config asks, or for
+// kAuto by the free keyframes (dense up to native_max_free_keyframes, sparse above if
+// native_sparse).
+std::optional<ReducedMatrix> nativeSolver(const BundleAdjustmentProblem& problem,
+                                          const std::vector<std::uint8_t>& active,
+                                          const BundleAdjustmentConfig& config) {
+  switch (config.linear_solver) {
+    case BaLinearSolver::kNativeDenseSchur:
+      return ReducedMatrix::kDense;
+    case BaLinearSolver::kNativeSparseSchur:
+      return ReducedMatrix::kSparse;
+    case BaLinearSolver::kAuto:
+      break;
+    default:
+      return std::nullopt;
+  }
+  if (config.native_max_free_keyframes > 0 &&
+      countFreeKeyframes(problem, active) <= config.native_max_free_keyframes) {
+    return ReducedMatrix::kDense;
+  }
+  if (config.native_sparse) return ReducedMatrix::kSparse;
+  return std::nullopt;
+}
+
+// One solve over the observations with active[i] != 0: by solveNativePass when nativeSolver
+// says so, else by Ceres.
 PassOutcome solvePass(const BundleAdjustmentProblem& problem,
                       const std::vector<std::uint8_t>& active, bool robust, int iterations,
                       double time_limit_s, const BundleAdjustmentConfig& config, BaModel* model,
                       BaState* state, const std::atomic<bool>* abort, bool* aborted,
                       std::string* solver_name) {
-  if (config.linear_solver == BaLinearSolver::kNativeDenseSchur ||
-      (config.linear_solver == BaLinearSolver::kAuto &&
-       config.native_max_free_keyframes > 0 &&
-       countFreeKeyframes(problem, active) <= config.native_max_free_keyframes)) {
-    return solveNativePass(problem, active, robust, iterations, time_limit_s, config, *model,
-                           state, abort, aborted, solver_name);
+  if (const std::optional<ReducedMatrix> native = nativeSolver(problem, active, config)) {
+    return solveNativePass(problem, active, *native, robust, iterations, time_limit_s, config,
+                           *model, state, abort, aborted, solver_name);
   }
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;

@@ -17,9 +17,11 @@ namespace cblox {
 
 /// Bundle adjustment (ORB-SLAM2's Optimizer::LocalBundleAdjustment and, with
 /// globalBundleAdjustmentConfig(), GlobalBundleAdjustemnt), on plain structs. Each pass is
-/// solved by our own dense-Schur Levenberg-Marquardt (dense_schur_lm.h) when it has at most
-/// native_max_free_keyframes free keyframes (kAuto) or kNativeDenseSchur is asked for, and
-/// by Ceres otherwise; both minimise the same cost with the same step control.
+/// solved by our own Schur-complement Levenberg-Marquardt (schur_lm.h): with a dense reduced
+/// camera matrix when it has at most native_max_free_keyframes free keyframes (kAuto) or
+/// kNativeDenseSchur is asked for, with a sparse one (CHOLMOD) above that when native_sparse
+/// is set or kNativeSparseSchur is asked for; by Ceres otherwise. All minimise the same cost
+/// with the same step control.
 ///
 /// Unknowns: keyframe poses T_C_G (world-to-camera, 7 doubles with SE3Manifold: left
 /// perturbation, tangent [rho (m); phi (rad)]) and landmark positions p_G (metres). Residuals:
@@ -87,13 +89,16 @@ enum class BaLinearSolver {
   kDenseSchur,      ///< ceres::DENSE_SCHUR
   kSparseSchur,     ///< ceres::SPARSE_SCHUR with SuiteSparse (Eigen sparse if absent)
   kIterativeSchur,  ///< ceres::ITERATIVE_SCHUR with the SCHUR_JACOBI preconditioner
-  /// Our own Levenberg-Marquardt with a dense Schur complement, no Ceres
-  /// (dense_schur_lm.h): for windows of tens of free keyframes, not whole maps.
+  /// Our own Levenberg-Marquardt with a dense Schur complement, no Ceres (schur_lm.h): for
+  /// windows of tens of free keyframes, not whole maps.
   kNativeDenseSchur,
+  /// The same with a block-sparse reduced camera matrix factorised by CHOLMOD: whole maps.
+  kNativeSparseSchur,
 };
 
-/// BundleAdjustmentResult::linear_solver of kNativeDenseSchur.
+/// BundleAdjustmentResult::linear_solver of kNativeDenseSchur and kNativeSparseSchur.
 inline constexpr const char* kNativeDenseSchurName = "NATIVE_DENSE_SCHUR";
+inline constexpr const char* kNativeSparseSchurName = "NATIVE_SPARSE_SCHUR";
 
 struct BundleAdjustmentConfig {
   /// Iterations of the robust pass (ORB-SLAM2 local BA: 5). >= 1.
@@ -113,18 +118,23 @@ struct BundleAdjustmentConfig {
   /// Measured (cblox-bench-optimization, ~4 observations per landmark): DENSE_SCHUR is
   /// faster at 10 and 60 free keyframes, SPARSE_SCHUR at 120 and 250.
   int dense_schur_max_free_keyframes = 80;
-  /// kAuto uses kNativeDenseSchur for a pass with up to this many free keyframes (0: never),
-  /// Ceres above. >= 0. Measured (cblox-bench-optimization, ~4 observations per landmark):
-  /// ours is 5-7x faster than DENSE_SCHUR at 10-60 free keyframes, 1.6x at 120, and slower
-  /// than SPARSE_SCHUR at 250 (its reduced matrix is dense).
-  int native_max_free_keyframes = 120;
+  /// kAuto uses kNativeDenseSchur for a pass with up to this many free keyframes (0: never).
+  /// >= 0. Measured (cblox-bench-optimization, ~4 observations per landmark, CPU time): ours
+  /// dense is 5-7x faster than DENSE_SCHUR at 10-60 free keyframes and 10 % faster than ours
+  /// sparse at 60; at 120 ours sparse takes 71 ms, ours dense 182, SPARSE_SCHUR 244.
+  int native_max_free_keyframes = 80;
+  /// kAuto uses kNativeSparseSchur above native_max_free_keyframes (false: Ceres' Schur
+  /// solvers as above). Measured: 2.5-3.5x faster than SPARSE_SCHUR from 120 free keyframes
+  /// to global BAs of 1000 (cblox-bench-optimization global_ba/loop: 3.3 s against 8.5 s).
+  bool native_sparse = true;
   /// Threads, time limit (for both passes together) and tolerances of Ceres.
   CeresSolverConfig solver;
 };
 
 /// Preset for global BA after loop closure (ORB-SLAM2: 10 iterations with the Huber loss
 /// and no outlier pass): first_pass_iterations = 10, second_pass_iterations = 0; outlier flags
-/// are still computed at the end. Solver kAuto (SPARSE_SCHUR for large maps).
+/// are still computed at the end. Solver kAuto (ours with the sparse reduced matrix for
+/// large maps).
 /// Thread-safe (pure).
 BundleAdjustmentConfig globalBundleAdjustmentConfig();
 

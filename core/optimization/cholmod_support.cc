@@ -1,4 +1,4 @@
-#include "core/covariance/cholmod_support.h"
+#include "core/optimization/cholmod_support.h"
 
 #include <algorithm>
 #include <cmath>

@@ -12,7 +12,8 @@
 namespace cblox {
 
 /// Thin RAII layer over SuiteSparse CHOLMOD (Debian's SuiteSparse 5.12, 32-bit int API) for
-/// the covariance solvers of this folder.
+/// the sparse reduced camera system of our bundle adjustment (reduced_camera_system.h) and
+/// the covariance solvers (core/covariance).
 
 /// RAII owner of one cholmod_common (cholmod_start / cholmod_finish). CHOLMOD keeps its
 /// workspace in it, so it must not be used by two threads at once: every solver object owns

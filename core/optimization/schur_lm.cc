@@ -1,4 +1,4 @@
-#include "core/optimization/dense_schur_lm.h"
+#include "core/optimization/schur_lm.h"
 
 #include <algorithm>
 #include <array>
@@ -9,6 +9,7 @@
 #include <Eigen/LU>
 
 #include "core/optimization/bundle_adjustment.h"
+#include "core/optimization/reduced_camera_system.h"
 #include "core/optimization/reprojection_error.h"
 
 namespace cblox {
@@ -17,7 +18,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using Mat33 = Eigen::Matrix3d;
 using Mat63 = Eigen::Matrix<double, 6, 3>;
-using Mat66 = Eigen::Matrix<double, 6, 6>;
 using Vec3 = Eigen::Vector3d;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 using RowMajor33 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
@@ -189,18 +189,43 @@ Eigen::Matrix<double, N, 1> damping(const Eigen::Matrix<double, N, N>& H, double
   return H.diagonal().cwiseMax(kMinDiagonal).cwiseMin(kMaxDiagonal) / radius;
 }
 
-bool solveStep(const Structure& s, const Linearization& lin, double radius, Step* step) {
+// The block pattern of the reduced camera matrix: for each free keyframe c, the free keyframes
+// r <= c that share a landmark with it, ascending (c itself last).
+std::vector<std::vector<int>> reducedPattern(const Structure& s) {
+  std::vector<std::vector<int>> rows(s.free_keyframes.size());
+  for (size_t g = 0; g + 1 < s.offsets.size(); ++g) {
+    for (auto a = static_cast<size_t>(s.offsets[g]); a < static_cast<size_t>(s.offsets[g + 1]);
+         ++a) {
+      const int fa = s.free_index[a];
+      if (fa < 0) continue;
+      for (auto c = static_cast<size_t>(s.offsets[g]); c < static_cast<size_t>(s.offsets[g + 1]);
+           ++c) {
+        const int fc = s.free_index[c];
+        if (fc >= fa) rows[static_cast<size_t>(fc)].push_back(fa);
+      }
+    }
+  }
+  for (std::vector<int>& r : rows) {
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+  }
+  return rows;
+}
+
+template <class System>
+bool solveStep(const Structure& s, const Linearization& lin, double radius, System* S,
+               Step* step) {
   const size_t n = s.free_keyframes.size();
   const size_t groups = s.landmarks.size();
-  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(6 * n),
-                                            static_cast<Eigen::Index>(6 * n));
+  S->setZero();
   Eigen::VectorXd rhs(static_cast<Eigen::Index>(6 * n));
   Eigen::VectorXd D_p(static_cast<Eigen::Index>(6 * n));
   for (size_t f = 0; f < n; ++f) {
     const auto i = static_cast<Eigen::Index>(6 * f);
     const Vec6 d = damping<6>(lin.H_pp[f], radius);
-    S.block<6, 6>(i, i) = lin.H_pp[f];
-    S.block<6, 6>(i, i).diagonal() += d;
+    Mat66Map block = S->block(static_cast<int>(f), static_cast<int>(f));
+    block = lin.H_pp[f];
+    block.diagonal() += d;
     D_p.segment<6>(i) = d;
     rhs.segment<6>(i) = lin.b_p[f];
   }
@@ -223,22 +248,19 @@ bool solveStep(const Structure& s, const Linearization& lin, double radius, Step
       V[a - begin].noalias() = lin.W[a] * H_inv[g];
       rhs.segment<6>(6 * fa).noalias() -= V[a - begin] * lin.b_l[g];
     }
-    // S -= sum over pairs of W_a H^-1 W_c^T, into the lower block triangle (both orders of
+    // S -= sum over pairs of W_a H^-1 W_c^T, into the upper block triangle (both orders of
     // a pair within one diagonal block).
     for (size_t a = begin; a < end; ++a) {
       const int fa = s.free_index[a];
       if (fa < 0) continue;
       for (size_t c = begin; c < end; ++c) {
         const int fc = s.free_index[c];
-        if (fc < 0 || fc > fa) continue;
-        S.block<6, 6>(6 * fa, 6 * fc).noalias() -= V[a - begin] * lin.W[c].transpose();
+        if (fc < fa) continue;
+        S->block(fa, fc).noalias() -= V[a - begin] * lin.W[c].transpose();
       }
     }
   }
-  Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(S);
-  if (llt.info() != Eigen::Success) return false;
-  step->dp = llt.solve(rhs);
-  if (!step->dp.allFinite()) return false;
+  if (!S->solve(rhs, &step->dp)) return false;
   double decrease = 0.0;
   double norm2 = step->dp.squaredNorm();
   for (size_t f = 0; f < n; ++f) {
@@ -264,29 +286,14 @@ bool solveStep(const Structure& s, const Linearization& lin, double radius, Step
   return std::isfinite(step->norm);
 }
 
-}  // namespace
-
-DenseSchurLmSummary denseSchurLevenbergMarquardt(const BundleAdjustmentProblem& problem,
-                                                 const std::vector<std::uint8_t>& active,
-                                                 const DenseSchurLmOptions& options,
-                                                 std::vector<PoseParameters>* poses,
-                                                 std::vector<Eigen::Vector3d>* points) {
-  const Clock::time_point start = Clock::now();
-  DenseSchurLmSummary summary;
-  const Structure s = buildStructure(problem, active);
-  if (s.observations.empty()) return summary;
-  summary.solved = true;
-  const Loss loss{options.loss_mono, options.loss_stereo};
-
-  State x;
-  x.T_C_G.reserve(poses->size());
-  for (const PoseParameters& p : *poses) x.T_C_G.push_back(fromPoseParameters(p.data()));
-  x.p_G = *points;
-  x.updateRotations();
-  double current = cost(problem, s, loss, x);
-  summary.initial_cost = current;
-  summary.final_cost = current;
-
+// The Levenberg-Marquardt iterations from state x (cost `current`) with the reduced camera
+// system `S`; returns the final cost and counts the steps in *summary.
+template <class System>
+double iterate(const BundleAdjustmentProblem& problem, const Structure& s, const Loss& loss,
+               const SchurLmOptions& options, Clock::time_point start, System* S, State* x_io,
+               double current, SchurLmSummary* summary_io) {
+  State& x = *x_io;
+  SchurLmSummary& summary = *summary_io;
   Linearization lin;
   Step step;
   State candidate;
@@ -307,7 +314,7 @@ DenseSchurLmSummary denseSchurLevenbergMarquardt(const BundleAdjustmentProblem& 
       linearized = true;
       if (lin.max_gradient <= options.gradient_tolerance) break;
     }
-    bool success = solveStep(s, lin, radius, &step);
+    bool success = solveStep(s, lin, radius, S, &step);
     if (success) {
       double x_norm2 = 0.0;
       for (const int k : s.free_keyframes) {
@@ -348,6 +355,40 @@ DenseSchurLmSummary denseSchurLevenbergMarquardt(const BundleAdjustmentProblem& 
     radius /= decrease_factor;
     decrease_factor *= 2.0;
     if (radius < kMinRadius) break;
+  }
+  return current;
+}
+
+}  // namespace
+
+SchurLmSummary schurLevenbergMarquardt(const BundleAdjustmentProblem& problem,
+                                       const std::vector<std::uint8_t>& active,
+                                       const SchurLmOptions& options,
+                                       std::vector<PoseParameters>* poses,
+                                       std::vector<Eigen::Vector3d>* points) {
+  const Clock::time_point start = Clock::now();
+  SchurLmSummary summary;
+  const Structure s = buildStructure(problem, active);
+  if (s.observations.empty()) return summary;
+  summary.solved = true;
+  const Loss loss{options.loss_mono, options.loss_stereo};
+
+  State x;
+  x.T_C_G.reserve(poses->size());
+  for (const PoseParameters& p : *poses) x.T_C_G.push_back(fromPoseParameters(p.data()));
+  x.p_G = *points;
+  x.updateRotations();
+  double current = cost(problem, s, loss, x);
+  summary.initial_cost = current;
+  summary.final_cost = current;
+
+  const int n = static_cast<int>(s.free_keyframes.size());
+  if (options.reduced_matrix == ReducedMatrix::kSparse && n > 0) {
+    SparseReducedCameraSystem S(n, reducedPattern(s));
+    current = iterate(problem, s, loss, options, start, &S, &x, current, &summary);
+  } else {
+    DenseReducedCameraSystem S(n, {});
+    current = iterate(problem, s, loss, options, start, &S, &x, current, &summary);
   }
   summary.final_cost = current;
   for (const int k : s.free_keyframes) {

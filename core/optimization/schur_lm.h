@@ -13,9 +13,17 @@ namespace cblox {
 
 struct BundleAdjustmentProblem;
 
-/// Settings of one pass of denseSchurLevenbergMarquardt (bundle_adjustment.h sets them from
+/// How schurLevenbergMarquardt stores and solves the reduced camera matrix
+/// (reduced_camera_system.h).
+enum class ReducedMatrix {
+  kDense,   ///< dense, Eigen's LLT: local windows (tens of free keyframes)
+  kSparse,  ///< block-sparse, CHOLMOD with AMD: whole maps (hundreds and more)
+};
+
+/// Settings of one pass of schurLevenbergMarquardt (bundle_adjustment.h sets them from
 /// BundleAdjustmentConfig).
-struct DenseSchurLmOptions {
+struct SchurLmOptions {
+  ReducedMatrix reduced_matrix = ReducedMatrix::kDense;
   int max_iterations = 10;    ///< steps (successful + unsuccessful), >= 1
   double time_limit_s = 0.0;  ///< checked before each step; 0 = none
   /// Robust losses on chi2 of mono / stereo observations (not owned); nullptr: none.
@@ -27,7 +35,7 @@ struct DenseSchurLmOptions {
   const std::atomic<bool>* abort = nullptr;  ///< polled before each step
 };
 
-struct DenseSchurLmSummary {
+struct SchurLmSummary {
   bool solved = false;  ///< false if no observation was active (nothing was changed)
   double initial_cost = 0.0;
   double final_cost = 0.0;
@@ -45,9 +53,10 @@ struct DenseSchurLmSummary {
 ///
 /// Each step linearizes every active observation (Jacobians of reprojection_error.h), weighs
 /// it by rho'(chi2) (the IRLS weight: for a loss with rho'' <= 0 such as Huber, what Ceres'
-/// residual correction amounts to), eliminates every landmark (3 x 3 blocks) into the reduced camera matrix,
-/// which is DENSE (6 x free keyframes wide, so for local windows, not for whole maps), solves
-/// it by Cholesky (LLT) and back-substitutes the landmarks. Damping and the step control are
+/// residual correction amounts to), eliminates every landmark (3 x 3 blocks) into the reduced
+/// camera matrix (6 x free keyframes wide; dense or block-sparse by options.reduced_matrix),
+/// solves it by Cholesky (Eigen's LLT, or CHOLMOD with AMD and the symbolic factorisation
+/// done once per pass) and back-substitutes the landmarks. Damping and the step control are
 /// Ceres' Levenberg-Marquardt strategy with its defaults: the normal equations' diagonal,
 /// clamped to [1e-6, 1e32], over a trust-region radius that starts at 1e4; a step is taken if
 /// it achieves more than 1e-3 of the decrease the model predicts; a step that puts a point
@@ -58,10 +67,10 @@ struct DenseSchurLmSummary {
 /// are left exactly as given. Every active observation must have its point in front of its
 /// camera at the start (bundleAdjust guarantees it). Single-threaded; thread-safe for
 /// distinct outputs.
-DenseSchurLmSummary denseSchurLevenbergMarquardt(const BundleAdjustmentProblem& problem,
-                                                 const std::vector<std::uint8_t>& active,
-                                                 const DenseSchurLmOptions& options,
-                                                 std::vector<PoseParameters>* poses,
-                                                 std::vector<Eigen::Vector3d>* points);
+SchurLmSummary schurLevenbergMarquardt(const BundleAdjustmentProblem& problem,
+                                       const std::vector<std::uint8_t>& active,
+                                       const SchurLmOptions& options,
+                                       std::vector<PoseParameters>* poses,
+                                       std::vector<Eigen::Vector3d>* points);
 
 }  // namespace cblox

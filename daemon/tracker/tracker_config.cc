@@ -67,7 +67,8 @@ void loadBundleAdjustment(const YAML::Node& node, const std::string& path,
                    {"num_threads", &ba->solver.num_threads},
                    {"max_time_s", &ba->solver.max_time_s},
                    {"dense_schur_max_free_keyframes", &ba->dense_schur_max_free_keyframes},
-                   {"native_max_free_keyframes", &ba->native_max_free_keyframes}})) {
+                   {"native_max_free_keyframes", &ba->native_max_free_keyframes},
+                   {"native_sparse", &ba->native_sparse}})) {
     throwIfInvalid(path, validate(*ba));
   }
 }

@@ -3,10 +3,14 @@
 //    observations (1 px noise, 10% gross outliers);
 //  - local BA of an ORB-SLAM2-like window: 10 free + 10 fixed keyframes, 2000 landmarks,
 //    ~8000 observations (1 px noise, 2% gross outliers), with Ceres' DENSE_SCHUR and
-//    SPARSE_SCHUR and with our own dense-Schur LM (NATIVE_DENSE_SCHUR, dense_schur_lm.h);
+//    SPARSE_SCHUR and with our own Schur LM (schur_lm.h; NATIVE_DENSE_SCHUR);
 //  - a window of the town's median local BA size (33 free + 55 fixed keyframes, 2400
 //    landmarks, ~13,000 observations), Ceres' DENSE_SCHUR against ours;
-//  - BA with 10 / 60 / 120 / 250 free keyframes and all three solvers (kAuto's crossovers);
+//  - BA with 10 / 60 / 120 / 250 free keyframes and four solvers (kAuto's crossovers);
+//  - global BA (globalBundleAdjustmentConfig: 10 robust iterations) of closed two-lap loops
+//    of 500 and 1000 keyframes (test/covariance/loop_scene.h: 50 landmarks per keyframe,
+//    3-8 observers, 30 % seen again on the other lap; 1 px noise, 1 % gross outliers),
+//    Ceres' SPARSE_SCHUR against ours with the sparse reduced matrix (NATIVE_SPARSE_SCHUR);
 //  - the BA linearization + information matrix of the local window (for core/covariance);
 //  - an SE(3) pose graph of 500 keyframes (loop with covisibility edges and drift).
 //
@@ -23,6 +27,7 @@
 #include "core/optimization/bundle_adjustment.h"
 #include "core/optimization/pose_graph_optimizer.h"
 #include "core/optimization/pose_optimizer.h"
+#include "test/covariance/loop_scene.h"
 #include "test/optimization/synthetic_scenes.h"
 
 namespace cblox {
@@ -90,15 +95,23 @@ const test::BaScene& townWindow() {
   return scene;
 }
 
-// range(0) of the BA benchmarks: 0 Ceres' DENSE_SCHUR, 1 Ceres' SPARSE_SCHUR, 2 ours.
+// The solver argument of the BA benchmarks: 0 Ceres' DENSE_SCHUR, 1 Ceres' SPARSE_SCHUR, 2 ours
+// with a dense reduced matrix, 3 ours with a sparse one.
 BaLinearSolver solverOf(int64_t arg) {
-  return arg == 0 ? BaLinearSolver::kDenseSchur
-                  : arg == 1 ? BaLinearSolver::kSparseSchur : BaLinearSolver::kNativeDenseSchur;
+  switch (arg) {
+    case 0:
+      return BaLinearSolver::kDenseSchur;
+    case 1:
+      return BaLinearSolver::kSparseSchur;
+    case 2:
+      return BaLinearSolver::kNativeDenseSchur;
+    default:
+      return BaLinearSolver::kNativeSparseSchur;
+  }
 }
 
 void runBundleAdjustment(benchmark::State& state, const test::BaScene& scene,
-                         BaLinearSolver solver) {
-  BundleAdjustmentConfig config;
+                         BaLinearSolver solver, BundleAdjustmentConfig config = {}) {
   config.linear_solver = solver;
   BundleAdjustmentResult result;
   for (auto _ : state) {
@@ -135,6 +148,40 @@ void BM_BundleAdjustmentSolvers(benchmark::State& state) {
     it = scenes.end() - 1;
   }
   runBundleAdjustment(state, it->second, solverOf(state.range(1)));
+}
+
+// A closed two-lap loop of `keyframes` keyframes as global BA sees it after a loop closure:
+// keyframe 0 fixed, noisy observations with gross outliers, the state perturbed.
+test::BaScene globalLoop(int keyframes) {
+  test::LoopSceneOptions options;
+  options.keyframes = keyframes;
+  options.seed = 31;
+  test::BaScene scene = test::makeLoopBaScene(options);
+  std::mt19937 rng(32);
+  std::normal_distribution<double> pixel(0.0, 1.0);
+  for (size_t i = 0; i < scene.problem.observations.size(); ++i) {
+    BaObservation& o = scene.problem.observations[i];
+    const double du = pixel(rng);
+    o.u += du;
+    o.v += pixel(rng);
+    if (o.u_right >= 0.0) o.u_right += du + 0.5 * pixel(rng);
+    if (i % 100 == 0) o.v += 30.0;  // 1 % gross outliers
+  }
+  test::perturbInitialState(&scene, 0.02, 0.005, 0.03, 33);
+  return scene;
+}
+
+// range(0) keyframes, range(1) the solver as above.
+void BM_GlobalBundleAdjustment(benchmark::State& state) {
+  static std::vector<std::pair<int, test::BaScene>> scenes;
+  const int keyframes = static_cast<int>(state.range(0));
+  auto it = std::find_if(scenes.begin(), scenes.end(),
+                         [&](const auto& s) { return s.first == keyframes; });
+  if (it == scenes.end()) {
+    scenes.emplace_back(keyframes, globalLoop(keyframes));
+    it = scenes.end() - 1;
+  }
+  runBundleAdjustment(state, it->second, solverOf(state.range(1)), globalBundleAdjustmentConfig());
 }
 
 void BM_LinearizationAndInformation(benchmark::State& state) {
@@ -199,8 +246,14 @@ BENCHMARK(BM_TownBundleAdjustment)
 BENCHMARK(BM_BundleAdjustmentSolvers)
     ->Name("ba_solvers")
     ->ArgNames({"free_kf", "solver"})
-    ->ArgsProduct({{10, 60, 120, 250}, {0, 1, 2}})
+    ->ArgsProduct({{10, 60, 120, 250}, {0, 1, 2, 3}})
     ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GlobalBundleAdjustment)
+    ->Name("global_ba/loop")
+    ->ArgNames({"keyframes", "solver"})
+    ->ArgsProduct({{500, 1000}, {1, 3}})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 BENCHMARK(BM_LinearizationAndInformation)
     ->Name("ba_linearization/local_window")
     ->Unit(benchmark::kMillisecond);

@@ -8,7 +8,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "core/covariance/batch_covariance_solver.h"
-#include "core/covariance/cholmod_support.h"
+#include "core/optimization/cholmod_support.h"
 #include "core/covariance/constrained_ordering_solver.h"
 #include "core/covariance/kaess_recovery_solver.h"
 #include "core/covariance/sparse_solve_solver.h"

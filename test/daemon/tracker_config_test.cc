@@ -21,6 +21,7 @@ void expectSameBundleAdjustment(const BundleAdjustmentConfig& a, const BundleAdj
   EXPECT_EQ(a.solver.max_time_s, b.solver.max_time_s);
   EXPECT_EQ(a.dense_schur_max_free_keyframes, b.dense_schur_max_free_keyframes);
   EXPECT_EQ(a.native_max_free_keyframes, b.native_max_free_keyframes);
+  EXPECT_EQ(a.native_sparse, b.native_sparse);
 }
 
 TEST(TrackerConfigTest, ShippedYamlMatchesTheCodeDefaults) {

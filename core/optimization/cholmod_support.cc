@@ -29,23 +29,30 @@ void CholmodFactor::reset() {
   factor_ = nullptr;
 }
 
+cholmod_sparse cholmodUpperView(int n, int* p, int* i, double* x) {
+  cholmod_sparse view{};
+  view.nrow = static_cast<size_t>(n);
+  view.ncol = static_cast<size_t>(n);
+  view.nzmax = static_cast<size_t>(p[n]);
+  view.p = p;
+  view.i = i;
+  view.nz = nullptr;
+  view.x = x;
+  view.z = nullptr;
+  view.stype = 1;
+  view.itype = CHOLMOD_INT;
+  view.xtype = CHOLMOD_REAL;
+  view.dtype = CHOLMOD_DOUBLE;
+  view.sorted = 1;
+  view.packed = 1;
+  return view;
+}
+
 CholmodSymmetricMatrix::CholmodSymmetricMatrix(const Eigen::SparseMatrix<double>& full)
     : upper_(full.triangularView<Eigen::Upper>()), diagonal_(full.diagonal()) {
   upper_.makeCompressed();
-  view_.nrow = upper_.rows();
-  view_.ncol = upper_.cols();
-  view_.nzmax = upper_.nonZeros();
-  view_.p = upper_.outerIndexPtr();
-  view_.i = upper_.innerIndexPtr();
-  view_.nz = nullptr;
-  view_.x = upper_.valuePtr();
-  view_.z = nullptr;
-  view_.stype = 1;
-  view_.itype = CHOLMOD_INT;
-  view_.xtype = CHOLMOD_REAL;
-  view_.dtype = CHOLMOD_DOUBLE;
-  view_.sorted = 1;
-  view_.packed = 1;
+  view_ = cholmodUpperView(static_cast<int>(upper_.rows()), upper_.outerIndexPtr(),
+                           upper_.innerIndexPtr(), upper_.valuePtr());
 }
 
 std::string validate(const CholmodFactorConfig& config) {

@@ -51,6 +51,12 @@ class CholmodFactor {
   CholmodCommon* common_ = nullptr;
 };
 
+/// CHOLMOD's view (not a copy) of a symmetric n x n matrix given by its upper triangle in
+/// packed compressed columns with sorted rows (stype = 1: entries below the diagonal are
+/// ignored): column pointers p (n + 1), row indices i and values x (p[n] each). The arrays
+/// must outlive the view. Thread-safe (pure).
+cholmod_sparse cholmodUpperView(int n, int* p, int* i, double* x);
+
 /// A symmetric matrix in CHOLMOD's layout: its upper triangle (stype = 1), packed, sorted,
 /// stored here and viewed (not copied) by CHOLMOD. Immutable after construction; get()
 /// returns a non-const pointer only because CHOLMOD's API is not const-correct.

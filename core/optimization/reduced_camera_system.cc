@@ -67,20 +67,9 @@ SparseReducedCameraSystem::SparseReducedCameraSystem(
       scalar_column_pointers_.push_back(static_cast<int>(scalar_row_indices_.size()));
     }
   }
-  cholmod_sparse& A = cholmod_->view;
-  A.nrow = A.ncol = 6 * static_cast<size_t>(n);
-  A.nzmax = values_.size();
-  A.p = scalar_column_pointers_.data();
-  A.i = scalar_row_indices_.data();
-  A.nz = nullptr;
-  A.x = values_.data();
-  A.z = nullptr;
-  A.stype = 1;  // upper triangle (the lower halves of the diagonal blocks are ignored)
-  A.itype = CHOLMOD_INT;
-  A.xtype = CHOLMOD_REAL;
-  A.dtype = CHOLMOD_DOUBLE;
-  A.sorted = 1;
-  A.packed = 1;
+  // Upper triangle: the lower halves of the diagonal blocks are ignored.
+  cholmod_->view = cholmodUpperView(6 * n, scalar_column_pointers_.data(),
+                                    scalar_row_indices_.data(), values_.data());
 }
 
 SparseReducedCameraSystem::~SparseReducedCameraSystem() = default;

@@ -16,8 +16,8 @@ DenseReducedCameraSystem::DenseReducedCameraSystem(
 
 void DenseReducedCameraSystem::setZero() { S_.setZero(); }
 
-Mat66Map DenseReducedCameraSystem::block(int r, int c) {
-  return Mat66Map(S_.data() + static_cast<Eigen::Index>(6 * c) * S_.rows() + 6 * r, 6, 6,
+ReducedBlockMap DenseReducedCameraSystem::block(int r, int c) {
+  return ReducedBlockMap(S_.data() + static_cast<Eigen::Index>(6 * c) * S_.rows() + 6 * r, 6, 6,
                   Eigen::OuterStride<>(S_.rows()));
 }
 
@@ -76,12 +76,12 @@ SparseReducedCameraSystem::~SparseReducedCameraSystem() = default;
 
 void SparseReducedCameraSystem::setZero() { std::fill(values_.begin(), values_.end(), 0.0); }
 
-Mat66Map SparseReducedCameraSystem::block(int r, int c) {
+ReducedBlockMap SparseReducedCameraSystem::block(int r, int c) {
   const auto begin = row_index_.begin() + column_start_[c];
   const auto end = row_index_.begin() + column_start_[c + 1];
   const int k = static_cast<int>(std::lower_bound(begin, end, r) - row_index_.begin());
   const int blocks = column_start_[c + 1] - column_start_[c];
-  return Mat66Map(values_.data() + 36 * static_cast<size_t>(column_start_[c]) +
+  return ReducedBlockMap(values_.data() + 36 * static_cast<size_t>(column_start_[c]) +
                       6 * static_cast<size_t>(k - column_start_[c]),
                   6, 6, Eigen::OuterStride<>(6 * blocks));
 }

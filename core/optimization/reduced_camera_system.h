@@ -22,8 +22,8 @@ namespace cblox {
 ///   For whole maps (hundreds to thousands of keyframes), where S is sparse.
 /// Neither is thread-safe; distinct objects may be used on distinct threads.
 
-using Mat66 = Eigen::Matrix<double, 6, 6>;
-using Mat66Map = Eigen::Map<Mat66, 0, Eigen::OuterStride<>>;
+/// A 6 x 6 block of S, viewed in place.
+using ReducedBlockMap = Eigen::Map<Eigen::Matrix<double, 6, 6>, 0, Eigen::OuterStride<>>;
 
 class DenseReducedCameraSystem {
  public:
@@ -32,7 +32,7 @@ class DenseReducedCameraSystem {
   /// S = 0.
   void setZero();
   /// Block (r, c), r <= c, of S (a view into it).
-  Mat66Map block(int r, int c);
+  ReducedBlockMap block(int r, int c);
   /// x = S^-1 b by Cholesky. False if S is not numerically positive definite (x is then
   /// unspecified).
   bool solve(const Eigen::VectorXd& b, Eigen::VectorXd* x);
@@ -54,7 +54,7 @@ class SparseReducedCameraSystem {
   void setZero();
   /// Block (r, c) of the pattern, r <= c (a view into CHOLMOD's values). Precondition: (r, c)
   /// is in the pattern.
-  Mat66Map block(int r, int c);
+  ReducedBlockMap block(int r, int c);
   /// x = S^-1 b by CHOLMOD (the ordering and symbolic factorisation on the first call, the
   /// numeric factorisation on each). False if S is not positive definite.
   bool solve(const Eigen::VectorXd& b, Eigen::VectorXd* x);

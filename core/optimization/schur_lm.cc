@@ -18,6 +18,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using Mat33 = Eigen::Matrix3d;
 using Mat63 = Eigen::Matrix<double, 6, 3>;
+using Mat66 = Eigen::Matrix<double, 6, 6>;
 using Vec3 = Eigen::Vector3d;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 using RowMajor33 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
@@ -223,7 +224,7 @@ bool solveStep(const Structure& s, const Linearization& lin, double radius, Syst
   for (size_t f = 0; f < n; ++f) {
     const auto i = static_cast<Eigen::Index>(6 * f);
     const Vec6 d = damping<6>(lin.H_pp[f], radius);
-    Mat66Map block = S->block(static_cast<int>(f), static_cast<int>(f));
+    ReducedBlockMap block = S->block(static_cast<int>(f), static_cast<int>(f));
     block = lin.H_pp[f];
     block.diagonal() += d;
     D_p.segment<6>(i) = d;

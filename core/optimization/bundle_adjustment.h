@@ -124,8 +124,9 @@ struct BundleAdjustmentConfig {
   /// sparse at 60; at 120 ours sparse takes 71 ms, ours dense 182, SPARSE_SCHUR 244.
   int native_max_free_keyframes = 80;
   /// kAuto uses kNativeSparseSchur above native_max_free_keyframes (false: Ceres' Schur
-  /// solvers as above). Measured: 2.5-3.5x faster than SPARSE_SCHUR from 120 free keyframes
-  /// to global BAs of 1000 (cblox-bench-optimization global_ba/loop: 3.3 s against 8.5 s).
+  /// solvers as above). Measured (CPU time): 2-3x faster than SPARSE_SCHUR from 120 free
+  /// keyframes to global BAs of 1000 (cblox-bench-optimization global_ba/loop: 2.8 s against
+  /// 7.4 s); the town's live global BA 19.6 s against 27.1 s (BENCHMARKS.md).
   bool native_sparse = true;
   /// Threads, time limit (for both passes together) and tolerances of Ceres.
   CeresSolverConfig solver;

@@ -381,7 +381,6 @@ SchurLmSummary schurLevenbergMarquardt(const BundleAdjustmentProblem& problem,
   x.updateRotations();
   double current = cost(problem, s, loss, x);
   summary.initial_cost = current;
-  summary.final_cost = current;
 
   const int n = static_cast<int>(s.free_keyframes.size());
   if (options.reduced_matrix == ReducedMatrix::kSparse && n > 0) {

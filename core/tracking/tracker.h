@@ -119,8 +119,9 @@ class Tracker {
   int searchLocalMap();
   KeyframeReason needNewKeyframe(int inliers) const;
   // The close-point rule's gap: close_points_min_frames since the last keyframe, or a turn of
-  // more than close_points_turn_deg since it.
-  bool closePointGapPassed() const;
+  // more than close_points_turn_deg since it, or fewer than close_points_gap_min_inliers
+  // inliers in the frame.
+  bool closePointGapPassed(int inliers) const;
   Keyframe* createKeyframe();
   void replaceRetiredInLastFrame();
   // The last frame's pose follows its reference keyframe's (moved by local BA or loop

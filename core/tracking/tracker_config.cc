@@ -34,6 +34,9 @@ std::string TrackerConfig::validate() const {
   if (error.tellp() == 0 && !(close_points_turn_deg >= 0.0 && close_points_turn_deg <= 180.0)) {
     error << "close_points_turn_deg must be in [0, 180], got " << close_points_turn_deg;
   }
+  if (error.tellp() == 0 && close_points_gap_min_inliers < 0) {
+    error << "close_points_gap_min_inliers must be >= 0, got " << close_points_gap_min_inliers;
+  }
   if (error.tellp() == 0 && min_frames_between_keyframes < 0) {
     error << "min_frames_between_keyframes must be >= 0, got " << min_frames_between_keyframes;
   }

@@ -5,7 +5,9 @@
 namespace cblox {
 
 /// Settings of the tracking thread (ORB-SLAM2's Tracking). Defaults are ORB-SLAM2's stereo
-/// values; frame counts are frames the tracker has processed (not source frame ids).
+/// values; frame counts are frames the tracker has processed (not source frame ids). For
+/// street drives at speed the keyframe decision can be bounded (README "Keyframes on a street
+/// drive": reference_ratio 0.5 and the close-point gap's three settings below).
 struct TrackerConfig {
   /// Stereo initialisation needs this many features with depth (ORB-SLAM2: 500).
   int min_features_to_initialize = 500;
@@ -26,15 +28,19 @@ struct TrackerConfig {
   /// The close-point rule only once this many frames have passed since the last keyframe
   /// (0 = at any frame, ORB-SLAM2's). On a street at speed the close road and walls are new
   /// in every frame, and without the gap the rule alone made a keyframe every 2.7 frames
-  /// (BENCHMARKS.md). (The frames' inliers do not tell the two cases apart: the town's
-  /// close-point keyframes had 212 inliers at the median, the room's 149.)
+  /// (BENCHMARKS.md). 0 by default: in a small indoor scene the gap cuts the keyframes about
+  /// 4x, and the dense mapper's subvolumes are a number of keyframes long (README).
   int close_points_min_frames = 0;
   /// ... or once the camera has turned more than this many degrees since the last keyframe
   /// (0 = the gap always holds): at a turn the view changes in a few frames, and a gap that
-  /// held there lost the town's 12 m-radius turn. 8 frames or 5 degrees halved the town's
-  /// keyframes with no frame lost on an idle machine, but lost the turn in one of two runs
-  /// on a loaded one, so both stay 0 by default (BENCHMARKS.md).
+  /// held there lost the town's 12 m-radius turn.
   double close_points_turn_deg = 0.0;
+  /// ... or once the frame has fewer than this many inliers (0 = off). Where few far
+  /// landmarks are in view (the town's turn at its west edge, facing open land) the road's
+  /// close points are most of what is tracked and leave the image within frames: with a gap
+  /// of 8 frames the inliers fell from about 100 to 40 over 30 frames and the next frame was
+  /// lost; with this floor at 100 they stayed above 59 (BENCHMARKS.md).
+  int close_points_gap_min_inliers = 0;
   /// Projection search windows (pixels, times the level's scale): against the last frame
   /// (7 for stereo in ORB-SLAM2, doubled when too few matches), against the local map (1;
   /// 5 just after relocalization).

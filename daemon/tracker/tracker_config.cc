@@ -115,6 +115,7 @@ void loadTracking(const YAML::Node& node, TrackerConfig* t) {
                    {"untracked_close_min", &t->untracked_close_min},
                    {"close_points_min_frames", &t->close_points_min_frames},
                    {"close_points_turn_deg", &t->close_points_turn_deg},
+                   {"close_points_gap_min_inliers", &t->close_points_gap_min_inliers},
                    {"last_frame_search_radius", &t->last_frame_search_radius},
                    {"local_map_search_radius", &t->local_map_search_radius},
                    {"relocalized_search_radius", &t->relocalized_search_radius},

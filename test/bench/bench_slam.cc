@@ -31,6 +31,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -40,6 +41,7 @@
 
 #include "core/eval/trajectory_metrics.h"
 #include "core/eval/trajectory_plot.h"
+#include "core/io/tum_trajectory.h"
 #include "core/tracking/slam_system.h"
 #include "daemon/common/cli.h"
 #include "daemon/tracker/tracker_config.h"
@@ -67,6 +69,9 @@ double cpuSeconds() {
 struct Ate {
   double rmse = 0.0, max = 0.0;
   size_t count = 0;
+  /// Of a Sim(3) alignment of the same pairs: the scale mapping the estimate onto the truth
+  /// (> 1: the estimate is too small) and the RMSE left after it.
+  double sim3_scale = 1.0, sim3_rmse = 0.0;
 };
 
 Ate ate(const StampedTrajectory& truth, const StampedTrajectory& estimate) {
@@ -79,6 +84,10 @@ Ate ate(const StampedTrajectory& truth, const StampedTrajectory& estimate) {
   result.rmse = a->translation_m.rmse;
   result.max = a->translation_m.max;
   result.count = a->translation_m.count;
+  if (const auto s = computeAte(pairs, AlignmentType::kSim3, &error)) {
+    result.sim3_scale = s->alignment.scale;
+    result.sim3_rmse = s->translation_m.rmse;
+  }
   return result;
 }
 
@@ -105,7 +114,10 @@ int run(int argc, char** argv) {
   app.add_option("--config", config_path,
                  "a tracker.yaml: its SLAM settings replace the defaults (camera settings unused)")
       ->type_name("FILE");
-  app.add_option("--out", out_dir, "writes DIR/slam_<scene>.json and the trajectory picture")
+  app.add_option("--out", out_dir,
+                 "writes DIR/slam_<scene>.json, the trajectory picture, per-frame rows "
+                 "(_frames.csv) and the final keyframes with the truth at their times "
+                 "(_keyframes.tum, _keyframes_truth.tum)")
       ->type_name("DIR");
   if (const std::optional<int> code = parseCommandLine(app, argc, argv)) return *code;
   std::string error;
@@ -170,6 +182,10 @@ int run(int argc, char** argv) {
   // Inliers of every tracked frame, and of the frames that made a keyframe, by reason.
   std::vector<double> inliers;
   std::map<std::string, std::vector<double>> keyframe_inliers;
+  // One row per frame for --out's slam_<scene>_frames.csv: where a lost stretch began and
+  // how the inliers fell before it.
+  std::ostringstream frame_rows;
+  frame_rows << "frame,state,inliers,keyframe_reason,reference_keyframe\n";
   size_t lost = 0;
   TrackingState last_state = TrackingState::kNotInitialized;
   const double cpu_start = cpuSeconds();
@@ -195,6 +211,9 @@ int run(int argc, char** argv) {
       keyframe_inliers[keyframeReasonName(r.keyframe_reason)].push_back(r.inliers);
     }
     if (r.state == TrackingState::kOk) inliers.push_back(r.inliers);
+    frame_rows << i << ',' << trackingStateName(r.state) << ',' << r.inliers << ','
+               << (r.new_keyframe != nullptr ? keyframeReasonName(r.keyframe_reason) : "") << ','
+               << r.reference_keyframe << '\n';
     if (r.state != last_state || r.relocalized) {
       // Every change of state, with the tracker's reason, so a lost stretch can be found.
       std::fprintf(stderr, "\nframe %zu: %s%s%s%s\n", i, trackingStateName(r.state),
@@ -240,6 +259,7 @@ int run(int argc, char** argv) {
   for (const Keyframe* k : slam.map().keyframes()) {
     const double t = static_cast<double>(k->timestamp_ns) * 1e-9;
     keyframes_final.push_back({t, k->T_G_C()});
+    keyframes_truth.push_back({t, truth_by_frame.at(k->frame_id)});
   }
   double path = 0.0;
   for (size_t i = 1; i < truth.size(); ++i) {
@@ -316,6 +336,10 @@ int run(int argc, char** argv) {
       "published %.4f m, final keyframes %.4f m (%.3f %% of path)\n",
       ate_before.rmse, 100.0 * ate_before.rmse / path, ate_online.rmse, ate_keyframes.rmse,
       100.0 * ate_keyframes.rmse / path);
+  // A map uniformly too small or too large (stereo depth bias) shows as a scale far from 1
+  // with a small RMSE left after the Sim(3) alignment.
+  std::printf("  final keyframes aligned with scale: scale %.4f, ATE RMSE %.4f m\n",
+              ate_keyframes.sim3_scale, ate_keyframes.sim3_rmse);
 
   if (!out_dir.empty()) {
     std::filesystem::create_directories(out_dir);
@@ -348,8 +372,17 @@ int run(int argc, char** argv) {
         {"cpu_cores", cpu_s / wall_s},
         {"ate_before_loop_m", ate_before.rmse},
         {"ate_frames_m", ate_online.rmse},
-        {"ate_keyframes_m", ate_keyframes.rmse}};
+        {"ate_keyframes_m", ate_keyframes.rmse},
+        {"keyframes_sim3_scale", ate_keyframes.sim3_scale},
+        {"ate_keyframes_sim3_m", ate_keyframes.sim3_rmse}};
     std::ofstream(out_dir + "/slam_" + scene + ".json") << json.dump(2) << "\n";
+    std::ofstream(out_dir + "/slam_" + scene + "_frames.csv") << frame_rows.str();
+    // The final keyframes and the truth at their times, for evaluation tools (TUM format).
+    for (const auto& [name, poses] : {std::pair{"keyframes", &keyframes_final},
+                                      std::pair{"keyframes_truth", &keyframes_truth}}) {
+      if (!writeTumTrajectory(out_dir + "/slam_" + scene + "_" + name + ".tum", *poses, &error))
+        std::fprintf(stderr, "%s\n", error.c_str());
+    }
     TrajectoryPlotConfig plot;
     char title[160];
     std::snprintf(title, sizeof(title), "%s: keyframe ATE %.3f m (%.2f %% of %.0f m), %zu loops",

@@ -31,6 +31,7 @@ struct RunStats {
   int frames = 0, ok = 0, keyframes = 0;
   std::vector<std::pair<int, KeyframeReason>> keyframe_frames;  // frame index, reason
   std::vector<Eigen::Quaterniond> rotations;  // estimated R_C_G of every frame (identity if lost)
+  std::vector<int> inliers;                   // TrackingResult::inliers of every frame
   double max_translation_error = 0.0, max_rotation_error_deg = 0.0, path_length = 0.0;
   std::vector<double> track_ms;
   LocalMapperStats mapping;
@@ -77,6 +78,7 @@ RunStats runTracker(const std::string& spec, const std::string& trajectory, size
     ++stats.frames;
     stats.track_ms.push_back(r.time_ms);
     stats.rotations.push_back(r.T_C_G ? r.T_C_G->rotation() : Eigen::Quaterniond::Identity());
+    stats.inliers.push_back(r.inliers);
     if (r.new_keyframe != nullptr) {
       ++stats.keyframes;
       stats.keyframe_frames.emplace_back(stats.frames - 1, r.keyframe_reason);
@@ -139,8 +141,8 @@ TEST(TrackerSimTest, TracksTheRoomLoopCloseToTheExactPoses) {
 // Each keyframe says which condition made it: with min_frames_between_keyframes and
 // max_frames_between_keyframes both 8 ("mapper idle" then never holds before the frame
 // count does), the room's keyframes come from the frame count (exactly 8 frames after the
-// previous one, or later: c2, fewer inliers than 75 % of the reference keyframe's, must hold
-// too) or from the tracking itself (sooner).
+// previous one, or later: c2, fewer inliers than reference_ratio of the reference keyframe's,
+// must hold too) or from the tracking itself (sooner).
 TEST(TrackerSimTest, KeyframesSayWhichConditionMadeThem) {
   TrackerConfig config;
   config.min_frames_between_keyframes = 8;
@@ -174,8 +176,9 @@ TEST(TrackerSimTest, ClosePointRuleOnlyAfterTheFrameGap) {
   TrackerConfig config;
   config.tracked_close_min = 1000000;
   config.untracked_close_min = 0;
-  config.close_points_min_frames = 0;  // ORB-SLAM2's rule, no gap and no turn
+  config.close_points_min_frames = 0;  // ORB-SLAM2's rule, no gap, no turn, no inlier floor
   config.close_points_turn_deg = 0.0;
+  config.close_points_gap_min_inliers = 0;
   const auto count = [](const RunStats& s, KeyframeReason reason) {
     return std::count_if(s.keyframe_frames.begin(), s.keyframe_frames.end(),
                          [&](const auto& k) { return k.second == reason; });
@@ -213,6 +216,7 @@ TEST(TrackerSimTest, ClosePointGapIsWaivedWhileTheCameraTurns) {
   config.untracked_close_min = 0;
   config.close_points_min_frames = 19;
   config.close_points_turn_deg = 2.0;
+  config.close_points_gap_min_inliers = 0;
   const RunStats s = runTracker("sim:room", "orbit", 40, false, config);
   ASSERT_EQ(s.ok, 40);
   int waived = 0;
@@ -231,6 +235,46 @@ TEST(TrackerSimTest, ClosePointGapIsWaivedWhileTheCameraTurns) {
   EXPECT_LT(gated.keyframes, s.keyframes);
   config.close_points_turn_deg = -1.0;
   EXPECT_NE(config.validate().find("close_points_turn_deg"), std::string::npos);
+}
+
+// close_points_gap_min_inliers waives the gap while the frame tracks few inliers: with the
+// close-point rule holding at every frame and a gap of 19 frames on the room's straight
+// drive, a floor above the frames' inliers brings close-point keyframes inside the gap, each
+// at a frame with fewer inliers than the floor; with the floor at 0 none comes inside it.
+TEST(TrackerSimTest, ClosePointGapIsWaivedBelowTheInlierFloor) {
+  TrackerConfig config;
+  config.tracked_close_min = 1000000;
+  config.untracked_close_min = 0;
+  config.close_points_min_frames = 19;
+  config.close_points_turn_deg = 0.0;
+  config.close_points_gap_min_inliers = 0;
+  const auto insideGap = [](const RunStats& s) {
+    std::vector<int> frames;
+    for (size_t k = 1; k < s.keyframe_frames.size(); ++k) {
+      const auto& [frame, reason] = s.keyframe_frames[k];
+      if (reason == KeyframeReason::kClosePoints && frame - s.keyframe_frames[k - 1].first < 19)
+        frames.push_back(frame);
+    }
+    return frames;
+  };
+  const RunStats gated = runTracker("sim:room", "loop", 40, false, config);
+  ASSERT_EQ(gated.ok, 40);
+  EXPECT_TRUE(insideGap(gated).empty());
+  // A floor between the frames' smallest and largest inlier counts.
+  std::vector<int> sorted(gated.inliers.begin() + 1, gated.inliers.end());
+  std::sort(sorted.begin(), sorted.end());
+  config.close_points_gap_min_inliers = sorted[sorted.size() / 2];
+  const RunStats floored = runTracker("sim:room", "loop", 40, false, config);
+  ASSERT_EQ(floored.ok, 40);
+  const std::vector<int> waived = insideGap(floored);
+  EXPECT_FALSE(waived.empty());
+  for (int frame : waived) {
+    EXPECT_LT(floored.inliers[static_cast<size_t>(frame)], config.close_points_gap_min_inliers)
+        << "keyframe at frame " << frame;
+  }
+  EXPECT_GT(floored.keyframes, gated.keyframes);
+  config.close_points_gap_min_inliers = -1;
+  EXPECT_NE(config.validate().find("close_points_gap_min_inliers"), std::string::npos);
 }
 
 // A turn that starts within one frame: the camera drives along the room at 1 cm a frame, then

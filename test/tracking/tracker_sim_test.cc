@@ -168,17 +168,37 @@ TEST(TrackerSimTest, KeyframesSayWhichConditionMadeThem) {
   EXPECT_STREQ(keyframeReasonName(KeyframeReason::kClosePoints), "close_points");
 }
 
+// The close-point rule made to hold at every frame (tracked_close_min above any count,
+// untracked_close_min 0), gated by `gap_frames` alone (no turn, no inlier floor).
+TrackerConfig closePointRuleAtEveryFrame(int gap_frames) {
+  TrackerConfig config;
+  config.tracked_close_min = 1000000;
+  config.untracked_close_min = 0;
+  config.close_points_min_frames = gap_frames;
+  config.close_points_turn_deg = 0.0;
+  config.close_points_gap_min_inliers = 0;
+  return config;
+}
+
+// The close-point keyframes made fewer than `gap_frames` frames after the keyframe before:
+// (frame, the keyframe before's frame).
+std::vector<std::pair<int, int>> closePointKeyframesInsideGap(const RunStats& s, int gap_frames) {
+  std::vector<std::pair<int, int>> inside;
+  for (size_t k = 1; k < s.keyframe_frames.size(); ++k) {
+    const auto& [frame, reason] = s.keyframe_frames[k];
+    const int previous = s.keyframe_frames[k - 1].first;
+    if (reason == KeyframeReason::kClosePoints && frame - previous < gap_frames)
+      inside.emplace_back(frame, previous);
+  }
+  return inside;
+}
+
 // close_points_min_frames gates the close-point rule by the frames since the last keyframe:
 // with the rule made to hold at every frame (tracked_close_min above any count,
 // untracked_close_min 0), the room's keyframes come from it, some 1 frame apart; gated at 5
 // frames, every close-point keyframe comes at least 5 frames after the one before.
 TEST(TrackerSimTest, ClosePointRuleOnlyAfterTheFrameGap) {
-  TrackerConfig config;
-  config.tracked_close_min = 1000000;
-  config.untracked_close_min = 0;
-  config.close_points_min_frames = 0;  // ORB-SLAM2's rule, no gap, no turn, no inlier floor
-  config.close_points_turn_deg = 0.0;
-  config.close_points_gap_min_inliers = 0;
+  TrackerConfig config = closePointRuleAtEveryFrame(0);  // ORB-SLAM2's rule, no gap
   const auto count = [](const RunStats& s, KeyframeReason reason) {
     return std::count_if(s.keyframe_frames.begin(), s.keyframe_frames.end(),
                          [&](const auto& k) { return k.second == reason; });
@@ -211,25 +231,17 @@ TEST(TrackerSimTest, ClosePointRuleOnlyAfterTheFrameGap) {
 // each one turned more than 2 degrees from the keyframe before (the rule compares the same
 // estimated poses the run returns); without the waiver it makes fewer keyframes.
 TEST(TrackerSimTest, ClosePointGapIsWaivedWhileTheCameraTurns) {
-  TrackerConfig config;
-  config.tracked_close_min = 1000000;
-  config.untracked_close_min = 0;
-  config.close_points_min_frames = 19;
+  TrackerConfig config = closePointRuleAtEveryFrame(19);
   config.close_points_turn_deg = 2.0;
-  config.close_points_gap_min_inliers = 0;
   const RunStats s = runTracker("sim:room", "orbit", 40, false, config);
   ASSERT_EQ(s.ok, 40);
-  int waived = 0;
-  for (size_t k = 1; k < s.keyframe_frames.size(); ++k) {
-    const auto& [frame, reason] = s.keyframe_frames[k];
-    const int previous = s.keyframe_frames[k - 1].first;
-    if (reason != KeyframeReason::kClosePoints || frame - previous >= 19) continue;
-    ++waived;
+  const std::vector<std::pair<int, int>> waived = closePointKeyframesInsideGap(s, 19);
+  for (const auto& [frame, previous] : waived) {
     const double turned_deg =
         s.rotations[frame].angularDistance(s.rotations[previous]) * 180.0 / M_PI;
     EXPECT_GT(turned_deg, 2.0) << "keyframe at frame " << frame << ", the last at " << previous;
   }
-  EXPECT_GT(waived, 0);
+  EXPECT_FALSE(waived.empty());
   config.close_points_turn_deg = 0.0;
   const RunStats gated = runTracker("sim:room", "orbit", 40, false, config);
   EXPECT_LT(gated.keyframes, s.keyframes);
@@ -242,35 +254,21 @@ TEST(TrackerSimTest, ClosePointGapIsWaivedWhileTheCameraTurns) {
 // drive, a floor above the frames' inliers brings close-point keyframes inside the gap, each
 // at a frame with fewer inliers than the floor; with the floor at 0 none comes inside it.
 TEST(TrackerSimTest, ClosePointGapIsWaivedBelowTheInlierFloor) {
-  TrackerConfig config;
-  config.tracked_close_min = 1000000;
-  config.untracked_close_min = 0;
-  config.close_points_min_frames = 19;
-  config.close_points_turn_deg = 0.0;
-  config.close_points_gap_min_inliers = 0;
-  const auto insideGap = [](const RunStats& s) {
-    std::vector<int> frames;
-    for (size_t k = 1; k < s.keyframe_frames.size(); ++k) {
-      const auto& [frame, reason] = s.keyframe_frames[k];
-      if (reason == KeyframeReason::kClosePoints && frame - s.keyframe_frames[k - 1].first < 19)
-        frames.push_back(frame);
-    }
-    return frames;
-  };
+  TrackerConfig config = closePointRuleAtEveryFrame(19);
   const RunStats gated = runTracker("sim:room", "loop", 40, false, config);
   ASSERT_EQ(gated.ok, 40);
-  EXPECT_TRUE(insideGap(gated).empty());
+  EXPECT_TRUE(closePointKeyframesInsideGap(gated, 19).empty());
   // A floor between the frames' smallest and largest inlier counts.
   std::vector<int> sorted(gated.inliers.begin() + 1, gated.inliers.end());
   std::sort(sorted.begin(), sorted.end());
   config.close_points_gap_min_inliers = sorted[sorted.size() / 2];
   const RunStats floored = runTracker("sim:room", "loop", 40, false, config);
   ASSERT_EQ(floored.ok, 40);
-  const std::vector<int> waived = insideGap(floored);
+  const std::vector<std::pair<int, int>> waived = closePointKeyframesInsideGap(floored, 19);
   EXPECT_FALSE(waived.empty());
-  for (int frame : waived) {
+  for (const auto& [frame, previous] : waived) {
     EXPECT_LT(floored.inliers[static_cast<size_t>(frame)], config.close_points_gap_min_inliers)
-        << "keyframe at frame " << frame;
+        << "keyframe at frame " << frame << ", the last at " << previous;
   }
   EXPECT_GT(floored.keyframes, gated.keyframes);
   config.close_points_gap_min_inliers = -1;

@@ -326,4 +326,13 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
   return config;
 }
 
+std::optional<SlamSystemConfig> loadSlamSettings(const std::string& path, std::string* error) {
+  try {
+    return loadTrackerConfig(YAML::LoadFile(path)).tracker.slam;
+  } catch (const std::exception& e) {
+    if (error != nullptr) *error = path + ": " + e.what();
+    return std::nullopt;
+  }
+}
+
 }  // namespace cblox

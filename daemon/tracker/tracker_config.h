@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include <yaml-cpp/yaml.h>
@@ -58,6 +59,13 @@ InitialPose parseInitialPose(const std::string& name);
 /// defaults), then finishTrackerConfig(); throws ConfigError naming the key for unknown keys
 /// or bad values. Thread-safe.
 TrackerProcessConfig loadTrackerConfig(const YAML::Node& root);
+
+/// The SLAM settings (TrackerNodeConfig::slam) of the tracker.yaml at `path`, read by
+/// loadTrackerConfig(), for tools that run the SLAM system without the process
+/// (cblox-bench-slam and cblox-bench-maintenance --config). Returns std::nullopt and, when
+/// error is non-null, "<path>: <what>" when the file cannot be read or parsed or a key or
+/// value is bad. Thread-safe.
+std::optional<SlamSystemConfig> loadSlamSettings(const std::string& path, std::string* error);
 
 /// Loads the calibration file into config->tracker.calibration when calibration_source is
 /// kFile (cleared otherwise; for the configured mode: cam1 only for stereo) and validates the

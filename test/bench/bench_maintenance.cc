@@ -73,6 +73,7 @@
 #include "core/tracking/slam_system.h"
 #include "daemon/common/cli.h"
 #include "daemon/mapper/mapper.h"
+#include "daemon/tracker/tracker_config.h"
 #include "drivers/open_frame_source.h"
 #include "drivers/sim/builtin_scenes.h"
 
@@ -124,7 +125,7 @@ MapperConfig baseConfig(float voxel, const std::filesystem::path& out, bool dete
 }
 
 int run(int argc, char** argv) {
-  std::string scene = "room", out_dir, vocabulary_path;
+  std::string scene = "room", out_dir, vocabulary_path, config_path;
   int laps = 2;
   std::string trajectory = "loop";
   size_t max_frames = 0;
@@ -219,6 +220,9 @@ int run(int argc, char** argv) {
   app.add_option("--out", out_dir, "writes DIR/maintenance_<scene>.json and the sweep picture")
       ->type_name("DIR");
   app.add_option("--vocabulary", vocabulary_path, "vocabulary file")->capture_default_str();
+  app.add_option("--config", config_path,
+                 "a tracker.yaml: its SLAM settings replace the defaults (camera settings unused)")
+      ->type_name("FILE");
   if (const std::optional<int> code = parseCommandLine(app, argc, argv)) return *code;
   if (sweep.empty() || !(voxel > 0.0f) || !(revisit_variant_distance > 0.0) ||
       revisit_variant_frames < 1 || revisit_frames < 0 || revisit_max_frames < 0) {
@@ -251,7 +255,16 @@ int run(int argc, char** argv) {
   }
   const RectifiedStereoCalibration& calibration = *info.stereo;
   const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
-  SlamSystem slam(camera, SlamSystemConfig{}, &*vocabulary);
+  SlamSystemConfig slam_config;
+  if (!config_path.empty()) {
+    const std::optional<SlamSystemConfig> loaded = loadSlamSettings(config_path, &error);
+    if (!loaded) {
+      std::fprintf(stderr, "%s\n", error.c_str());
+      return 2;
+    }
+    slam_config = *loaded;
+  }
+  SlamSystem slam(camera, slam_config, &*vocabulary);
 
   const std::filesystem::path work =
       std::filesystem::temp_directory_path() /
@@ -682,7 +695,8 @@ int run(int argc, char** argv) {
     nlohmann::ordered_json json = {{"scene", scene},   {"trajectory", trajectory},
                                    {"laps", static_cast<size_t>(laps)},
                                    {"frames", n},      {"keyframes", slam.map().numKeyframes()},
-                                   {"voxel_m", voxel}, {"maps", nlohmann::ordered_json::array()}};
+                                   {"voxel_m", voxel}, {"tracker_config", config_path},
+                                   {"maps", nlohmann::ordered_json::array()}};
     for (const auto& v : variants) {
       json["maps"].push_back({{"name", v->name},
                               {"q_min", v->q_min},

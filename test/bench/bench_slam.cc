@@ -156,12 +156,12 @@ int run(int argc, char** argv) {
   const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
   SlamSystemConfig config;
   if (!config_path.empty()) {
-    try {
-      config = loadTrackerConfig(YAML::LoadFile(config_path)).tracker.slam;
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "%s: %s\n", config_path.c_str(), e.what());
+    const std::optional<SlamSystemConfig> loaded = loadSlamSettings(config_path, &error);
+    if (!loaded) {
+      std::fprintf(stderr, "%s\n", error.c_str());
       return 2;
     }
+    config = *loaded;
   }
   if (one_core) config.frames.parallel_stereo_extraction = false;
   SlamSystem slam(camera, config, &*vocabulary);

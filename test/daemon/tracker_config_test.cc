@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <regex>
 #include <string>
 
@@ -113,6 +114,7 @@ TEST(TrackerConfigTest, CommentedKeysOfTheShippedYamlAreTheDefaults) {
   EXPECT_EQ(t.untracked_close_min, t0.untracked_close_min);
   EXPECT_EQ(t.close_points_min_frames, t0.close_points_min_frames);
   EXPECT_EQ(t.close_points_turn_deg, t0.close_points_turn_deg);
+  EXPECT_EQ(t.close_points_gap_min_inliers, t0.close_points_gap_min_inliers);
   EXPECT_EQ(t.last_frame_search_radius, t0.last_frame_search_radius);
   EXPECT_EQ(t.local_map_search_radius, t0.local_map_search_radius);
   EXPECT_EQ(t.relocalized_search_radius, t0.relocalized_search_radius);
@@ -162,7 +164,7 @@ TEST(TrackerConfigTest, ReadsOverrides) {
       "frames: {orb: {num_features: 1500, num_levels: 6}, stereo: {min_depth_m: 0.5},\n"
       "         parallel_stereo_extraction: false}\n"
       "tracker: {min_features_to_initialize: 300, max_frames_between_keyframes: 10,\n"
-      "          pnp_reprojection_error_px: 3.0}\n"
+      "          pnp_reprojection_error_px: 3.0, close_points_gap_min_inliers: 90}\n"
       "local_mapping: {cull_keyframes: true, bundle_adjustment: {num_threads: 2,\n"
       "                max_time_s: 0.2}}\n"
       "loop_closing: {enabled: false, seed: 7, pose_graph: {max_iterations: 30},\n"
@@ -195,6 +197,7 @@ TEST(TrackerConfigTest, ReadsOverrides) {
   EXPECT_FALSE(t.checkpoint.resume);
   EXPECT_EQ(t.close_depth_baselines, 35.0);
   EXPECT_EQ(t.rgbd_baseline_m, 0.07);
+  EXPECT_EQ(t.slam.tracker.close_points_gap_min_inliers, 90);
   EXPECT_EQ(t.slam.frames.orb.num_features, 1500);
   EXPECT_EQ(t.slam.frames.orb.num_levels, 6);
   EXPECT_EQ(t.slam.frames.stereo.min_depth_m, 0.5);
@@ -221,6 +224,32 @@ TEST(TrackerConfigTest, ReadsOverrides) {
   EXPECT_EQ(config.progress_period_s, 2.0);
   EXPECT_EQ(t.timing_window, 10u);
   EXPECT_EQ(t.log_interval_s, 1.0);
+}
+
+// loadSlamSettings reads a file's SLAM settings as loadTrackerConfig does, and says what is
+// wrong (the path, and the key) instead of throwing.
+TEST(TrackerConfigTest, SlamSettingsOfAFile) {
+  const test::TempDir dir("slam_settings");
+  const std::string path = (dir.path() / "tracker.yaml").string();
+  std::ofstream(path) << "tracker: {reference_ratio: 0.5, close_points_gap_min_inliers: 100}\n"
+                         "loop_closing: {global_ba: {first_pass_iterations: 30}}\n";
+  std::string error;
+  const std::optional<SlamSystemConfig> slam = loadSlamSettings(path, &error);
+  ASSERT_TRUE(slam.has_value()) << error;
+  EXPECT_EQ(slam->tracker.reference_ratio, 0.5);
+  EXPECT_EQ(slam->tracker.close_points_gap_min_inliers, 100);
+  EXPECT_EQ(slam->loop_closing.global_ba.first_pass_iterations, 30);
+  EXPECT_EQ(slam->tracker.max_frames_between_keyframes,
+            TrackerConfig{}.max_frames_between_keyframes);  // absent: the default
+
+  const std::string missing = (dir.path() / "absent.yaml").string();
+  EXPECT_FALSE(loadSlamSettings(missing, &error).has_value());
+  EXPECT_EQ(error.rfind(missing + ": ", 0), 0u) << error;
+  std::ofstream(path) << "tracker: {close_points_gap_min_inliers: -1}\n";
+  EXPECT_FALSE(loadSlamSettings(path, &error).has_value());
+  EXPECT_NE(error.find("close_points_gap_min_inliers"), std::string::npos) << error;
+  EXPECT_EQ(error.rfind(path + ": ", 0), 0u) << error;
+  EXPECT_FALSE(loadSlamSettings(path, nullptr).has_value());
 }
 
 TEST(TrackerConfigTest, RejectsBadKeysAndValuesNamingThem) {

@@ -430,7 +430,8 @@ KeyframeReason Tracker::needNewKeyframe(int inliers) const {
     }
   }
   const bool need_close = tracked_close < config_.tracked_close_min &&
-                          untracked_close > config_.untracked_close_min && closePointGapPassed(inliers);
+                          untracked_close > config_.untracked_close_min &&
+                          closePointGapPassed(inliers);
   const double ratio = num_keyframes < 2 ? 0.4 : config_.reference_ratio;
   const bool c1a = current_index_ >= last_keyframe_index_ + max_frames;
   const bool c1b =

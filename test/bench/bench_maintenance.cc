@@ -692,10 +692,13 @@ int run(int argc, char** argv) {
     // maintenance_<scene>[_<trajectory>]: the loop keeps the names of earlier runs.
     const std::string stem = trajectory == "loop" ? scene : scene + "_" + trajectory;
     std::filesystem::create_directories(out_dir);
-    nlohmann::ordered_json json = {{"scene", scene},   {"trajectory", trajectory},
+    nlohmann::ordered_json json = {{"scene", scene},
+                                   {"trajectory", trajectory},
                                    {"laps", static_cast<size_t>(laps)},
-                                   {"frames", n},      {"keyframes", slam.map().numKeyframes()},
-                                   {"voxel_m", voxel}, {"tracker_config", config_path},
+                                   {"frames", n},
+                                   {"keyframes", slam.map().numKeyframes()},
+                                   {"voxel_m", voxel},
+                                   {"tracker_config", config_path},
                                    {"maps", nlohmann::ordered_json::array()}};
     for (const auto& v : variants) {
       json["maps"].push_back({{"name", v->name},

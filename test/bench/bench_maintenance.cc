@@ -255,16 +255,14 @@ int run(int argc, char** argv) {
   }
   const RectifiedStereoCalibration& calibration = *info.stereo;
   const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
-  SlamSystemConfig slam_config;
-  if (!config_path.empty()) {
-    const std::optional<SlamSystemConfig> loaded = loadSlamSettings(config_path, &error);
-    if (!loaded) {
-      std::fprintf(stderr, "%s\n", error.c_str());
-      return 2;
-    }
-    slam_config = *loaded;
+  const std::optional<SlamSystemConfig> slam_config = config_path.empty()
+                                                          ? std::make_optional(SlamSystemConfig{})
+                                                          : loadSlamSettings(config_path, &error);
+  if (!slam_config) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return 2;
   }
-  SlamSystem slam(camera, slam_config, &*vocabulary);
+  SlamSystem slam(camera, *slam_config, &*vocabulary);
 
   const std::filesystem::path work =
       std::filesystem::temp_directory_path() /

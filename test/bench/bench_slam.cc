@@ -154,17 +154,15 @@ int run(int argc, char** argv) {
 
   const RectifiedStereoCalibration& calibration = *info.stereo;
   const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
-  SlamSystemConfig config;
-  if (!config_path.empty()) {
-    const std::optional<SlamSystemConfig> loaded = loadSlamSettings(config_path, &error);
-    if (!loaded) {
-      std::fprintf(stderr, "%s\n", error.c_str());
-      return 2;
-    }
-    config = *loaded;
+  std::optional<SlamSystemConfig> config = config_path.empty()
+                                               ? std::make_optional(SlamSystemConfig{})
+                                               : loadSlamSettings(config_path, &error);
+  if (!config) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return 2;
   }
-  if (one_core) config.frames.parallel_stereo_extraction = false;
-  SlamSystem slam(camera, config, &*vocabulary);
+  if (one_core) config->frames.parallel_stereo_extraction = false;
+  SlamSystem slam(camera, *config, &*vocabulary);
   std::mutex mutex;
   std::vector<LoopClosureEvent> loops;
   std::vector<double> ba_ms;

@@ -243,6 +243,12 @@ int run(int argc, char** argv) {
                  "--revisit-max-frames >= 0\n");
     return 2;
   }
+  if (depth_kind == "stereo" && depth_noise != 0.0) {
+    std::fprintf(stderr,
+                 "--depth-noise adds noise to the renderer's depth, which --depth stereo does "
+                 "not use\n");
+    return 2;
+  }
   std::string error;
   const auto vocabulary = BinaryVocabulary::load(vocabulary_path, &error);
   if (!vocabulary) {

@@ -609,16 +609,15 @@ int run(int argc, char** argv) {
   }
   std::filesystem::remove_all(work);
 
-  // The covisibility graph the fusion candidates come from (the first fusion mapper's).
+  // The covisibility graphs the fusion candidates came from, at the end (what is left unfused).
   for (const auto& v : variants) {
     if (v->kind != Kind::kOn) continue;
-    std::printf("covisibility edges (shared / |L_a| / |L_b|):");
+    std::printf("%s: covisibility edges left (shared / |L_a| / |L_b|):", v->name.c_str());
     for (const CovisibilityCandidate& e : v->mapper->covisibilityEdges()) {
       std::printf(" %lld-%lld %d/%zu/%zu", static_cast<long long>(e.a), static_cast<long long>(e.b),
                   e.shared, e.landmarks_a, e.landmarks_b);
     }
     std::printf("\n");
-    break;
   }
   {
     std::lock_guard<std::mutex> lock(errors_mutex);

@@ -174,20 +174,19 @@ void FusionExportWorker::runCommand(QueuedCommand& queued) {
 void FusionExportWorker::fuse(const FusionPair& pair) {
   const std::shared_ptr<Submap> older = collection_->getSubmap(pair.older);
   const std::shared_ptr<Submap> newer = collection_->getSubmap(pair.newer);
+  // A subvolume that is no longer the collection's active one is being finished by the thread
+  // that replaced it (SubmapCollection::createSubmap makes the new one active, then finishes
+  // the previous one outside its lock, waiting for the frame in hand). Finish it here too
+  // (idempotent, the same wait) rather than fail the pair for that moment.
+  const std::shared_ptr<Submap> active = collection_->activeSubmap();
+  const auto finished = [&active](Submap& submap) {
+    if (!submap.isFinished() && &submap != active.get()) submap.finish();
+    return submap.isFinished();
+  };
   std::string failure;
-  if (older && newer) {
-    // A subvolume that is no longer the collection's active one is being finished by the
-    // thread that replaced it (SubmapCollection::createSubmap makes the new one active, then
-    // finishes the previous one outside its lock, waiting for the frame in hand). Finish it
-    // here too (idempotent, the same wait) rather than fail the pair for that moment.
-    const std::shared_ptr<Submap> active = collection_->activeSubmap();
-    for (const std::shared_ptr<Submap>& submap : {older, newer}) {
-      if (!submap->isFinished() && submap != active) submap->finish();
-    }
-  }
   if (!older || !newer) {
     failure = "a subvolume of the pair no longer exists";
-  } else if (!older->isFinished() || !newer->isFinished()) {
+  } else if (!finished(*older) || !finished(*newer)) {
     failure = "a subvolume of the pair is still active";
   } else {
     try {

@@ -40,8 +40,8 @@ struct FusionExportWorkerConfig {
 /// removed from the collection) and runs export commands, on its own thread.
 /// Both subvolumes of a pair must be finished (an active one is never fused); one that is no
 /// longer the collection's active subvolume but not yet finished (its replacement is being
-/// created) is finished by the worker first, which waits for the frame being integrated. An export holds
-/// the ACTIVE subvolume's layer lock only while copying that layer.
+/// created) is finished by the worker first, which waits for the frame being integrated.
+/// An export holds the ACTIVE subvolume's layer lock only while copying that layer.
 /// Thread-safety: every public member function is thread-safe; callbacks run on the worker
 /// thread (an export reply also on the caller's, when it is refused at once).
 class FusionExportWorker {

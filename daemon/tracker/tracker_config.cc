@@ -327,6 +327,7 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
 }
 
 std::optional<SlamSystemConfig> loadSlamSettings(const std::string& path, std::string* error) {
+  if (path.empty()) return SlamSystemConfig{};
   try {
     return loadTrackerConfig(YAML::LoadFile(path)).tracker.slam;
   } catch (const std::exception& e) {

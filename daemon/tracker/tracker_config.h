@@ -62,9 +62,9 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root);
 
 /// The SLAM settings (TrackerNodeConfig::slam) of the tracker.yaml at `path`, read by
 /// loadTrackerConfig(), for tools that run the SLAM system without the process
-/// (cblox-bench-slam and cblox-bench-maintenance --config). Returns std::nullopt and, when
-/// error is non-null, "<path>: <what>" when the file cannot be read or parsed or a key or
-/// value is bad. Thread-safe.
+/// (cblox-bench-slam and cblox-bench-maintenance --config); an empty path gives the defaults
+/// (no file). Returns std::nullopt and, when error is non-null, "<path>: <what>" when the
+/// file cannot be read or parsed or a key or value is bad. Thread-safe.
 std::optional<SlamSystemConfig> loadSlamSettings(const std::string& path, std::string* error);
 
 /// Loads the calibration file into config->tracker.calibration when calibration_source is

@@ -282,9 +282,7 @@ int run(int argc, char** argv) {
     }
   }
   const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
-  const std::optional<SlamSystemConfig> slam_config = config_path.empty()
-                                                          ? std::make_optional(SlamSystemConfig{})
-                                                          : loadSlamSettings(config_path, &error);
+  const std::optional<SlamSystemConfig> slam_config = loadSlamSettings(config_path, &error);
   if (!slam_config) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return 2;

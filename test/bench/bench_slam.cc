@@ -154,9 +154,7 @@ int run(int argc, char** argv) {
 
   const RectifiedStereoCalibration& calibration = *info.stereo;
   const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
-  std::optional<SlamSystemConfig> config = config_path.empty()
-                                               ? std::make_optional(SlamSystemConfig{})
-                                               : loadSlamSettings(config_path, &error);
+  std::optional<SlamSystemConfig> config = loadSlamSettings(config_path, &error);
   if (!config) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return 2;

@@ -250,6 +250,10 @@ TEST(TrackerConfigTest, SlamSettingsOfAFile) {
   EXPECT_NE(error.find("close_points_gap_min_inliers"), std::string::npos) << error;
   EXPECT_EQ(error.rfind(path + ": ", 0), 0u) << error;
   EXPECT_FALSE(loadSlamSettings(path, nullptr).has_value());
+  // No file named: the defaults.
+  const std::optional<SlamSystemConfig> defaults = loadSlamSettings("", &error);
+  ASSERT_TRUE(defaults.has_value());
+  EXPECT_EQ(defaults->tracker.reference_ratio, TrackerConfig{}.reference_ratio);
 }
 
 TEST(TrackerConfigTest, RejectsBadKeysAndValuesNamingThem) {

@@ -114,6 +114,10 @@ struct FusionSchedulerStats {
   uint64_t same_anchor = 0;  ///< pairs handed on without a covariance (takeSameAnchorPairs)
   uint64_t fused = 0;               ///< fusions reported done (onFused)
   uint64_t fusions_failed = 0;      ///< fusions reported failed (onFusionFailed)
+
+  /// Pairs asked, handed on and decided, summed: every count in it only grows, so an
+  /// unchanged sum means maintenance did nothing in between.
+  uint64_t progress() const { return requested + same_anchor + fused + fusions_failed; }
 };
 
 /// The map maintenance's fusion bookkeeping (issue 6, item 4), free of threads and I/O:

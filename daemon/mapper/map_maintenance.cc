@@ -120,6 +120,17 @@ bool MapMaintenance::applySynthesisedKeyframe(KeyframeId id, int64_t utime,
   return true;
 }
 
+void MapMaintenance::tick() {
+  {
+    // A queued item is followed by scheduleFusions anyway; a tick never displaces one.
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    if (stop_ || !queue_.empty()) return;
+  }
+  Item item;
+  item.kind = Item::Kind::kTick;
+  enqueue(std::move(item));
+}
+
 void MapMaintenance::loop() {
   std::unique_lock<std::mutex> lock(queue_mutex_);
   while (true) {
@@ -164,6 +175,8 @@ void MapMaintenance::apply(const Item& item) {
         break;
       case Kind::kCovarianceReply:
         applyReply(item);
+        break;
+      case Kind::kTick:  // scheduleFusions follows every item
         break;
     }
   } catch (const std::exception& e) {

@@ -86,6 +86,11 @@ class MapMaintenance {
   /// applied, when maintenance is stopping). A synthesised id used before gets the next
   /// unused one. Not from the maintenance thread.
   bool applySynthesisedKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K);
+  /// Asks the fusion scheduler for due pairs once more, after what is queued, with no input:
+  /// on MaintenanceClock::kInput the only way a pair that became free after the last input
+  /// (the last subvolume finished, a fusion done) is asked before the next input. The
+  /// steady clock does this by itself every 0.25 s.
+  void tick();
   /// The integrator started revisit submap `revisit`, anchored at the anchor keyframe of
   /// submap `home` (SubmapCreationPolicy::onFrameReference): makes it a subvolume of the
   /// fusion scheduler sharing home's anchor (FusionScheduler::addSubvolumeSharingAnchor) and
@@ -122,7 +127,7 @@ class MapMaintenance {
 
  private:
   struct Item {
-    enum class Kind { kKeyframe, kSynthesisedKeyframe, kBatch, kCovarianceReply };
+    enum class Kind { kKeyframe, kSynthesisedKeyframe, kBatch, kCovarianceReply, kTick };
     Kind kind = Kind::kKeyframe;
     KeyframeId keyframe_id = 0;
     int64_t utime = 0;

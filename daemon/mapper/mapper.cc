@@ -284,6 +284,7 @@ void Mapper::onCovarianceReply(int64_t request_id, std::vector<FusionCovarianceA
   maintenance_.enqueueReply(request_id, std::move(answers));
 }
 
+void Mapper::maintenanceTick() { maintenance_.tick(); }
 
 void Mapper::onCommand(const MapperCommand& command, ReplyCallback reply) {
   auto fail = [&](const std::string& message) {

@@ -183,6 +183,10 @@ class Mapper {
   /// The reply to covariance request `request_id`: one answer per requested pair, in
   /// order. Queued for the maintenance thread. Thread-safe.
   void onCovarianceReply(int64_t request_id, std::vector<FusionCovarianceAnswer> answers);
+  /// Map maintenance asks for due fusion pairs once more (MapMaintenance::tick): on the
+  /// input clock (deterministic replay, the benches) after the last input, so pairs freed
+  /// at the end are asked as the steady clock's tick would. Thread-safe.
+  void maintenanceTick();
   /// A command. "status" is answered at once on the calling thread; "export_mesh" {path},
   /// "export_submap_meshes" {path}, "save_map" {path} and "load_map" {path} are queued for
   /// the worker and answered from it; anything else is answered at once with ok = false.

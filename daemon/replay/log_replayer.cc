@@ -34,6 +34,8 @@ using Clock = std::chrono::steady_clock;
 
 // How long one input may keep a thread busy before the replay gives up (a hang, not work).
 constexpr std::chrono::milliseconds kSettleTimeout = std::chrono::minutes(10);
+// Maintenance rounds after the log's end at the most (each asks at least one more pair).
+constexpr int kMaxEndRounds = 100;
 
 // One log event kept for later.
 struct HeldEvent {
@@ -216,11 +218,20 @@ struct LogReplayer::Impl {
     if (!used) ++summary.ignored[channel];
   }
 
-  void finish() {
+  // `stopped`: the replay was stopped; maintenance is not ticked after the last input.
+  void finish(bool stopped) {
     releaseTrackerFrame();
     horizon = std::numeric_limits<int64_t>::max();
     releaseDepth();
     settle();
+    // The log is over but maintenance is not: a live mapper's 0.25 s tick asks the pairs
+    // freed after the last input (the input clock does not); ticks until one changes nothing.
+    for (int round = 0; !stopped && round < kMaxEndRounds; ++round) {
+      const uint64_t before = mapper->status().fusion.progress();
+      mapper->maintenanceTick();
+      settle();
+      if (mapper->status().fusion.progress() == before) break;
+    }
   }
 
   void subscribeOutputs() {
@@ -369,7 +380,7 @@ ReplaySummary LogReplayer::run(const std::function<void(const ReplayProgress&)>&
     summary.skipped_bytes += static_cast<uint64_t>(file_size - skipping_from);
   }
   summary.stopped = stop != nullptr && stop->load();
-  impl_->finish();
+  impl_->finish(summary.stopped);
   summary.wall_s = secondsSince(start);
   summary.log_span_s = static_cast<double>(last_event_us - first_event_us) * 1e-6;
   report();

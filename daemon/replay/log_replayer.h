@@ -107,7 +107,9 @@ class LogReplayer {
   LogReplayer(const LogReplayer&) = delete;
   LogReplayer& operator=(const LogReplayer&) = delete;
 
-  /// Plays the whole log (or until `*stop`), then waits until everything is settled.
+  /// Plays the whole log (or until `*stop`), then waits until everything is settled and map
+  /// maintenance, ticked (Mapper::maintenanceTick) as a live mapper's clock would, has asked
+  /// and fused every pair that became due after the last input.
   /// `progress` is called about every `progress_period_s` of wall time and at the end.
   /// Throws std::runtime_error when the log cannot be opened or the mapper cannot start.
   ReplaySummary run(const std::function<void(const ReplayProgress&)>& progress,

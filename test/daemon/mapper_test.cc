@@ -815,6 +815,62 @@ TEST(MapperTest, TrackerModeFusesSubvolumesWhoseCovarianceIsSmallEnough) {
   EXPECT_EQ(mapper.collection().size(), 3u);
 }
 
+// On the input clock (deterministic replay) map maintenance asks only after an input: a pair
+// that becomes free when a fusion ends after the last input waits for the next one, or for
+// maintenanceTick(), which asks at once (the steady clock's 0.25 s tick does it by itself).
+TEST(MapperTest, MaintenanceTickAsksForPairsFreedAfterTheLastInput) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  config.creation.max_keyframes_per_subvolume = 1;
+  config.maintenance_clock = MaintenanceClock::kInput;
+  LogLines log;
+  RequestLog requests;
+  const std::unique_ptr<Mapper> started = startTrackerModeMapper(config, &log, &requests);
+  ASSERT_NE(started, nullptr);
+  Mapper& mapper = *started;
+  const auto& frames = roomFrames();
+  // Subvolumes 0, 1, 2 (keyframes 100, 101, 102) all see landmarks [0, 100); 3 sees others.
+  auto subvolume = [&](KeyframeId id, size_t first_frame, uint64_t first, uint64_t last) {
+    ASSERT_TRUE(mapper.onKeyframe(id, utimeOf(frames[first_frame]), frames[first_frame].T_G_C,
+                                  landmarkRange(first, last)));
+    for (size_t i = first_frame; i < first_frame + 2; ++i) {
+      ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));
+      ASSERT_TRUE(mapper.onFramePose(groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C)));
+      ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+    }
+  };
+  subvolume(100, 0, 0, 100);
+  subvolume(101, 2, 0, 100);
+  subvolume(102, 4, 0, 100);  // 1 is finished: the pair 0-1 is asked
+  const std::optional<FusionCovarianceRequest> first = requests.waitFor(0);
+  ASSERT_TRUE(first.has_value());
+  ASSERT_EQ(first->pairs.size(), 1u);
+  EXPECT_EQ(first->pairs[0].older, 0);
+  EXPECT_EQ(first->pairs[0].newer, 1);
+  subvolume(103, 6, 5000, 5100);  // 2 is finished while that request is in flight
+  mapper.onCovarianceReply(first->request_id, {FusionCovarianceAnswer{true, "", 1e5}});
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(20000)));
+  EXPECT_EQ(mapper.status().fusion.fused, 1u);
+  {
+    // 0-2 became free when the fusion ended, after the last input: not asked.
+    std::lock_guard<std::mutex> lock(requests.mutex);
+    EXPECT_EQ(requests.requests.size(), 1u);
+  }
+  mapper.maintenanceTick();
+  const std::optional<FusionCovarianceRequest> second = requests.waitFor(1);
+  ASSERT_TRUE(second.has_value());
+  ASSERT_EQ(second->pairs.size(), 1u);
+  EXPECT_EQ(second->pairs[0].older, 0);
+  EXPECT_EQ(second->pairs[0].newer, 2);
+  EXPECT_EQ(second->pairs[0].older_keyframe, 100);
+  EXPECT_EQ(second->pairs[0].newer_keyframe, 102);
+  // A second tick with the request still in flight asks nothing more.
+  mapper.maintenanceTick();
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  std::lock_guard<std::mutex> lock(requests.mutex);
+  EXPECT_EQ(requests.requests.size(), 2u);
+}
+
 TEST(MapperTest, StopAppliesTheKeyframesStillQueued) {
   test::TempDir dir("mapper");
   MapperConfig config = testConfig(dir.path());

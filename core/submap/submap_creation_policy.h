@@ -45,13 +45,11 @@ struct SubmapCreationPolicyConfig {
   /// (FusionScheduler::takeSameAnchorPairs). The frames' poses are the tracker's, made
   /// against that home's landmarks, so the anchoring adds no uncertainty of its own. The votes
   /// keep a reference that flickers between neighbouring subvolumes (or lags behind a new
-  /// keyframe) from starting a subvolume per frame. README, "Map maintenance". Measured
-  /// (BENCHMARKS.md, "Revisits anchored by the frames' reference keyframes") with 10: on the
-  /// hall over three runs fusion keeps 64-69 % of the off size at q_min 1e4 and 60-62 % at 3e3
-  /// instead of 93-95 %, at the same RMSE; on the town the two runs with the SLAM waited for
-  /// had a 7-16 % higher RMSE with it and no smaller map, about the bench's own spread.
-  /// Default 0 (off) until the town shows no cost.
-  int revisit_after_frames = 0;
+  /// keyframe) from starting a subvolume per frame. README, "Map maintenance". Default 10:
+  /// measured (BENCHMARKS.md, "The frames rule by default") with q_min 3e3 and
+  /// CovisibilityGraphConfig::min_shared_ratio 0.04, fusion keeps 59 % of the off size on the
+  /// hall instead of 87 %, and the room and the town lose nothing by it, at the same RMSE.
+  int revisit_after_frames = 10;
   /// With revisit_after_frames: a revisit submap (one started by that rule) whose frames keep
   /// being tracked against its home takes at most this many frames (>= 1); the next one
   /// starts a fresh revisit submap with the same anchor, and the full one, finished, is fused

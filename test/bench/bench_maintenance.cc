@@ -628,8 +628,13 @@ int run(int argc, char** argv) {
   // The covisibility graphs the fusion candidates came from, at the end (what is left unfused).
   for (const auto& v : variants) {
     if (v->kind != Kind::kOn) continue;
-    std::printf("%s: covisibility edges left (shared / |L_a| / |L_b|):", v->name.c_str());
-    for (const CovisibilityCandidate& e : v->mapper->covisibilityEdges()) {
+    // The strongest only: the town leaves hundreds.
+    constexpr size_t kShown = 20;
+    const std::vector<CovisibilityCandidate> edges = v->mapper->covisibilityEdges();
+    std::printf("%s: %zu covisibility edges left (shared / |L_a| / |L_b|), the strongest:",
+                v->name.c_str(), edges.size());
+    for (size_t i = 0; i < std::min(edges.size(), kShown); ++i) {
+      const CovisibilityCandidate& e = edges[i];
       std::printf(" %lld-%lld %d/%zu/%zu", static_cast<long long>(e.a), static_cast<long long>(e.b),
                   e.shared, e.landmarks_a, e.landmarks_b);
     }

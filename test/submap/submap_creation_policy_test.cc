@@ -138,7 +138,8 @@ TEST(SubmapCreationPolicy, FramesTrackedInAnOlderSubmapStartARevisitSubmap) {
   for (int i = 0; i < 8; ++i) EXPECT_FALSE(renewing.onFrameReference(revisit, other_home));
 
   SubmapCreationPolicyConfig off_config;
-  EXPECT_EQ(off_config.revisit_after_frames, 0);  // off by default
+  EXPECT_EQ(off_config.revisit_after_frames, 10);  // the default
+  off_config.revisit_after_frames = 0;
   SubmapCreationPolicy off(off_config);
   for (int i = 0; i < 20; ++i) EXPECT_FALSE(off.onFrameReference(active, old_home));
   config.revisit_after_frames = -1;

@@ -8,6 +8,9 @@
 //                                            [--json FILE]
 //   build/test/bench/cblox-bench-integrators --only fast      # peak memory of one integrator
 //
+// Exit status: 0; 3 when built without the Open3D peer (every figure but the ratios is
+// printed); 1 or 2 on a data or usage error.
+//
 // Timing: each configuration runs R times (default 3) on a fresh volume; per frame the
 // fastest repetition is kept (interference from other jobs only adds time), and the
 // table gives the median and 95th percentile over the frames.
@@ -346,7 +349,10 @@ int main(int argc, char** argv) {
     }
   }
 #else
-  std::printf("\nOpen3D peer not built (install libopen3d-dev: scripts/setup.sh --bench)\n");
+  // No peer, no ratio: the targets are ratios to Open3D measured in the same run.
+  std::printf(
+      "\nno ratio: the Open3D peer is not built (install libopen3d-dev: "
+      "scripts/setup.sh --bench, then rebuild)\n");
 #endif
   std::printf("\npeak RSS of the whole benchmark process: %.0f MiB\n", peakRssMiB());
   if (!json_path.empty()) {
@@ -367,5 +373,10 @@ int main(int argc, char** argv) {
     }
     std::ofstream(json_path) << json.dump() << "\n";
   }
+#ifndef CBLOX_HAVE_OPEN3D
+  std::fprintf(stderr, "cblox-bench-integrators: the Open3D peer is missing (exit 3)\n");
+  return 3;
+#else
   return 0;
+#endif
 }

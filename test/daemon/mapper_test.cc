@@ -580,6 +580,23 @@ struct RequestLog {
   }
 };
 
+/// `request` came and asks about exactly one pair: subvolumes `older` and `newer` through
+/// their keyframes `older_keyframe` and `newer_keyframe`, sharing `shared` landmarks (< 0:
+/// not checked).
+void expectOnlyPair(const std::optional<FusionCovarianceRequest>& request, SubmapId older,
+                    SubmapId newer, KeyframeId older_keyframe, KeyframeId newer_keyframe,
+                    int shared = -1) {
+  ASSERT_TRUE(request.has_value());
+  ASSERT_EQ(request->pairs.size(), 1u);
+  EXPECT_EQ(request->pairs[0].older, older);
+  EXPECT_EQ(request->pairs[0].newer, newer);
+  EXPECT_EQ(request->pairs[0].older_keyframe, older_keyframe);
+  EXPECT_EQ(request->pairs[0].newer_keyframe, newer_keyframe);
+  if (shared >= 0) {
+    EXPECT_EQ(request->pairs[0].shared_landmarks, shared);
+  }
+}
+
 /// A started tracker-mode mapper logging to `log`, its covariance requests going to
 /// `requests` (both must outlive it); null when it did not start.
 std::unique_ptr<Mapper> startTrackerModeMapper(MapperConfig config, LogLines* log,
@@ -766,13 +783,8 @@ TEST(MapperTest, TrackerModeFusesSubvolumesWhoseCovarianceIsSmallEnough) {
   const size_t blocks_1 = mapper.collection().getSubmap(1)->numBlocks();
 
   const std::optional<FusionCovarianceRequest> request = requests.waitFor(0);
+  expectOnlyPair(request, 0, 1, 100, 102, 50);
   ASSERT_TRUE(request.has_value());
-  ASSERT_EQ(request->pairs.size(), 1u);
-  EXPECT_EQ(request->pairs[0].older, 0);
-  EXPECT_EQ(request->pairs[0].newer, 1);
-  EXPECT_EQ(request->pairs[0].older_keyframe, 100);
-  EXPECT_EQ(request->pairs[0].newer_keyframe, 102);
-  EXPECT_EQ(request->pairs[0].shared_landmarks, 50);
 
   mapper.onCovarianceReply(request->request_id, {FusionCovarianceAnswer{true, "", 2e4}});
   ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(20000)));
@@ -800,13 +812,8 @@ TEST(MapperTest, TrackerModeFusesSubvolumesWhoseCovarianceIsSmallEnough) {
   frameWithPose(8);
   ASSERT_EQ(mapper.collection().size(), 3u);  // 0, 2, 3
   const std::optional<FusionCovarianceRequest> second = requests.waitFor(1);
+  expectOnlyPair(second, 0, 2, 100, 104, 100);  // asked through the anchors
   ASSERT_TRUE(second.has_value());
-  ASSERT_EQ(second->pairs.size(), 1u);
-  EXPECT_EQ(second->pairs[0].older, 0);
-  EXPECT_EQ(second->pairs[0].newer, 2);
-  EXPECT_EQ(second->pairs[0].older_keyframe, 100);  // the anchors
-  EXPECT_EQ(second->pairs[0].newer_keyframe, 104);
-  EXPECT_EQ(second->pairs[0].shared_landmarks, 100);
   mapper.onCovarianceReply(second->request_id, {FusionCovarianceAnswer{true, "", 5e3}});
   ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
   s = mapper.status();
@@ -843,10 +850,8 @@ TEST(MapperTest, MaintenanceTickAsksForPairsFreedAfterTheLastInput) {
   subvolume(101, 2, 0, 100);
   subvolume(102, 4, 0, 100);  // 1 is finished: the pair 0-1 is asked
   const std::optional<FusionCovarianceRequest> first = requests.waitFor(0);
+  expectOnlyPair(first, 0, 1, 100, 101);
   ASSERT_TRUE(first.has_value());
-  ASSERT_EQ(first->pairs.size(), 1u);
-  EXPECT_EQ(first->pairs[0].older, 0);
-  EXPECT_EQ(first->pairs[0].newer, 1);
   subvolume(103, 6, 5000, 5100);  // 2 is finished while that request is in flight
   mapper.onCovarianceReply(first->request_id, {FusionCovarianceAnswer{true, "", 1e5}});
   ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(20000)));
@@ -857,13 +862,7 @@ TEST(MapperTest, MaintenanceTickAsksForPairsFreedAfterTheLastInput) {
     EXPECT_EQ(requests.requests.size(), 1u);
   }
   mapper.maintenanceTick();
-  const std::optional<FusionCovarianceRequest> second = requests.waitFor(1);
-  ASSERT_TRUE(second.has_value());
-  ASSERT_EQ(second->pairs.size(), 1u);
-  EXPECT_EQ(second->pairs[0].older, 0);
-  EXPECT_EQ(second->pairs[0].newer, 2);
-  EXPECT_EQ(second->pairs[0].older_keyframe, 100);
-  EXPECT_EQ(second->pairs[0].newer_keyframe, 102);
+  expectOnlyPair(requests.waitFor(1), 0, 2, 100, 102);
   // A second tick with the request still in flight asks nothing more.
   mapper.maintenanceTick();
   ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));

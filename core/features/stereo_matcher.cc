@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
+#include <vector>
 
 namespace cblox {
 
@@ -120,39 +121,68 @@ RowIndex indexRows(const ExtractedFeatures& right, int rows, double tolerance_fa
   return table;
 }
 
-// Sum of absolute differences between the (2w+1)^2 windows centred at (ua, v) of `a` and
-// (ub, v) of `b`, after removing the brightness offset between them: the difference of the
-// window means (kWindowMean, returned times the window's pixel count so that it stays an exact
-// integer) or of the centre pixels (kCentrePixel, ORB-SLAM2). The windows must fit.
-int64_t offsetFreeSad(const cv::Mat& a, int ua, const cv::Mat& b, int ub, int v, int w,
-                      StereoMatcherConfig::SadReference reference) {
+// Sums of absolute differences between the (2w+1)^2 window centred at (ua, v) of `a` and the
+// windows centred at (ub0 + k, v) of `b`, k = 0 .. count - 1, each after removing the
+// brightness offset between the two windows: the difference of the window means
+// (kWindowMean, each SAD times the window's pixel count so that it stays an exact integer)
+// or of the centre pixels (kCentrePixel, ORB-SLAM2). sads[k] is
+//   sum over the window of |scale * (a - b) + offset_k|,
+// scale = (2w+1)^2 and offset_k = sum(b window k) - sum(a window) for kWindowMean, scale = 1
+// and offset_k = b(v, ub0 + k) - a(v, ua) for kCentrePixel. The left window's sum and its
+// scaled pixels are computed once, the right windows' sums slide along the row. The windows
+// must fit.
+struct SadScratch {
+  std::vector<int> scaled_a;    // the left window times scale, row by row
+  std::vector<int> column_sum;  // b's column sums over the window's rows
+};
+void offsetFreeSadsAlongRow(const cv::Mat& a, int ua, const cv::Mat& b, int ub0, int count, int v,
+                            int w, StereoMatcherConfig::SadReference reference, SadScratch* scratch,
+                            int64_t* sads) {
   const int side = 2 * w + 1;
-  int scale = 1, offset = 0;
-  if (reference == StereoMatcherConfig::SadReference::kCentrePixel) {
-    offset = static_cast<int>(b.at<uint8_t>(v, ub)) - a.at<uint8_t>(v, ua);
-  } else {
-    int sum_a = 0, sum_b = 0;
-    for (int y = v - w; y <= v + w; ++y) {
-      const uint8_t* pa = a.ptr<uint8_t>(y) + ua - w;
-      const uint8_t* pb = b.ptr<uint8_t>(y) + ub - w;
-      for (int x = 0; x < side; ++x) {
-        sum_a += pa[x];
-        sum_b += pb[x];
-      }
+  const bool mean = reference == StereoMatcherConfig::SadReference::kWindowMean;
+  const int scale = mean ? side * side : 1;
+  std::vector<int>& scaled_a = scratch->scaled_a;
+  scaled_a.resize(static_cast<size_t>(side) * static_cast<size_t>(side));
+  int sum_a = 0;
+  for (int y = 0; y < side; ++y) {
+    const uint8_t* pa = a.ptr<uint8_t>(v - w + y) + ua - w;
+    int* row = scaled_a.data() + static_cast<size_t>(y) * static_cast<size_t>(side);
+    for (int x = 0; x < side; ++x) {
+      sum_a += pa[x];
+      row[x] = scale * pa[x];
     }
-    scale = side * side;
-    offset = sum_b - sum_a;
   }
-  int64_t sad = 0;
-  for (int y = v - w; y <= v + w; ++y) {
-    const uint8_t* pa = a.ptr<uint8_t>(y) + ua - w;
-    const uint8_t* pb = b.ptr<uint8_t>(y) + ub - w;
-    int row = 0;
-    for (int x = 0; x < side; ++x)
-      row += std::abs(scale * (static_cast<int>(pa[x]) - pb[x]) + offset);
-    sad += row;
+  // Column sums of `b` over the window's rows, for the columns every window k covers.
+  std::vector<int>& column_sum = scratch->column_sum;
+  int window_sum = 0;
+  if (mean) {
+    const int columns = count + 2 * w;
+    column_sum.assign(static_cast<size_t>(columns), 0);
+    for (int y = v - w; y <= v + w; ++y) {
+      const uint8_t* pb = b.ptr<uint8_t>(y) + ub0 - w;
+      for (int c = 0; c < columns; ++c) column_sum[static_cast<size_t>(c)] += pb[c];
+    }
+    for (int c = 0; c < side; ++c) window_sum += column_sum[static_cast<size_t>(c)];
   }
-  return sad;
+  const int centre_a = a.at<uint8_t>(v, ua);
+  for (int k = 0; k < count; ++k) {
+    const int ub = ub0 + k;
+    if (mean && k > 0) {
+      window_sum +=
+          column_sum[static_cast<size_t>(k + side - 1)] - column_sum[static_cast<size_t>(k - 1)];
+    }
+    const int offset =
+        mean ? window_sum - sum_a : static_cast<int>(b.at<uint8_t>(v, ub)) - centre_a;
+    int64_t sad = 0;
+    for (int y = 0; y < side; ++y) {
+      const uint8_t* pb = b.ptr<uint8_t>(v - w + y) + ub - w;
+      const int* row = scaled_a.data() + static_cast<size_t>(y) * static_cast<size_t>(side);
+      int row_sad = 0;
+      for (int x = 0; x < side; ++x) row_sad += std::abs(row[x] - scale * pb[x] + offset);
+      sad += row_sad;
+    }
+    sads[k] = sad;
+  }
 }
 
 }  // namespace
@@ -175,6 +205,7 @@ StereoDepth matchStereo(const ExtractedFeatures& left, const ExtractedFeatures& 
   const int w = config.sad_half_window;
   const int range = config.sad_search_half_range;
   std::vector<int64_t> sads(static_cast<size_t>(2 * range + 1));
+  SadScratch scratch;
   std::vector<std::pair<int64_t, int>> sad_of_match;  // (best SAD, left index)
   sad_of_match.reserve(n);
 
@@ -219,11 +250,12 @@ StereoDepth matchStereo(const ExtractedFeatures& left, const ExtractedFeatures& 
         ur0 - range - w < 0 || ur0 + range + w >= ir_img.cols) {
       continue;
     }
+    offsetFreeSadsAlongRow(il_img, ul, ir_img, ur0 - range, 2 * range + 1, vl, w,
+                           config.sad_reference, &scratch, sads.data());
     int64_t best_sad = std::numeric_limits<int64_t>::max();
     int best_inc = 0;
     for (int inc = -range; inc <= range; ++inc) {
-      const int64_t sad = offsetFreeSad(il_img, ul, ir_img, ur0 + inc, vl, w, config.sad_reference);
-      sads[static_cast<size_t>(inc + range)] = sad;
+      const int64_t sad = sads[static_cast<size_t>(inc + range)];
       if (sad < best_sad) {
         best_sad = sad;
         best_inc = inc;

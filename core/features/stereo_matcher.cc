@@ -133,6 +133,7 @@ RowIndex indexRows(const ExtractedFeatures& right, int rows, double tolerance_fa
 // must fit.
 struct SadScratch {
   std::vector<int> scaled_a;    // the left window times scale, row by row
+  std::vector<int> scaled_b;    // the strip of b the windows cover times scale, row by row
   std::vector<int> column_sum;  // b's column sums over the window's rows
 };
 void offsetFreeSadsAlongRow(const cv::Mat& a, int ua, const cv::Mat& b, int ub0, int count, int v,
@@ -152,33 +153,39 @@ void offsetFreeSadsAlongRow(const cv::Mat& a, int ua, const cv::Mat& b, int ub0,
       row[x] = scale * pa[x];
     }
   }
-  // Column sums of `b` over the window's rows, for the columns every window k covers.
+  // The strip of `b` every window k covers, scaled, row by row (its multiplications done
+  // once, not once per window: the SAD loop below is then subtractions, which vectorise),
+  // and its column sums over the window's rows.
+  const int columns = count + 2 * w;
+  std::vector<int>& scaled_b = scratch->scaled_b;
   std::vector<int>& column_sum = scratch->column_sum;
-  int window_sum = 0;
-  if (mean) {
-    const int columns = count + 2 * w;
-    column_sum.assign(static_cast<size_t>(columns), 0);
-    for (int y = v - w; y <= v + w; ++y) {
-      const uint8_t* pb = b.ptr<uint8_t>(y) + ub0 - w;
-      for (int c = 0; c < columns; ++c) column_sum[static_cast<size_t>(c)] += pb[c];
+  scaled_b.resize(static_cast<size_t>(side) * static_cast<size_t>(columns));
+  column_sum.assign(static_cast<size_t>(columns), 0);
+  for (int y = 0; y < side; ++y) {
+    const uint8_t* pb = b.ptr<uint8_t>(v - w + y) + ub0 - w;
+    int* row = scaled_b.data() + static_cast<size_t>(y) * static_cast<size_t>(columns);
+    for (int c = 0; c < columns; ++c) {
+      column_sum[static_cast<size_t>(c)] += pb[c];
+      row[c] = scale * pb[c];
     }
-    for (int c = 0; c < side; ++c) window_sum += column_sum[static_cast<size_t>(c)];
   }
+  int window_sum = 0;
+  for (int c = 0; c < side; ++c) window_sum += column_sum[static_cast<size_t>(c)];
   const int centre_a = a.at<uint8_t>(v, ua);
   for (int k = 0; k < count; ++k) {
-    const int ub = ub0 + k;
-    if (mean && k > 0) {
+    if (k > 0) {
       window_sum +=
           column_sum[static_cast<size_t>(k + side - 1)] - column_sum[static_cast<size_t>(k - 1)];
     }
     const int offset =
-        mean ? window_sum - sum_a : static_cast<int>(b.at<uint8_t>(v, ub)) - centre_a;
+        mean ? window_sum - sum_a : static_cast<int>(b.at<uint8_t>(v, ub0 + k)) - centre_a;
     int64_t sad = 0;
     for (int y = 0; y < side; ++y) {
-      const uint8_t* pb = b.ptr<uint8_t>(v - w + y) + ub - w;
-      const int* row = scaled_a.data() + static_cast<size_t>(y) * static_cast<size_t>(side);
+      const int* ra = scaled_a.data() + static_cast<size_t>(y) * static_cast<size_t>(side);
+      const int* rb = scaled_b.data() + static_cast<size_t>(y) * static_cast<size_t>(columns) +
+                      static_cast<size_t>(k);
       int row_sad = 0;
-      for (int x = 0; x < side; ++x) row_sad += std::abs(row[x] - scale * pb[x] + offset);
+      for (int x = 0; x < side; ++x) row_sad += std::abs(ra[x] - rb[x] + offset);
       sad += row_sad;
     }
     sads[k] = sad;

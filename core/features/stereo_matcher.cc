@@ -128,9 +128,10 @@ RowIndex indexRows(const ExtractedFeatures& right, int rows, double tolerance_fa
 // or of the centre pixels (kCentrePixel, ORB-SLAM2). sads[k] is
 //   sum over the window of |scale * (a - b) + offset_k|,
 // scale = (2w+1)^2 and offset_k = sum(b window k) - sum(a window) for kWindowMean, scale = 1
-// and offset_k = b(v, ub0 + k) - a(v, ua) for kCentrePixel. The left window's sum and its
-// scaled pixels are computed once, the right windows' sums slide along the row. The windows
-// must fit.
+// and offset_k = b(v, ub0 + k) - a(v, ua) for kCentrePixel. The left window (its sum and
+// scaled pixels) and the strip of `b` all the windows cover (scaled, and its column sums) are
+// computed once; the right windows' sums slide along the row. The same integers as summing
+// each pair of windows afresh. The windows must fit.
 struct SadScratch {
   std::vector<int> scaled_a;    // the left window times scale, row by row
   std::vector<int> scaled_b;    // the strip of b the windows cover times scale, row by row

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <random>
 #include <tuple>
 
 #include <gtest/gtest.h>
@@ -113,6 +114,53 @@ TEST(FastGridDetectorTest, EqualsOneWholeAreaPassFilteredPerCell) {
   }
   // The minimum threshold was used somewhere (textureless cells exist), so it is tested.
   EXPECT_GT(levels_with_fallback, 0u);
+}
+
+TEST(FastGridDetectorTest, WeakCellsBesideStrongOnesEqualTheWholeAreaPass) {
+  // Cells of strong texture (corners at the initial threshold) beside cells of faint texture
+  // (corners only at the minimum threshold) and flat ones: the corners along the borders
+  // between them depend on scores across the border (non-maximum suppression).
+  std::mt19937 rng(11);
+  for (const cv::Size size : {cv::Size(211, 157), cv::Size(300, 200), cv::Size(97, 64)}) {
+    cv::Mat image(size, CV_8UC1);
+    // Mostly faint, so that faint cells border faint cells and strong ones.
+    std::discrete_distribution<int> kind({2, 6, 2});
+    for (int y0 = 0; y0 < size.height; y0 += 23) {
+      for (int x0 = 0; x0 < size.width; x0 += 27) {
+        const cv::Rect patch = cv::Rect(x0, y0, 27, 23) & cv::Rect(cv::Point(0, 0), size);
+        const int k = kind(rng);
+        if (k == 0) cv::randu(image(patch), 0, 256);     // strong
+        if (k == 1) cv::randu(image(patch), 100, 116);   // faint: scores below 16
+        if (k == 2) image(patch).setTo(cv::Scalar(90));  // flat
+      }
+    }
+    for (const auto& [initial, minimum] :
+         {std::pair(20, 7), std::pair(12, 5), std::pair(7, 7), std::pair(7, 20)}) {
+      FastGridConfig p;
+      p.initial_threshold = initial;
+      p.min_threshold = minimum;
+      FastGridDetector detector;
+      const std::vector<LevelCorner> corners = detector.detect(image, p);
+      const std::map<Key, float> reference = wholeAreaReference(image, p);
+      EXPECT_EQ(asMap(corners), reference) << size << " thresholds " << initial << "/" << minimum;
+      EXPECT_GT(corners.size(), 10u);
+      // Ordered by cell (row-major), then by row and column within a cell.
+      const int e = p.edge_threshold;
+      const int area_w = size.width - 2 * e + 6, area_h = size.height - 2 * e + 6;
+      const int n_cols = std::max(1, area_w / p.cell_size);
+      const int n_rows = std::max(1, area_h / p.cell_size);
+      const int cw = static_cast<int>(std::ceil(static_cast<float>(area_w) / n_cols));
+      const int ch = static_cast<int>(std::ceil(static_cast<float>(area_h) / n_rows));
+      const auto rank = [&](const LevelCorner& c) {
+        const int col = std::min(n_cols - 1, (c.x - e) / cw);
+        const int row = std::min(n_rows - 1, (c.y - e) / ch);
+        return std::tuple(row * n_cols + col, c.y, c.x);
+      };
+      for (size_t i = 1; i < corners.size(); ++i) {
+        ASSERT_LT(rank(corners[i - 1]), rank(corners[i])) << "corner " << i;
+      }
+    }
+  }
 }
 
 TEST(FastGridDetectorTest, AgreesWithOrbSlam2sPerCellDetectionAwayFromCellOverlaps) {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 
 #include <opencv2/core.hpp>
 
@@ -28,6 +29,10 @@ class OrbOrientation {
 
  private:
   std::array<int, kOrbHalfPatchSize + 1> umax_{};
+  // Byte masks of each row's extent for the vectorised sums (see angleDeg).
+  using Mask = std::array<uint8_t, 16>;
+  alignas(16) std::array<Mask, kOrbHalfPatchSize + 1> mask_lo_{};
+  alignas(16) std::array<Mask, kOrbHalfPatchSize + 1> mask_hi_{};
 };
 
 }  // namespace cblox

@@ -67,6 +67,21 @@ TEST(OrbOrientationTest, AnglesEqualOpenCvOrbsOnItsOwnKeypoints) {
   }
 }
 
+TEST(OrbOrientationTest, AnglesEqualOpenCvOrbsOnSaturatedNoise) {
+  // Pixels of 0 and 255 only: the largest moments the sums can meet.
+  cv::Mat image(240, 320, CV_8UC1);
+  cv::randu(image, 0, 2);
+  image *= 255;
+  std::vector<cv::KeyPoint> keypoints;
+  singleLevelOrb()->detect(image, keypoints);
+  ASSERT_GT(keypoints.size(), 100u);
+  const OrbOrientation orientation;
+  for (const cv::KeyPoint& kp : keypoints) {
+    const float angle = orientation.angleDeg(image, cvRound(kp.pt.x), cvRound(kp.pt.y));
+    ASSERT_EQ(angle, kp.angle) << kp.pt;
+  }
+}
+
 // Computes OpenCV's descriptors of `ours` (keypoints of one level, level coordinates) on the
 // level image and checks that OpenCV keeps every keypoint, position and angle unchanged.
 cv::Mat openCvDescriptors(const cv::Mat& level, const std::vector<cv::KeyPoint>& ours) {

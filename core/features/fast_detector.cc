@@ -85,27 +85,6 @@ __m128i arcStrength(const __m128i (&e)[16]) {
   return best;
 }
 
-// A necessary condition for a corner at threshold t (`t` in every lane): an arc of 9 of the
-// 16 circle pixels covers two neighbouring cardinal points (circle pixels 0, 4, 8, 12), so some
-// two neighbouring cardinal points are both brighter than centre + t or both darker than
-// centre - t. False for all 16 pixels at `p` means none is a corner (OpenCV's FAST makes the
-// same pre-test); it reads 4 of the 16 circle pixels.
-bool mayHoldCorner16(const uint8_t* p, const std::array<int, 16>& offset, __m128i t) {
-  const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
-  __m128i darker[4], brighter[4];
-  for (size_t i = 0; i < 4; ++i) {
-    const __m128i q = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + offset[4 * i]));
-    darker[i] = _mm_subs_epu8(_mm_subs_epu8(v, q), t);  // non-zero iff q < centre - t
-    brighter[i] = _mm_subs_epu8(_mm_subs_epu8(q, v), t);
-  }
-  __m128i any = _mm_setzero_si128();
-  for (size_t i = 0; i < 4; ++i) {
-    any = _mm_max_epu8(any, _mm_min_epu8(darker[i], darker[(i + 1) & 3]));
-    any = _mm_max_epu8(any, _mm_min_epu8(brighter[i], brighter[(i + 1) & 3]));
-  }
-  return _mm_movemask_epi8(_mm_cmpeq_epi8(any, _mm_setzero_si128())) != 0xFFFF;
-}
-
 __m128i strength16(const uint8_t* p, const std::array<int, 16>& offset) {
   const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
   __m128i darker[16], brighter[16];
@@ -127,10 +106,6 @@ void scoreRowSse2(const uint8_t* row, int w, const std::array<int, 16>& offset, 
   for (int next = 3; next < w - 3;) {
     // The last block overlaps the previous one; its first lanes are done already.
     const int start = std::min(next, w - 3 - 16);
-    if (!mayHoldCorner16(row + start, offset, t)) {
-      next = start + 16;
-      continue;
-    }
     const __m128i a = strength16(row + start, offset);
     // Lanes with a > t are corners; their score is a - 1 (> threshold - 1).
     const int not_corner = _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(a, t), zero));
@@ -163,23 +138,6 @@ __attribute__((target("avx2"))) __m256i arcStrengthAvx2(const __m256i (&e)[16]) 
   return best;
 }
 
-// mayHoldCorner16 for 32 pixels.
-__attribute__((target("avx2"))) bool mayHoldCorner32(__m256i v, const uint8_t* p,
-                                                     const std::array<int, 16>& offset, __m256i t) {
-  __m256i darker[4], brighter[4];
-  for (size_t i = 0; i < 4; ++i) {
-    const __m256i q = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + offset[4 * i]));
-    darker[i] = _mm256_subs_epu8(_mm256_subs_epu8(v, q), t);
-    brighter[i] = _mm256_subs_epu8(_mm256_subs_epu8(q, v), t);
-  }
-  __m256i any = _mm256_setzero_si256();
-  for (size_t i = 0; i < 4; ++i) {
-    any = _mm256_max_epu8(any, _mm256_min_epu8(darker[i], darker[(i + 1) & 3]));
-    any = _mm256_max_epu8(any, _mm256_min_epu8(brighter[i], brighter[(i + 1) & 3]));
-  }
-  return _mm256_testz_si256(any, any) == 0;
-}
-
 __attribute__((target("avx2"))) void scoreRowAvx2(const uint8_t* row, int w,
                                                   const std::array<int, 16>& offset, int threshold,
                                                   uint8_t* scores) {
@@ -190,10 +148,6 @@ __attribute__((target("avx2"))) void scoreRowAvx2(const uint8_t* row, int w,
     const int start = std::min(next, w - 3 - 32);
     const uint8_t* p = row + start;
     const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
-    if (!mayHoldCorner32(v, p, offset, t)) {
-      next = start + 32;
-      continue;
-    }
     __m256i darker[16], brighter[16];
     for (size_t k = 0; k < 16; ++k) {
       const __m256i q = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + offset[k]));

@@ -13,11 +13,8 @@ std::vector<LevelCorner> FastGridDetector::detect(const cv::Mat& level,
   // Corners lie in [e, W - e) x [e, H - e); FAST needs a 3-pixel ring around a candidate, so
   // it runs on the area grown by 3 pixels (ORB-SLAM2's [e - 3, W - e + 3)).
   const cv::Rect area(e - 3, e - 3, level.cols - 2 * e + 6, level.rows - 2 * e + 6);
-  // A cell falls back to the minimum threshold only when it has no corner at the initial one,
-  // so the first pass runs at the higher of the two (the initial one when it is higher).
-  const bool fallback = params.initial_threshold > params.min_threshold;
-  fast_.detect(level(area), fallback ? params.initial_threshold : params.min_threshold,
-               &fast_corners_);
+  fast_.detect(level(area), params.min_threshold, &fast_corners_);
+  if (fast_corners_.empty()) return corners;
 
   // Cells as ORB-SLAM2 lays them out: cell (i, j) owns corners with
   // x in [e + j * cell_w, e + (j + 1) * cell_w) (the last one up to W - e), likewise y.
@@ -33,9 +30,14 @@ std::vector<LevelCorner> FastGridDetector::detect(const cv::Mat& level,
     return static_cast<size_t>(cy * n_cols + cx);
   };
 
-  // Counting sort of the first pass's corners by cell (row-major order kept within a cell).
+  // Counting sort by cell; a cell is "strong" when it has a corner at the initial threshold.
   start_.assign(n_cells + 1, 0);
-  for (const FastCorner& c : fast_corners_) ++start_[cellOf(c) + 1];
+  strong_.assign(n_cells, 0);
+  for (const FastCorner& c : fast_corners_) {
+    const size_t cell = cellOf(c);
+    ++start_[cell + 1];
+    if (c.score >= params.initial_threshold) strong_[cell] = 1;
+  }
   for (size_t c = 0; c < n_cells; ++c) start_[c + 1] += start_[c];
   order_.resize(fast_corners_.size());
   fill_.assign(start_.begin(), start_.end() - 1);
@@ -44,42 +46,13 @@ std::vector<LevelCorner> FastGridDetector::detect(const cv::Mat& level,
   }
   corners.reserve(fast_corners_.size());
   for (size_t c = 0; c < n_cells; ++c) {
-    if (start_[c] == start_[c + 1]) {
-      if (fallback)
-        appendWeakCell(level, area, c, n_cols, n_rows, cell_w, cell_h, params, &corners);
-      continue;
-    }
     for (int k = start_[c]; k < start_[c + 1]; ++k) {
       const FastCorner& fc = fast_corners_[static_cast<size_t>(order_[static_cast<size_t>(k)])];
+      if (strong_[c] && fc.score < params.initial_threshold) continue;
       corners.push_back({fc.x + area.x, fc.y + area.y, static_cast<float>(fc.score)});
     }
   }
   return corners;
-}
-
-void FastGridDetector::appendWeakCell(const cv::Mat& level, const cv::Rect& area, size_t cell,
-                                      int n_cols, int n_rows, int cell_w, int cell_h,
-                                      const FastGridConfig& params,
-                                      std::vector<LevelCorner>* corners) {
-  // The pixels the cell owns, in area coordinates (corners are scored in [3, size - 3)).
-  const int cx = static_cast<int>(cell % static_cast<size_t>(n_cols));
-  const int cy = static_cast<int>(cell / static_cast<size_t>(n_cols));
-  const int x0 = 3 + cx * cell_w, y0 = 3 + cy * cell_h;
-  const int x1 = cx == n_cols - 1 ? area.width - 3 : std::min(area.width - 3, x0 + cell_w);
-  const int y1 = cy == n_rows - 1 ? area.height - 3 : std::min(area.height - 3, y0 + cell_h);
-  if (x0 >= x1 || y0 >= y1) return;
-  // The window adds the 3-pixel ring FAST reads and one more pixel, so that the scores of the
-  // owned pixels' 8 neighbours (non-maximum suppression) are those of the whole-area pass.
-  constexpr int kGrow = 4;
-  const cv::Rect window(std::max(0, x0 - kGrow), std::max(0, y0 - kGrow),
-                        std::min(area.width, x1 + kGrow) - std::max(0, x0 - kGrow),
-                        std::min(area.height, y1 + kGrow) - std::max(0, y0 - kGrow));
-  fast_.detect(level(area)(window), params.min_threshold, &weak_corners_);
-  for (const FastCorner& fc : weak_corners_) {
-    const int x = fc.x + window.x, y = fc.y + window.y;  // area coordinates
-    if (x < x0 || x >= x1 || y < y0 || y >= y1) continue;
-    corners->push_back({x + area.x, y + area.y, static_cast<float>(fc.score)});
-  }
 }
 
 }  // namespace cblox

@@ -34,20 +34,13 @@ struct FastGridConfig {
 /// least one); a cell keeps its FAST corners (9-16, non-maximum suppression) of score >=
 /// initial_threshold, or, when it has none, its corners of score >= min_threshold.
 ///
-/// The result is that of one FAST pass (FastDetector, identical to cv::FAST) at min_threshold
-/// over the whole detection area followed by a per-cell score filter. This gives the same
-/// corners and scores as ORB-SLAM2's per-cell cv::FAST calls at the two thresholds (a FAST
-/// score is the largest threshold at which the point is still a corner, so "corner at t" ==
-/// "score >= t", and a corner of score >= t can only be suppressed by a neighbour of higher
-/// score, itself a corner at t), except that non-maximum suppression also works across cell
-/// borders, so the duplicate corners ORB-SLAM2 finds in the 6-pixel cell overlaps do not occur.
-///
-/// Implementation: one FAST pass at initial_threshold over the whole area (by the argument
-/// above, its corners are the min_threshold pass's corners of score >= initial_threshold),
-/// then a min_threshold pass over each cell without corners, on the cell grown by 4 pixels
-/// (FAST's 3-pixel ring and the suppression's neighbours), so that every score the cell's
-/// corners depend on is the whole-area pass's. The low-threshold pass, which finds corners
-/// almost everywhere on textured images, runs only where it is needed.
+/// Implementation: one FAST pass (FastDetector, identical to cv::FAST) at min_threshold over
+/// the whole detection area, then a per-cell score filter. This gives the same corners and
+/// scores as ORB-SLAM2's per-cell cv::FAST calls at the two thresholds (a FAST score is the
+/// largest threshold at which the point is still a corner, so "corner at t" == "score >= t",
+/// and a corner of score >= t can only be suppressed by a neighbour of higher score, itself a
+/// corner at t), except that non-maximum suppression also works across cell borders, so the
+/// duplicate corners ORB-SLAM2 finds in the 6-pixel cell overlaps do not occur.
 ///
 /// Returns corners ordered by cell (row-major) and, within a cell, by row then column. A level
 /// smaller than 2e + 1 in either direction gives no corners.
@@ -57,14 +50,10 @@ class FastGridDetector {
   std::vector<LevelCorner> detect(const cv::Mat& level, const FastGridConfig& params);
 
  private:
-  // Appends the corners of `cell` at min_threshold (a cell the first pass left empty).
-  void appendWeakCell(const cv::Mat& level, const cv::Rect& area, size_t cell, int n_cols,
-                      int n_rows, int cell_w, int cell_h, const FastGridConfig& params,
-                      std::vector<LevelCorner>* corners);
-
   FastDetector fast_;
-  std::vector<FastCorner> fast_corners_, weak_corners_;
+  std::vector<FastCorner> fast_corners_;
   std::vector<int> start_, fill_, order_;
+  std::vector<char> strong_;
 };
 
 }  // namespace cblox

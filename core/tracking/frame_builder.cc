@@ -124,13 +124,17 @@ std::shared_ptr<FrameFeatures> FrameBuilder::finish(ExtractedFeatures&& extracte
   f->descriptors = std::move(extracted.descriptors);
   f->right_u = depth.right_u;
   f->depth = depth.depth;
-  index(f.get());
+  buildGrid(f.get());
   return f;
 }
 
-void FrameBuilder::index(FrameFeatures* f) const {
+void FrameBuilder::buildGrid(FrameFeatures* f) const {
   f->grid = FeatureGrid(f->keypoints, camera_.intrinsics.width, camera_.intrinsics.height,
                         config_.grid_cols, config_.grid_rows);
+}
+
+void FrameBuilder::index(FrameFeatures* f) const {
+  buildGrid(f);
   if (vocabulary_ != nullptr) vocabulary_->transform(f->descriptors, &f->bow, &f->feature_vector);
 }
 

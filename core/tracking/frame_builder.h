@@ -28,14 +28,15 @@ struct FrameBuilderConfig {
 };
 
 /// Builds the features of a frame: ORB features of the left image, their depth from stereo
-/// matching against the right image (or from a registered depth image, RGB-D mode), the
-/// feature grid, and the BoW vectors when a vocabulary is given.
+/// matching against the right image (or from a registered depth image, RGB-D mode) and the
+/// feature grid. The BoW vectors are left empty: the Tracker computes them when it needs
+/// them (most frames never do); `index` computes them for features restored from a file.
 /// Thread-safety: not thread-safe (one tracking thread calls it); it owns the worker thread
 /// that extracts right images.
 class FrameBuilder {
  public:
-  /// Throws std::invalid_argument for an invalid config or camera. `vocabulary` may be null
-  /// (then bow / feature_vector stay empty) and must outlive the builder.
+  /// Throws std::invalid_argument for an invalid config or camera. `vocabulary` (for
+  /// `index`) may be null (then bow / feature_vector stay empty) and must outlive the builder.
   FrameBuilder(const TrackingCamera& camera, const FrameBuilderConfig& config,
                const BinaryVocabulary* vocabulary);
   ~FrameBuilder();
@@ -58,6 +59,7 @@ class FrameBuilder {
  private:
   std::shared_ptr<FrameFeatures> finish(ExtractedFeatures&& left, const StereoDepth& depth);
   void checkSize(int width, int height, const char* what) const;
+  void buildGrid(FrameFeatures* features) const;
   void rightWorker();
 
   TrackingCamera camera_;

@@ -30,7 +30,7 @@ SlamSystem::SlamSystem(const TrackingCamera& camera, const SlamSystemConfig& con
       builder_(camera, config.frames, vocabulary),
       local_mapper_(&map_, camera, builder_.pyramid(), config.local_mapping),
       tracker_(&map_, camera, builder_.pyramid(), config.tracker,
-               vocabulary != nullptr ? &database_ : nullptr, &sink_) {
+               vocabulary != nullptr ? &database_ : nullptr, &sink_, vocabulary) {
   if (vocabulary != nullptr && config.loop_closing_enabled) {
     loop_closer_ = std::make_unique<LoopCloser>(&map_, &database_, camera, builder_.pyramid(),
                                                 config.loop_closing);

@@ -52,14 +52,20 @@ const char* keyframeReasonName(KeyframeReason reason) {
 }
 
 Tracker::Tracker(SparseMap* map, const TrackingCamera& camera, const ScalePyramid& pyramid,
-                 const TrackerConfig& config, const KeyframeDatabase* database, KeyframeSink* sink)
+                 const TrackerConfig& config, const KeyframeDatabase* database, KeyframeSink* sink,
+                 const BinaryVocabulary* vocabulary)
     : map_(map),
       camera_(camera),
       pyramid_(pyramid),
       config_(config),
       database_(database),
-      sink_(sink) {
+      sink_(sink),
+      vocabulary_(vocabulary) {
   if (map == nullptr) throw std::invalid_argument("Tracker: map is null");
+  if (database != nullptr && vocabulary == nullptr) {
+    throw std::invalid_argument(
+        "Tracker: a keyframe database (relocalization) needs the vocabulary of its BoW vectors");
+  }
   if (std::string e = camera.validate(); !e.empty()) {
     throw std::invalid_argument("Tracker: camera: " + e);
   }
@@ -69,10 +75,11 @@ Tracker::Tracker(SparseMap* map, const TrackingCamera& camera, const ScalePyrami
 }
 
 TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
-                              std::shared_ptr<const FrameFeatures> features,
+                              std::shared_ptr<FrameFeatures> features,
                               const std::optional<Transformationd>& T_C_G_initial) {
   const auto start = std::chrono::steady_clock::now();
   TrackingResult result;
+  current_features_ = features;
   current_ = Frame(frame_id, timestamp_ns, std::move(features));
   current_index_ = ++frames_processed_;
   KeyframeReason create_keyframe = KeyframeReason::kNone;
@@ -121,6 +128,7 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
     }
   }
   if (state_ == TrackingState::kNotInitialized && result.reason.empty()) {
+    computeBow();  // before the first keyframe is shared (not under the map's lock)
     std::unique_lock<std::shared_mutex> lock(map_->mutex());
     if (initialize(T_C_G_initial, &result)) {
       state_ = TrackingState::kOk;
@@ -129,6 +137,7 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
       result.T_C_G = current_.T_C_G;
     }
   } else if (create_keyframe != KeyframeReason::kNone) {
+    computeBow();
     std::unique_lock<std::shared_mutex> lock(map_->mutex());
     result.new_keyframe = createKeyframe();
     if (result.new_keyframe != nullptr) result.keyframe_reason = create_keyframe;
@@ -143,6 +152,7 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
     result.reference_keyframe = reference_keyframe_->id;
   }
   last_frame_ = current_;
+  current_features_.reset();  // shared from here on (last frame, maybe a keyframe)
   if (current_.T_C_G && reference_keyframe_ != nullptr) {
     std::shared_lock<std::shared_mutex> lock(map_->mutex());
     last_reference_ = reference_keyframe_;
@@ -153,6 +163,13 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
   result.time_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+void Tracker::computeBow() {
+  if (vocabulary_ == nullptr || current_features_ == nullptr) return;
+  FrameFeatures& f = *current_features_;
+  if (!f.bow.empty() || f.descriptors.empty()) return;
+  vocabulary_->transform(f.descriptors, &f.bow, &f.feature_vector);
 }
 
 bool Tracker::initialize(const std::optional<Transformationd>& T_C_G_initial,
@@ -257,14 +274,14 @@ std::string Tracker::frameSearchFailure(const FrameSearchCounts& c) {
            (inliers >= 0 ? ", " + std::to_string(inliers) + " inliers" : std::string());
   };
   return "too few matches with the last frame (" + counts(c.motion_matches, c.motion_inliers) +
-         ") and the reference keyframe (" + counts(c.reference_matches, c.reference_inliers) +
-         ")";
+         ") and the reference keyframe (" + counts(c.reference_matches, c.reference_inliers) + ")";
 }
 
 bool Tracker::trackReferenceKeyframe(int* matches, int* inliers) {
   if (reference_keyframe_ == nullptr) return false;
   current_.clearMatches();
   current_.T_C_G = last_frame_.T_C_G ? *last_frame_.T_C_G : reference_keyframe_->T_C_G();
+  computeBow();
   int n = 0;
   if (!current_.features->feature_vector.empty() &&
       !reference_keyframe_->features().feature_vector.empty()) {
@@ -515,7 +532,9 @@ void Tracker::resumeLost() {
 }
 
 bool Tracker::relocalize() {
-  if (database_ == nullptr || current_.features->bow.empty()) return false;
+  if (database_ == nullptr) return false;
+  computeBow();
+  if (current_.features->bow.empty()) return false;
   const std::vector<PlaceCandidate> candidates = database_->queryRelocalizationCandidates(
       current_.features->bow, static_cast<size_t>(config_.max_relocalization_candidates));
   const FrameFeatures& f = *current_.features;

@@ -13,6 +13,7 @@
 #include "core/tracking/sparse_map.h"
 #include "core/tracking/tracker_config.h"
 #include "core/tracking/tracking_camera.h"
+#include "core/vocabulary/binary_vocabulary.h"
 #include "core/vocabulary/keyframe_database.h"
 
 namespace cblox {
@@ -74,18 +75,26 @@ struct TrackingResult {
 /// shared lock while reading the map and the exclusive lock to insert a keyframe.
 class Tracker {
  public:
-  /// `map` must outlive the tracker; `database` (may be null: no relocalization) and `sink`
-  /// (may be null: keyframes are only added to the map) too. Throws std::invalid_argument
-  /// for an invalid camera or config.
+  /// `map` must outlive the tracker; `database` (may be null: no relocalization), `sink`
+  /// (may be null: keyframes are only added to the map) and `vocabulary` (may be null: no
+  /// BoW vectors, so no relocalization and the reference keyframe is searched by projection)
+  /// too. Throws std::invalid_argument for an invalid camera or config, or for a database
+  /// without a vocabulary.
   Tracker(SparseMap* map, const TrackingCamera& camera, const ScalePyramid& pyramid,
-          const TrackerConfig& config, const KeyframeDatabase* database, KeyframeSink* sink);
+          const TrackerConfig& config, const KeyframeDatabase* database, KeyframeSink* sink,
+          const BinaryVocabulary* vocabulary = nullptr);
 
-  /// Tracks one frame (features from a FrameBuilder; bow needed for relocalization and
-  /// reference-keyframe tracking). `frame_id` and `timestamp_ns` must increase.
-  /// `T_C_G_initial`: the pose of the first keyframe when this frame initialises the map
-  /// (identity when absent).
+  /// Tracks one frame (features from a FrameBuilder). `frame_id` and `timestamp_ns` must
+  /// increase. `T_C_G_initial`: the pose of the first keyframe when this frame initialises the
+  /// map (identity when absent).
+  /// BoW vectors are computed lazily, as ORB-SLAM2 does: the tracker fills `features->bow` and
+  /// `feature_vector` (with the vocabulary, when they are empty) only when it needs them: the
+  /// reference-keyframe search, relocalization, and before the frame becomes a keyframe (so
+  /// every keyframe has them before other threads see it). A frame the motion model tracks
+  /// and that makes no keyframe never pays for them (1.3 ms with the default vocabulary).
+  /// The features must not be shared with another thread while the call runs.
   TrackingResult track(uint64_t frame_id, int64_t timestamp_ns,
-                       std::shared_ptr<const FrameFeatures> features,
+                       std::shared_ptr<FrameFeatures> features,
                        const std::optional<Transformationd>& T_C_G_initial = std::nullopt);
 
   /// After the map was restored from a snapshot (SparseMap::restore): the tracker is lost in
@@ -98,6 +107,8 @@ class Tracker {
 
  private:
   bool initialize(const std::optional<Transformationd>& T_C_G_initial, TrackingResult* result);
+  // The current frame's BoW vectors, when there is a vocabulary and they are not computed.
+  void computeBow();
   /// Match counts of the searches that track a frame before the local map: the last frame at
   /// the velocity's pose (matches in its last window, inliers after the pose), the reference
   /// keyframe (by BoW, or projected without a vocabulary). -1: not tried. For the reason
@@ -135,6 +146,7 @@ class Tracker {
   TrackerConfig config_;
   const KeyframeDatabase* database_;
   KeyframeSink* sink_;
+  const BinaryVocabulary* vocabulary_;
 
   TrackingState state_ = TrackingState::kNotInitialized;
   uint64_t frames_processed_ = 0;  // counter behind the keyframe decision
@@ -146,6 +158,8 @@ class Tracker {
   bool ever_relocalized_ = false;
   int map_change_index_ = 0;
   Frame current_;
+  // current_.features, writable for computeBow() until the frame is shared as a keyframe.
+  std::shared_ptr<FrameFeatures> current_features_;
   Frame last_frame_;
   std::optional<Transformationd> velocity_;  // T_Ccur_Clast
   Keyframe* reference_keyframe_ = nullptr;

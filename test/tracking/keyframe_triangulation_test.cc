@@ -497,6 +497,9 @@ HallPair renderHallPair(const SourceConfig& options, size_t first, size_t second
   FrameBuilder builder(h.camera, FrameBuilderConfig{}, &vocabulary);
   h.f0 = builder.fromStereo(h.first.left, h.first.right);
   h.f1 = builder.fromStereo(h.second.left, h.second.right);
+  // Keyframes carry BoW vectors (the tracker computes them before making a keyframe).
+  builder.index(h.f0.get());
+  builder.index(h.f1.get());
   h.pyramid = builder.pyramid();
   return h;
 }

@@ -138,6 +138,55 @@ TEST(TrackerSimTest, TracksTheRoomLoopCloseToTheExactPoses) {
   EXPECT_GT(s.keyframes, 2);
 }
 
+// BoW vectors are lazy: every keyframe has them (computed before other threads see it), a
+// frame the motion model tracked without making a keyframe has none; the second frame (no
+// velocity yet) is searched against the reference keyframe by BoW, so it has them.
+TEST(TrackerSimTest, BowVectorsOnlyWhereTheTrackerNeedsThem) {
+  std::string error;
+  const auto vocabulary = BinaryVocabulary::load(CBLOX_DEFAULT_VOCABULARY, &error);
+  ASSERT_TRUE(vocabulary.has_value()) << error;
+  SourceConfig options;
+  options.trajectory = "loop";
+  options.max_frames = 60;
+  std::unique_ptr<FrameSource> source = openFrameSource("sim:room", options, &error);
+  ASSERT_NE(source, nullptr) << error;
+  const RectifiedStereoCalibration& calibration = *source->info().stereo;
+  const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
+  FrameBuilder builder(camera, FrameBuilderConfig{}, &*vocabulary);
+  SparseMap map;
+  KeyframeDatabase database;
+  EXPECT_THROW(Tracker(&map, camera, builder.pyramid(), TrackerConfig{}, &database, nullptr),
+               std::invalid_argument);  // a database without the vocabulary of its vectors
+  TrackerConfig config;
+  config.min_frames_between_keyframes = 8;  // keyframes without a local mapper
+  config.max_frames_between_keyframes = 8;
+  Tracker tracker(&map, camera, builder.pyramid(), config, nullptr, nullptr, &*vocabulary);
+  CaptureFrame frame;
+  int index = 0, keyframes = 0, without_bow = 0;
+  while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+    const std::shared_ptr<FrameFeatures> features = builder.fromStereo(frame.left, frame.right);
+    EXPECT_TRUE(features->bow.empty());  // the builder leaves them to the tracker
+    const TrackingResult r = tracker.track(static_cast<uint64_t>(frame.frame_id),
+                                           frame.timestamp_ns, features, frame.T_G_C->inverse());
+    ASSERT_EQ(r.state, TrackingState::kOk) << "frame " << frame.frame_id << ": " << r.reason;
+    const bool keyframe = r.new_keyframe != nullptr || r.initialized;
+    keyframes += keyframe;
+    if (keyframe || index == 1) {
+      EXPECT_FALSE(features->bow.empty()) << "frame " << index;
+      EXPECT_FALSE(features->feature_vector.empty()) << "frame " << index;
+    } else {
+      EXPECT_TRUE(features->bow.empty()) << "frame " << index;
+      without_bow += features->bow.empty();
+    }
+    ++index;
+  }
+  EXPECT_EQ(index, 60);
+  EXPECT_GE(keyframes, 3);
+  EXPECT_GT(without_bow, 40);
+  std::shared_lock<std::shared_mutex> lock(map.mutex());
+  for (const Keyframe* k : map.keyframes()) EXPECT_FALSE(k->features().bow.empty());
+}
+
 // Each keyframe says which condition made it: with min_frames_between_keyframes and
 // max_frames_between_keyframes both 8 ("mapper idle" then never holds before the frame
 // count does), the room's keyframes come from the frame count (exactly 8 frames after the
@@ -298,8 +347,8 @@ TEST(TrackerSimTest, LostFrameReasonGivesTheSearchesCounts) {
           << q.z() << " " << q.w() << "\n";
     }
   }
-  const RunStats s = runTracker("sim:room", path.string(), 24, false, TrackerConfig{}, {},
-                                nullptr, /*fail_on_lost=*/false);
+  const RunStats s = runTracker("sim:room", path.string(), 24, false, TrackerConfig{}, {}, nullptr,
+                                /*fail_on_lost=*/false);
   std::filesystem::remove(path);
   ASSERT_EQ(s.frames, 24);
   EXPECT_EQ(s.ok, 20);
@@ -355,31 +404,30 @@ TEST(TrackerSimTest, CulledKeyframesFollowTheirAncestorInThePublishedPoses) {
   LocalMapperConfig culling;
   culling.cull_keyframes = true;
   size_t culled_checked = 0;
-  const RunStats s =
-      runTracker("sim:room", "loop", 120, true, tracking, culling,
-                 [&](const SparseMap& map, const RunStats& run) {
-                   std::shared_lock<std::shared_mutex> lock(map.mutex());
-                   for (const std::unique_ptr<Keyframe>& k : map.allKeyframes()) {
-                     if (!k->bad()) continue;
-                     const std::optional<KeyframeAncestor> a = SparseMap::goodAncestor(k.get());
-                     ASSERT_TRUE(a.has_value()) << "keyframe " << k->id;
-                     const auto published = run.published.find(k->id);
-                     const auto ancestor = run.published.find(a->ancestor->id);
-                     // Never moved since the cull (its ancestor neither): nothing to follow.
-                     if (ancestor == run.published.end()) continue;
-                     if (published == run.published.end()) continue;  // never published
-                     const Transformationd expected = a->ancestor->T_G_C() * a->T_A_K;
-                     EXPECT_TRUE(published->second.isApprox(expected, 1e-9)) << "keyframe " << k->id;
-                     EXPECT_TRUE(k->T_G_C().isApprox(expected, 1e-9)) << "keyframe " << k->id;
-                     ++culled_checked;
-                   }
-                 });
+  const RunStats s = runTracker(
+      "sim:room", "loop", 120, true, tracking, culling,
+      [&](const SparseMap& map, const RunStats& run) {
+        std::shared_lock<std::shared_mutex> lock(map.mutex());
+        for (const std::unique_ptr<Keyframe>& k : map.allKeyframes()) {
+          if (!k->bad()) continue;
+          const std::optional<KeyframeAncestor> a = SparseMap::goodAncestor(k.get());
+          ASSERT_TRUE(a.has_value()) << "keyframe " << k->id;
+          const auto published = run.published.find(k->id);
+          const auto ancestor = run.published.find(a->ancestor->id);
+          // Never moved since the cull (its ancestor neither): nothing to follow.
+          if (ancestor == run.published.end()) continue;
+          if (published == run.published.end()) continue;  // never published
+          const Transformationd expected = a->ancestor->T_G_C() * a->T_A_K;
+          EXPECT_TRUE(published->second.isApprox(expected, 1e-9)) << "keyframe " << k->id;
+          EXPECT_TRUE(k->T_G_C().isApprox(expected, 1e-9)) << "keyframe " << k->id;
+          ++culled_checked;
+        }
+      });
   EXPECT_EQ(s.ok, 120);
   EXPECT_GT(s.mapping.keyframes_culled, 0u);
   EXPECT_GT(culled_checked, 0u);
   std::printf("[ measured ] %d keyframes made, %lu culled, %zu followed their ancestor\n",
-              s.keyframes, static_cast<unsigned long>(s.mapping.keyframes_culled),
-              culled_checked);
+              s.keyframes, static_cast<unsigned long>(s.mapping.keyframes_culled), culled_checked);
 }
 
 }  // namespace

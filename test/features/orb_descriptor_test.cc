@@ -53,18 +53,23 @@ TEST(OrbOrientationTest, UmaxIsOpenCvsSymmetricCircleOfRadius15) {
   EXPECT_EQ(orientation.umax(), expected);
 }
 
-TEST(OrbOrientationTest, AnglesEqualOpenCvOrbsOnItsOwnKeypoints) {
-  const auto& frames = simFrames("room", 1);
-  ASSERT_FALSE(frames.empty());
-  const cv::Mat image = matView(frames[0].left);
+// Our angle of each keypoint OpenCV's ORB finds on `image` is OpenCV's; returns how many.
+size_t expectAnglesOfOpenCvOrb(const cv::Mat& image) {
   std::vector<cv::KeyPoint> keypoints;
   singleLevelOrb()->detect(image, keypoints);
-  ASSERT_GT(keypoints.size(), 1000u);
   const OrbOrientation orientation;
   for (const cv::KeyPoint& kp : keypoints) {
     const float angle = orientation.angleDeg(image, cvRound(kp.pt.x), cvRound(kp.pt.y));
-    ASSERT_EQ(angle, kp.angle) << kp.pt;
+    EXPECT_EQ(angle, kp.angle) << kp.pt;
+    if (angle != kp.angle) break;
   }
+  return keypoints.size();
+}
+
+TEST(OrbOrientationTest, AnglesEqualOpenCvOrbsOnItsOwnKeypoints) {
+  const auto& frames = simFrames("room", 1);
+  ASSERT_FALSE(frames.empty());
+  EXPECT_GT(expectAnglesOfOpenCvOrb(matView(frames[0].left)), 1000u);
 }
 
 TEST(OrbOrientationTest, AnglesEqualOpenCvOrbsOnSaturatedNoise) {
@@ -72,14 +77,7 @@ TEST(OrbOrientationTest, AnglesEqualOpenCvOrbsOnSaturatedNoise) {
   cv::Mat image(240, 320, CV_8UC1);
   cv::randu(image, 0, 2);
   image *= 255;
-  std::vector<cv::KeyPoint> keypoints;
-  singleLevelOrb()->detect(image, keypoints);
-  ASSERT_GT(keypoints.size(), 100u);
-  const OrbOrientation orientation;
-  for (const cv::KeyPoint& kp : keypoints) {
-    const float angle = orientation.angleDeg(image, cvRound(kp.pt.x), cvRound(kp.pt.y));
-    ASSERT_EQ(angle, kp.angle) << kp.pt;
-  }
+  EXPECT_GT(expectAnglesOfOpenCvOrb(image), 100u);
 }
 
 // Computes OpenCV's descriptors of `ours` (keypoints of one level, level coordinates) on the

@@ -156,25 +156,27 @@ void offsetFreeSadsAlongRow(const cv::Mat& a, int ua, const cv::Mat& b, int ub0,
   }
   // The strip of `b` every window k covers, scaled, row by row (its multiplications done
   // once, not once per window: the SAD loop below is then subtractions, which vectorise),
-  // and its column sums over the window's rows.
+  // and, for the window mean, its column sums over the window's rows.
   const int columns = count + 2 * w;
   std::vector<int>& scaled_b = scratch->scaled_b;
   std::vector<int>& column_sum = scratch->column_sum;
   scaled_b.resize(static_cast<size_t>(side) * static_cast<size_t>(columns));
-  column_sum.assign(static_cast<size_t>(columns), 0);
+  column_sum.assign(mean ? static_cast<size_t>(columns) : 0, 0);
   for (int y = 0; y < side; ++y) {
     const uint8_t* pb = b.ptr<uint8_t>(v - w + y) + ub0 - w;
     int* row = scaled_b.data() + static_cast<size_t>(y) * static_cast<size_t>(columns);
-    for (int c = 0; c < columns; ++c) {
-      column_sum[static_cast<size_t>(c)] += pb[c];
-      row[c] = scale * pb[c];
+    for (int c = 0; c < columns; ++c) row[c] = scale * pb[c];
+    if (mean) {
+      for (int c = 0; c < columns; ++c) column_sum[static_cast<size_t>(c)] += pb[c];
     }
   }
   int window_sum = 0;
-  for (int c = 0; c < side; ++c) window_sum += column_sum[static_cast<size_t>(c)];
+  if (mean) {
+    for (int c = 0; c < side; ++c) window_sum += column_sum[static_cast<size_t>(c)];
+  }
   const int centre_a = a.at<uint8_t>(v, ua);
   for (int k = 0; k < count; ++k) {
-    if (k > 0) {
+    if (mean && k > 0) {
       window_sum +=
           column_sum[static_cast<size_t>(k + side - 1)] - column_sum[static_cast<size_t>(k - 1)];
     }

@@ -21,9 +21,9 @@ void mergeInto(std::vector<uint64_t>* into, std::span<const uint64_t> ids) {
 // Adds one keyframe's landmarks to a subvolume's ascending keyframe list.
 void addToKeyframes(std::vector<KeyframeLandmarks>* keyframes, int64_t keyframe,
                     std::span<const uint64_t> ids) {
-  auto it = std::lower_bound(
-      keyframes->begin(), keyframes->end(), keyframe,
-      [](const KeyframeLandmarks& k, int64_t id) { return k.keyframe < id; });
+  auto it =
+      std::lower_bound(keyframes->begin(), keyframes->end(), keyframe,
+                       [](const KeyframeLandmarks& k, int64_t id) { return k.keyframe < id; });
   if (it == keyframes->end() || it->keyframe != keyframe) {
     it = keyframes->insert(it, KeyframeLandmarks{keyframe, {}});
   }
@@ -33,7 +33,15 @@ void addToKeyframes(std::vector<KeyframeLandmarks>* keyframes, int64_t keyframe,
 }  // namespace
 
 const char* pairKeyframesName(PairKeyframes choice) {
-  return choice == PairKeyframes::kAnchors ? "anchors" : "most_shared";
+  switch (choice) {
+    case PairKeyframes::kAnchors:
+      return "anchors";
+    case PairKeyframes::kMostShared:
+      return "most_shared";
+    case PairKeyframes::kMostSharedOnRevisits:
+      return "most_shared_on_revisits";
+  }
+  return "?";
 }
 
 bool parsePairKeyframes(const std::string& name, PairKeyframes* choice) {
@@ -41,6 +49,8 @@ bool parsePairKeyframes(const std::string& name, PairKeyframes* choice) {
     *choice = PairKeyframes::kAnchors;
   } else if (name == "most_shared") {
     *choice = PairKeyframes::kMostShared;
+  } else if (name == "most_shared_on_revisits") {
+    *choice = PairKeyframes::kMostSharedOnRevisits;
   } else {
     return false;
   }
@@ -53,8 +63,11 @@ std::string FusionSchedulerConfig::validate() const {
   if (!(q_min > 0.0) || !std::isfinite(q_min)) {
     error << "q_min must be finite and > 0, got " << q_min;
   } else if (pair_keyframes != PairKeyframes::kAnchors &&
-             pair_keyframes != PairKeyframes::kMostShared) {
+             pair_keyframes != PairKeyframes::kMostShared &&
+             pair_keyframes != PairKeyframes::kMostSharedOnRevisits) {
     error << "pair_keyframes is not a PairKeyframes value";
+  } else if (revisit_keyframe_gap < 1) {
+    error << "revisit_keyframe_gap must be >= 1, got " << revisit_keyframe_gap;
   } else if (max_pairs_per_request < 1) {
     error << "max_pairs_per_request must be >= 1, got " << max_pairs_per_request;
   } else if (!(reply_timeout_s > 0.0) || !std::isfinite(reply_timeout_s)) {
@@ -93,9 +106,9 @@ bool FusionScheduler::addSubvolumeSharingAnchor(int64_t subvolume, int64_t home)
   const int64_t anchor = home_anchor->second;
   addSubvolume(subvolume, anchor);
   const std::vector<KeyframeLandmarks>& held = keyframes_.at(home);
-  const auto it = std::lower_bound(
-      held.begin(), held.end(), anchor,
-      [](const KeyframeLandmarks& k, int64_t id) { return k.keyframe < id; });
+  const auto it =
+      std::lower_bound(held.begin(), held.end(), anchor,
+                       [](const KeyframeLandmarks& k, int64_t id) { return k.keyframe < id; });
   if (it != held.end() && it->keyframe == anchor) {
     const std::vector<uint64_t> landmarks = it->landmark_ids;  // keyframes_ may rehash
     addKeyframeLandmarks(subvolume, anchor, landmarks);
@@ -180,7 +193,7 @@ void FusionScheduler::removeSubvolume(int64_t subvolume) {
 }
 
 std::tuple<int64_t, int64_t, int> FusionScheduler::mostSharedKeyframes(int64_t older,
-                                                                        int64_t newer) const {
+                                                                       int64_t newer) const {
   const std::vector<KeyframeLandmarks>& a = keyframes_.at(older);
   const std::vector<KeyframeLandmarks>& b = keyframes_.at(newer);
   // landmark -> indices (ascending) of older's keyframes that observed it
@@ -233,12 +246,18 @@ std::optional<FusionCovarianceRequest> FusionScheduler::nextRequest(int64_t acti
     FusionPair pair;
     pair.older = older;
     pair.newer = newer;
-    if (config_.pair_keyframes == PairKeyframes::kMostShared) {
-      std::tie(pair.older_keyframe, pair.newer_keyframe, pair.keyframe_shared_landmarks) =
-          mostSharedKeyframes(older, newer);
-    } else {
-      pair.older_keyframe = anchors_.at(older);
-      pair.newer_keyframe = anchors_.at(newer);
+    pair.older_keyframe = anchors_.at(older);
+    pair.newer_keyframe = anchors_.at(newer);
+    if (config_.pair_keyframes != PairKeyframes::kAnchors) {
+      const auto [older_keyframe, newer_keyframe, shared] = mostSharedKeyframes(older, newer);
+      const int64_t gap = newer_keyframe > older_keyframe ? newer_keyframe - older_keyframe
+                                                          : older_keyframe - newer_keyframe;
+      if (config_.pair_keyframes == PairKeyframes::kMostShared ||
+          gap >= config_.revisit_keyframe_gap) {
+        pair.older_keyframe = older_keyframe;
+        pair.newer_keyframe = newer_keyframe;
+        pair.keyframe_shared_landmarks = shared;
+      }
     }
     pair.shared_landmarks = c.shared;
     request.pairs.push_back(pair);
@@ -306,8 +325,8 @@ void FusionScheduler::onFused(const FusionPair& pair) {
     --fusing_pairs_;
   }
   graph_.merge(pair.older, pair.newer);
-  if (const auto it = anchors_.find(pair.newer); it != anchors_.end() &&
-                                                  anchors_.contains(pair.older)) {
+  if (const auto it = anchors_.find(pair.newer);
+      it != anchors_.end() && anchors_.contains(pair.older)) {
     // The newer's voxels, and those of anything fused into it before, are the older's now.
     for (auto& [anchor, holder] : absorbed_) {
       if (holder == pair.newer) holder = pair.older;

@@ -30,9 +30,16 @@ enum class PairKeyframes {
   /// before the loop closes and the loop correction can no longer bend it (RMSE as the
   /// naive map's). For comparison only.
   kMostShared,
+  /// The most shared keyframes when they were made far apart in time (at least
+  /// FusionSchedulerConfig::revisit_keyframe_gap keyframe ids: the overlap was seen on two
+  /// passes, a revisit), else the anchors. A revisit's subvolumes overlap where their anchors
+  /// need not (a 10-keyframe subvolume spans ~11 m of the town's streets), while fusing
+  /// neighbours of one pass by their overlap would make the pass rigid before its loop closes
+  /// (kMostShared).
+  kMostSharedOnRevisits,
 };
 
-/// "anchors" | "most_shared" (config files, logs).
+/// "anchors" | "most_shared" | "most_shared_on_revisits" (config files, logs).
 const char* pairKeyframesName(PairKeyframes choice);
 /// Parses pairKeyframesName's names; false for anything else.
 bool parsePairKeyframes(const std::string& name, PairKeyframes* choice);
@@ -53,6 +60,9 @@ struct FusionSchedulerConfig {
   double q_min = 3e3;
   /// Which keyframes q is computed for (see PairKeyframes).
   PairKeyframes pair_keyframes = PairKeyframes::kAnchors;
+  /// With kMostSharedOnRevisits: the most shared keyframes are asked about when their ids
+  /// differ by at least this much (>= 1).
+  int revisit_keyframe_gap = 30;
   /// At most this many pairs per covariance request (>= 1).
   int max_pairs_per_request = 8;
   /// A request without a reply is abandoned after this long, seconds (> 0): another request
@@ -84,7 +94,7 @@ struct FusionPair {
   int64_t older_keyframe = 0;
   int64_t newer_keyframe = 0;
   int shared_landmarks = 0;  ///< W between the two subvolumes
-  /// Landmarks both chosen keyframes observed (0 when the anchors were chosen by config).
+  /// Landmarks both chosen keyframes observed (0 when the anchors are asked about).
   int keyframe_shared_landmarks = 0;
 };
 
@@ -111,7 +121,7 @@ struct FusionSchedulerStats {
   uint64_t requests_timed_out = 0;  ///< requests abandoned without a reply
   uint64_t replies_ignored = 0;     ///< replies to no request in flight or kept (duplicate)
   uint64_t late_replies = 0;        ///< replies to a timed-out request, used (onReply)
-  uint64_t same_anchor = 0;  ///< pairs handed on without a covariance (takeSameAnchorPairs)
+  uint64_t same_anchor = 0;         ///< pairs handed on without a covariance (takeSameAnchorPairs)
   uint64_t fused = 0;               ///< fusions reported done (onFused)
   uint64_t fusions_failed = 0;      ///< fusions reported failed (onFusionFailed)
 
@@ -200,8 +210,8 @@ class FusionScheduler {
   std::tuple<int64_t, int64_t, int> mostSharedKeyframes(int64_t older, int64_t newer) const;
 
   /// What a resumed scheduler needs (fusion_scheduler_state.h): every known subvolume's
-  /// keyframe landmark sets and every pair's back-off, its wait as seconds left after `now_s` (0 when
-  /// over). Requests in flight and fusions in progress are not included.
+  /// keyframe landmark sets and every pair's back-off, its wait as seconds left after `now_s` (0
+  /// when over). Requests in flight and fusions in progress are not included.
   FusionSchedulerState exportState(double now_s) const;
   /// Restores a state exported by exportState (maybe by another process, whose clock is not
   /// this one: waits count from `now_s`). Only subvolumes known here (addSubvolume) take their
@@ -220,7 +230,7 @@ class FusionScheduler {
   /// Number of pairs accepted and not yet reported fused or failed.
   size_t fusionsInProgress() const { return fusing_pairs_; }
 
- /// Timed-out requests kept for their late replies (the oldest is forgotten first).
+  /// Timed-out requests kept for their late replies (the oldest is forgotten first).
   static constexpr size_t kKeptTimedOut = 4;
 
  private:

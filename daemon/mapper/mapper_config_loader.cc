@@ -57,10 +57,10 @@ SubmapFusionConfig loadFusion(const YAML::Node& node) {
 
 FusionSchedulerConfig loadMaintenance(const YAML::Node& node) {
   const std::string path = "maintenance";
-  requireKnownKeys(
-      node, path,
-      {"enabled", "min_shared_landmarks", "min_shared_ratio", "q_min", "pair_keyframes",
-       "max_pairs_per_request", "reply_timeout_s", "retry_after_s", "max_retry_after_s"});
+  requireKnownKeys(node, path,
+                   {"enabled", "min_shared_landmarks", "min_shared_ratio", "q_min",
+                    "pair_keyframes", "revisit_keyframe_gap", "max_pairs_per_request",
+                    "reply_timeout_s", "retry_after_s", "max_retry_after_s"});
   FusionSchedulerConfig m;
   if (!isAbsent(node)) {
     readOptional(node, path, "enabled", &m.enabled);
@@ -70,9 +70,12 @@ FusionSchedulerConfig loadMaintenance(const YAML::Node& node) {
     std::string pair_keyframes = pairKeyframesName(m.pair_keyframes);
     readOptional(node, path, "pair_keyframes", &pair_keyframes);
     if (!parsePairKeyframes(pair_keyframes, &m.pair_keyframes)) {
-      throw ConfigError(path + ".pair_keyframes must be anchors or most_shared, got '" +
+      throw ConfigError(path +
+                        ".pair_keyframes must be anchors, most_shared or most_shared_on_revisits, "
+                        "got '" +
                         pair_keyframes + "'");
     }
+    readOptional(node, path, "revisit_keyframe_gap", &m.revisit_keyframe_gap);
     readOptional(node, path, "max_pairs_per_request", &m.max_pairs_per_request);
     readOptional(node, path, "reply_timeout_s", &m.reply_timeout_s);
     readOptional(node, path, "retry_after_s", &m.retry_after_s);
@@ -94,11 +97,10 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   MapperProcessConfig config;
   MapperConfig& m = config.mapper;
   const std::string top = "mapper";
-  requireKnownKeys(
-      root, top,
-      {"pose_source", "lcm_url", "output_dir", "input_silence_s", "channels", "layer",
-       "integrator", "mesh", "fusion", "maintenance", "subvolumes", "poses", "queues", "worker",
-       "status", "checkpoint", "memory"});
+  requireKnownKeys(root, top,
+                   {"pose_source", "lcm_url", "output_dir", "input_silence_s", "channels", "layer",
+                    "integrator", "mesh", "fusion", "maintenance", "subvolumes", "poses", "queues",
+                    "worker", "status", "checkpoint", "memory"});
   if (isAbsent(root)) return config;
 
   if (root["pose_source"]) {
@@ -144,10 +146,10 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   m.maintenance = loadMaintenance(root["maintenance"]);
 
   const YAML::Node subvolumes = root["subvolumes"];
-  requireKnownKeys(subvolumes, "subvolumes",
-                   {"max_keyframes_per_subvolume", "max_anchor_distance_m",
-                    "revisit_anchor_distance_m", "revisit_after_frames",
-                    "revisit_max_frames", "keyframe_every_n_frames"});
+  requireKnownKeys(
+      subvolumes, "subvolumes",
+      {"max_keyframes_per_subvolume", "max_anchor_distance_m", "revisit_anchor_distance_m",
+       "revisit_after_frames", "revisit_max_frames", "keyframe_every_n_frames"});
   if (!isAbsent(subvolumes)) {
     readOptional(subvolumes, "subvolumes", "max_keyframes_per_subvolume",
                  &m.creation.max_keyframes_per_subvolume);

@@ -10,6 +10,9 @@
 //              q asked of the two anchor keyframes (the default, the paper's); and for
 //              each q_min of --most-shared-q-min, q asked of the keyframes that share the
 //              most landmarks (maintenance.pair_keyframes: most_shared, for comparison);
+//              for each of --revisit-overlap-q-min, q asked of those keyframes only when
+//              their ids are --revisit-keyframe-gap apart, else of the anchors
+//              (maintenance.pair_keyframes: most_shared_on_revisits);
 //              with --revisit-q-min, an off map and these q_min with subvolumes also
 //              started at revisits (subvolumes.revisit_anchor_distance_m); with
 //              --revisit-frames-q-min, an off map and these q_min with frames tracked in an
@@ -34,7 +37,9 @@
 //                           [--revisit-frames-q-min Q,... [--revisit-variant-frames 10]]
 //                           [--depth exact|stereo] [--depth-noise K] [--no-sync-slam]
 //                           [--min-shared-landmarks 30] [--min-shared-ratio 0.05]
-//                           [--q-min 3e3,1e4,3e4,1e5] [--most-shared-q-min Q,...] [--out DIR]
+//                           [--q-min 3e3,1e4,3e4,1e5] [--most-shared-q-min Q,...]
+//                           [--revisit-overlap-q-min Q,... [--revisit-keyframe-gap 30]]
+//                           [--out DIR]
 //
 // Mappers integrate every frame (no time budget, waited for) so the comparison does not
 // depend on the machine's load; with --sync-slam (the default) the SLAM's local mapping and
@@ -150,6 +155,8 @@ int run(int argc, char** argv) {
   CovisibilityGraphConfig candidates;
   std::vector<double> sweep = {3e3, 1e4, 3e4, 1e5};
   std::vector<double> most_shared_sweep;
+  std::vector<double> revisit_overlap_sweep;
+  int revisit_keyframe_gap = FusionSchedulerConfig{}.revisit_keyframe_gap;
 #ifdef CBLOX_DEFAULT_VOCABULARY
   vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
 #endif
@@ -228,6 +235,17 @@ int run(int argc, char** argv) {
       ->allow_extra_args(false)
       ->expected(0, 1 << 20)
       ->type_name("Q[,Q...]");
+  app.add_option("--revisit-overlap-q-min", revisit_overlap_sweep,
+                 "also these q_min with q asked of the most shared keyframes when they are "
+                 "--revisit-keyframe-gap ids apart, else of the anchors (comma-separated; "
+                 "default none)")
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->expected(0, 1 << 20)
+      ->type_name("Q[,Q...]");
+  app.add_option("--revisit-keyframe-gap", revisit_keyframe_gap,
+                 "keyframe ids between the most shared keyframes of a revisit pair")
+      ->capture_default_str();
   app.add_option("--out", out_dir, "writes DIR/maintenance_<scene>.json and the sweep picture")
       ->type_name("DIR");
   app.add_option("--vocabulary", vocabulary_path, "vocabulary file")->capture_default_str();
@@ -236,11 +254,12 @@ int run(int argc, char** argv) {
       ->type_name("FILE");
   if (const std::optional<int> code = parseCommandLine(app, argc, argv)) return *code;
   if (sweep.empty() || !(voxel > 0.0f) || !(revisit_variant_distance > 0.0) ||
-      revisit_variant_frames < 1 || revisit_frames < 0 || revisit_max_frames < 0) {
+      revisit_variant_frames < 1 || revisit_frames < 0 || revisit_max_frames < 0 ||
+      revisit_keyframe_gap < 1) {
     std::fprintf(stderr,
                  "--q-min needs at least one value, --voxel and --revisit-variant-distance "
                  "must be > 0, --revisit-variant-frames >= 1, --revisit-frames and "
-                 "--revisit-max-frames >= 0\n");
+                 "--revisit-max-frames >= 0, --revisit-keyframe-gap >= 1\n");
     return 2;
   }
   if (depth_kind == "stereo" && depth_noise != 0.0) {
@@ -328,6 +347,7 @@ int run(int argc, char** argv) {
       config.maintenance.candidates = candidates;
       if (kind == Kind::kOn) config.maintenance.q_min = q_min;
       config.maintenance.pair_keyframes = pair_keyframes;
+      config.maintenance.revisit_keyframe_gap = revisit_keyframe_gap;
     }
     v->mapper = std::make_unique<Mapper>(config, [](const std::string&) {});
     if (kind == Kind::kOn) {
@@ -405,6 +425,11 @@ int run(int argc, char** argv) {
     char name[40];
     std::snprintf(name, sizeof(name), "on q>=%.0g most shared", q);
     add(name, Kind::kOn, q, PairKeyframes::kMostShared);
+  }
+  for (const double q : revisit_overlap_sweep) {
+    char name[48];
+    std::snprintf(name, sizeof(name), "on q>=%.0g revisit overlap", q);
+    add(name, Kind::kOn, q, PairKeyframes::kMostSharedOnRevisits);
   }
   if (!revisit_sweep.empty()) {
     add("off revisit", Kind::kOff, 0.0, PairKeyframes::kAnchors, revisit_variant_distance);

@@ -54,6 +54,7 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.maintenance.candidates.min_shared_ratio, b.maintenance.candidates.min_shared_ratio);
   EXPECT_EQ(a.maintenance.q_min, b.maintenance.q_min);
   EXPECT_EQ(a.maintenance.pair_keyframes, b.maintenance.pair_keyframes);
+  EXPECT_EQ(a.maintenance.revisit_keyframe_gap, b.maintenance.revisit_keyframe_gap);
   EXPECT_EQ(a.maintenance.max_pairs_per_request, b.maintenance.max_pairs_per_request);
   EXPECT_EQ(a.maintenance.reply_timeout_s, b.maintenance.reply_timeout_s);
   EXPECT_EQ(a.maintenance.retry_after_s, b.maintenance.retry_after_s);
@@ -90,9 +91,9 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
 }
 
 TEST(MapperConfigTest, IntegratorNicenessAndMemoryCapAreRead) {
-  const MapperProcessConfig config = loadMapperConfig(YAML::Load(
-      "integrator: {niceness: 7}\nmemory: {cap_mb: 0, near_only_fraction: 0.5, "
-      "near_distance_m: 3.0}\n"));
+  const MapperProcessConfig config = loadMapperConfig(
+      YAML::Load("integrator: {niceness: 7}\nmemory: {cap_mb: 0, near_only_fraction: 0.5, "
+                 "near_distance_m: 3.0}\n"));
   EXPECT_EQ(config.mapper.integrator_niceness, 7);
   EXPECT_EQ(config.mapper.integrator.truncation_distance_m, 0.12f);  // the rest as before
   EXPECT_FALSE(config.mapper.memory_cap.enabled());
@@ -132,7 +133,8 @@ TEST(MapperConfigTest, ReadsOverrides) {
       "checkpoint: {dir: /data/ckpt, period_s: 45, resume: false}\n"
       "fusion: {num_threads: 1}\nmesh: {use_color: false}\n"
       "maintenance: {enabled: false, min_shared_landmarks: 50, min_shared_ratio: 0.5, q_min: "
-      "2500, pair_keyframes: most_shared, max_pairs_per_request: 3, reply_timeout_s: 1, "
+      "2500, pair_keyframes: most_shared_on_revisits, revisit_keyframe_gap: 12, "
+      "max_pairs_per_request: 3, reply_timeout_s: 1, "
       "retry_after_s: 9, "
       "max_retry_after_s: 30}\n"));
   const MapperConfig& m = config.mapper;
@@ -173,7 +175,8 @@ TEST(MapperConfigTest, ReadsOverrides) {
   EXPECT_EQ(m.maintenance.candidates.min_shared_landmarks, 50);
   EXPECT_EQ(m.maintenance.candidates.min_shared_ratio, 0.5);
   EXPECT_EQ(m.maintenance.q_min, 2500.0);
-  EXPECT_EQ(m.maintenance.pair_keyframes, PairKeyframes::kMostShared);
+  EXPECT_EQ(m.maintenance.pair_keyframes, PairKeyframes::kMostSharedOnRevisits);
+  EXPECT_EQ(m.maintenance.revisit_keyframe_gap, 12);
   EXPECT_EQ(m.maintenance.max_pairs_per_request, 3);
   EXPECT_EQ(m.maintenance.reply_timeout_s, 1.0);
   EXPECT_EQ(m.maintenance.retry_after_s, 9.0);
@@ -195,7 +198,10 @@ TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"maintenance: {min_shared_ratio: 1.5}\n", "maintenance.candidates.min_shared_ratio"},
       {"maintenance: {qmin: 5}\n", "qmin"},
       {"maintenance: {pair_keyframes: nearest}\n",
-       "maintenance.pair_keyframes must be anchors or most_shared, got 'nearest'"},
+       "maintenance.pair_keyframes must be anchors, most_shared or most_shared_on_revisits, got "
+       "'nearest'"},
+      {"maintenance: {revisit_keyframe_gap: 0}\n",
+       "maintenance.revisit_keyframe_gap must be >= 1, got 0"},
       {"maintenance: {max_retry_after_s: 1}\n", "maintenance.max_retry_after_s"},
       {"layer: {voxel_size: -1}\n", "voxel_size"},
       {"integrator: {truncation_distance_m: 0.01}\n", "truncation"},  // < one 4 cm voxel

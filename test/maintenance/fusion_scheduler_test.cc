@@ -261,9 +261,10 @@ TEST(FusionSchedulerTest, AcceptsPairsAtOrAboveQMinAndLocksThemUntilFused) {
 
 // Subvolume 0: keyframes 10 (anchor), 11, 12 along a corridor; subvolume 1 revisits it:
 // keyframes 20 (anchor, far away), 21 (sees 12's landmarks), 22 (sees 11's, fewer of them).
-FusionScheduler revisit(PairKeyframes choice) {
+FusionScheduler revisit(PairKeyframes choice, int revisit_keyframe_gap = 30) {
   FusionSchedulerConfig config = testConfig();
   config.pair_keyframes = choice;
+  config.revisit_keyframe_gap = revisit_keyframe_gap;
   FusionScheduler s(config);
   s.addSubvolume(0, 10);
   s.addSubvolume(1, 20);
@@ -294,6 +295,43 @@ TEST(FusionSchedulerTest, MostSharedAsksAboutTheKeyframesWhereTheSubvolumesOverl
   EXPECT_EQ(by_anchor->pairs[0].older_keyframe, 10);
   EXPECT_EQ(by_anchor->pairs[0].newer_keyframe, 20);
   EXPECT_EQ(by_anchor->pairs[0].keyframe_shared_landmarks, 0);
+}
+
+TEST(FusionSchedulerTest, MostSharedOnRevisitsAsksAboutTheOverlapOnlyWhenSeenFarApartInTime) {
+  // The overlap is keyframes 12 and 21: 9 ids apart.
+  for (const int gap : {1, 9, 10, 30}) {
+    SCOPED_TRACE(gap);
+    FusionScheduler s = revisit(PairKeyframes::kMostSharedOnRevisits, gap);
+    const auto request = s.nextRequest(-1, 0.0);
+    ASSERT_TRUE(request.has_value());
+    ASSERT_EQ(request->pairs.size(), 1u);
+    EXPECT_EQ(request->pairs[0].shared_landmarks, 60);
+    if (gap <= 9) {
+      EXPECT_EQ(request->pairs[0].older_keyframe, 12);
+      EXPECT_EQ(request->pairs[0].newer_keyframe, 21);
+      EXPECT_EQ(request->pairs[0].keyframe_shared_landmarks, 40);
+    } else {
+      EXPECT_EQ(request->pairs[0].older_keyframe, 10);
+      EXPECT_EQ(request->pairs[0].newer_keyframe, 20);
+      EXPECT_EQ(request->pairs[0].keyframe_shared_landmarks, 0);
+    }
+  }
+  // The gap is |newer - older| whichever subvolume holds the later keyframe: here the older
+  // subvolume's keyframe 45 shares the most (100) with the newer's 23, 22 ids before it.
+  for (const int gap : {22, 23}) {
+    SCOPED_TRACE(gap);
+    FusionScheduler later = revisit(PairKeyframes::kMostSharedOnRevisits, gap);
+    later.addKeyframeLandmarks(0, 45, range(600, 700));
+    later.addKeyframeLandmarks(1, 23, range(600, 700));
+    const auto request = later.nextRequest(-1, 0.0);
+    ASSERT_TRUE(request.has_value());
+    EXPECT_EQ(request->pairs[0].older_keyframe, gap == 22 ? 45 : 10);
+    EXPECT_EQ(request->pairs[0].newer_keyframe, gap == 22 ? 23 : 20);
+  }
+  FusionSchedulerConfig bad = testConfig();
+  bad.pair_keyframes = PairKeyframes::kMostSharedOnRevisits;
+  bad.revisit_keyframe_gap = 0;
+  EXPECT_NE(bad.validate().find("revisit_keyframe_gap must be >= 1, got 0"), std::string::npos);
 }
 
 TEST(FusionSchedulerTest, MostSharedTiesGoToTheLowestIdsAndUnknownKeyframesAreNeverChosen) {
@@ -329,9 +367,10 @@ TEST(FusionSchedulerTest, MostSharedTiesGoToTheLowestIdsAndUnknownKeyframesAreNe
 }
 
 TEST(FusionSchedulerTest, PairKeyframesNamesRoundTrip) {
-  for (const PairKeyframes c : {PairKeyframes::kAnchors, PairKeyframes::kMostShared}) {
-    PairKeyframes back = c == PairKeyframes::kAnchors ? PairKeyframes::kMostShared
-                                                      : PairKeyframes::kAnchors;
+  for (const PairKeyframes c : {PairKeyframes::kAnchors, PairKeyframes::kMostShared,
+                                PairKeyframes::kMostSharedOnRevisits}) {
+    PairKeyframes back =
+        c == PairKeyframes::kAnchors ? PairKeyframes::kMostShared : PairKeyframes::kAnchors;
     ASSERT_TRUE(parsePairKeyframes(pairKeyframesName(c), &back));
     EXPECT_EQ(back, c);
   }

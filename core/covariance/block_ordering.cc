@@ -5,6 +5,9 @@
 
 #include <amd.h>
 #include <camd.h>
+#include <cholmod.h>
+
+#include "core/optimization/cholmod_support.h"
 
 namespace cblox {
 
@@ -47,6 +50,57 @@ std::vector<int> blockAmdOrdering(const ReducedCameraMatrix& S) {
                              std::to_string(status));
   }
   return perm;
+}
+
+std::vector<int> blockNestedDissectionOrdering(const ReducedCameraMatrix& S) {
+  const int K = S.numBlocks();
+  std::vector<int> perm(K);
+  if (K == 0) return perm;
+  // A pattern-only view of the block pattern (both triangles stored; stype 1 reads the
+  // upper one). CHOLMOD does not modify its input.
+  cholmod_sparse pattern{};
+  pattern.nrow = pattern.ncol = static_cast<size_t>(K);
+  pattern.nzmax = S.block_row_index.size();
+  pattern.p = const_cast<int*>(S.block_col_ptr.data());
+  pattern.i = const_cast<int*>(S.block_row_index.data());
+  pattern.stype = 1;
+  pattern.itype = CHOLMOD_INT;
+  pattern.xtype = CHOLMOD_PATTERN;
+  pattern.dtype = CHOLMOD_DOUBLE;
+  pattern.sorted = 1;
+  pattern.packed = 1;
+  CholmodCommon common;
+  if (!cholmod_metis(&pattern, nullptr, 0, /*postorder=*/1, perm.data(), common.get()) ||
+      common.get()->status < CHOLMOD_OK) {
+    throw std::runtime_error("blockNestedDissectionOrdering: cholmod_metis failed with status " +
+                             std::to_string(common.get()->status));
+  }
+  return perm;
+}
+
+const char* blockOrderingName(BlockOrdering ordering) {
+  return ordering == BlockOrdering::kAmd ? "amd" : "nested_dissection";
+}
+
+bool parseBlockOrdering(const std::string& name, BlockOrdering* ordering) {
+  if (name == "amd") {
+    *ordering = BlockOrdering::kAmd;
+  } else if (name == "nested_dissection") {
+    *ordering = BlockOrdering::kNestedDissection;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+std::vector<int> blockOrdering(const ReducedCameraMatrix& S, BlockOrdering ordering) {
+  switch (ordering) {
+    case BlockOrdering::kAmd:
+      return blockAmdOrdering(S);
+    case BlockOrdering::kNestedDissection:
+      return blockNestedDissectionOrdering(S);
+  }
+  throw std::invalid_argument("blockOrdering: not a BlockOrdering value");
 }
 
 std::vector<int> expandBlockPermutation(std::span<const int> block_perm) {

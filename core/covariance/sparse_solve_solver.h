@@ -9,9 +9,10 @@
 #include <Eigen/Core>
 #include <Eigen/StdVector>
 
-#include "core/optimization/cholmod_support.h"
+#include "core/covariance/block_ordering.h"
 #include "core/covariance/conditional_covariance.h"
 #include "core/covariance/reduced_camera_matrix.h"
+#include "core/optimization/cholmod_support.h"
 
 namespace cblox {
 
@@ -19,6 +20,13 @@ struct SparseSolveCovarianceSolverConfig {
   /// Factor kind and positive-definiteness test (defaults: kAuto, 1e-10). A supernodal factor
   /// is converted once to simplicial LL^T for the sparse solves.
   CholmodFactorConfig factor;
+  /// The block ordering. Nested dissection (the default) shortens every keyframe's path to
+  /// the root of the elimination tree, which is what a solve costs: 1.9x fewer flops than
+  /// AMD on a 500-keyframe loop (BENCHMARKS.md, "Conditional covariance extraction").
+  BlockOrdering ordering = BlockOrdering::kNestedDissection;
+  /// The solve's 6 x 6 block updates with AVX2 + FMA where the CPU has both (x86-64 only);
+  /// false: Eigen's portable product. Both give the same covariances up to rounding.
+  bool vectorized = true;
 };
 
 /// Empty if valid, else a message naming the bad field. Thread-safe (pure).
@@ -33,25 +41,25 @@ struct SparseSolveStats {
   double flops = 0.0;
 };
 
-/// One AMD ordering and ONE factorisation at construction, then per keyframe a sparse
-/// forward solve (beyond the paper; the fourth method of issue 6).
+/// One ordering and ONE factorisation at construction, then per keyframe a sparse forward
+/// solve (beyond the paper; the fourth method of issue 6).
 ///
-/// With P S P^T = L L^T (AMD on S's block pattern expanded to scalars, forced through
-/// CHOLMOD, converted to simplicial LL^T), Sigma = S^-1 = P^T L^-T L^-1 P, so the joint
-/// covariance blocks are Sigma_ab = Y_a^T Y_b with Y_a = L^-1 (P E_a), E_a the 6 unit
-/// columns of keyframe a. P E_a has its nonzeros in the 6 pivot columns of a, so Y_a is
-/// nonzero only on their reach in the elimination tree of L (the union of their etree paths
-/// to the root; Gilbert & Peierls). Because the ordering keeps each keyframe's 6 pivots
-/// together, L is copied out of CHOLMOD by 6 x 6 blocks (block column = keyframe, with its
-/// lower-triangular diagonal block and the dense 6 x 6 blocks below it, zero-filled where
-/// CHOLMOD stores no entry) and the solve walks the BLOCK elimination tree: per reached
-/// block column B, Y_B <- L_BB^-1 Y_B, then Y_R -= L_RB Y_B for each block below (fixed-size
-/// 6 x 6 products; cost 432 flops per stored block). Sigma_ii = Y_i^T Y_i,
-/// Sigma_ij = Y_i^T Y_j over the common reached blocks, Sigma_jj = Y_j^T Y_j, then
-/// conditionalFromCovarianceBlocks. Y_a is cached per keyframe for the pairs of one
-/// compute() call (a keyframe in several pairs is solved once). Per pair the cost is that of
-/// two path solves, independent of the number of pairs; the reach of a keyframe ends in the
-/// dense separator at the top of the etree, which dominates it on loopy maps.
+/// With P S P^T = L L^T (the configured ordering, nested dissection by default, of S's block
+/// pattern expanded to scalars, forced through CHOLMOD, converted to simplicial LL^T),
+/// Sigma = S^-1 = P^T L^-T L^-1 P, so the joint covariance blocks are Sigma_ab = Y_a^T Y_b
+/// with Y_a = L^-1 (P E_a), E_a the 6 unit columns of keyframe a. P E_a has its nonzeros in
+/// the 6 pivot columns of a, so Y_a is nonzero only on their reach in the elimination tree of
+/// L (the union of their etree paths to the root; Gilbert & Peierls). Because the ordering
+/// keeps each keyframe's 6 pivots together, L is copied out of CHOLMOD by 6 x 6 blocks (block
+/// column = keyframe, with its lower-triangular diagonal block and the dense 6 x 6 blocks
+/// below it, zero-filled where CHOLMOD stores no entry) and the solve walks the BLOCK
+/// elimination tree: per reached block column B, Y_B <- L_BB^-1 Y_B, then Y_R -= L_RB Y_B for
+/// each block below (fixed-size 6 x 6 products; cost 432 flops per stored block). Sigma_ii =
+/// Y_i^T Y_i, Sigma_ij = Y_i^T Y_j over the common reached blocks, Sigma_jj = Y_j^T Y_j, then
+/// conditionalFromCovarianceBlocks. Y_a is cached per keyframe for the pairs of one compute()
+/// call (a keyframe in several pairs is solved once). Per pair the cost is that of two path
+/// solves, independent of the number of pairs; the reach of a keyframe ends in the dense
+/// separator at the top of the etree, which dominates it on loopy maps.
 class SparseSolveCovarianceSolver final : public ConditionalCovarianceSolver {
  public:
   /// Orders and factorises S (a failure is remembered and reported per pair). Takes S by
@@ -87,8 +95,13 @@ class SparseSolveCovarianceSolver final : public ConditionalCovarianceSolver {
     std::vector<int> blocks;
     std::vector<Matrix6d, Eigen::aligned_allocator<Matrix6d>> values;
   };
+  // At most this many keyframes share one sweep of L (their panels: 16 x 288 bytes per block
+  // column).
+  static constexpr size_t kMaxTogether = 16;
   const Solution& solutionOf(int block);
-  const Solution& solve(int block);
+  // Solves the keyframes of `blocks` (distinct, none cached) and caches their Y: one sweep
+  // over the union of their reaches per kMaxTogether of them.
+  void solveTogether(std::span<const int> blocks);
   void clearCache();
   // L by 6 x 6 blocks from the simplicial factor (see the class comment).
   void storeBlocks(const cholmod_factor& L);
@@ -108,8 +121,16 @@ class SparseSolveCovarianceSolver final : public ConditionalCovarianceSolver {
   std::vector<int> cache_slot_;  // per block: index into cache_, or -1
   std::deque<Solution> cache_;   // a deque: references stay valid as it grows
   SparseSolveStats stats_;
-  // Workspace: one 6 x 6 block per block column, zero outside a solve.
-  std::vector<Matrix6d, Eigen::aligned_allocator<Matrix6d>> work_;
+  // One block column's updates for the keyframes of a sweep (the AVX2 kernel or the portable
+  // one; see the .cc).
+  using UpdateBelow = void (*)(const Matrix6d* L, const int* rows, int count, const int* slots,
+                               int num_slots, int m, int B, Matrix6d* panel);
+  UpdateBelow update_below_;
+  // Workspace of a sweep of m keyframes: panel_[B m + t] is keyframe t's block of Y on block
+  // column B (valid on t's reach only); slots_[B] the keyframes whose reach holds B (empty
+  // outside a sweep).
+  std::vector<Matrix6d, Eigen::aligned_allocator<Matrix6d>> panel_;
+  std::vector<std::vector<int>> slots_;
 };
 
 }  // namespace cblox

@@ -48,10 +48,10 @@
 
 #include "core/covariance/batch_covariance_solver.h"
 #include "core/covariance/block_ordering.h"
-#include "core/optimization/cholmod_support.h"
 #include "core/covariance/constrained_ordering_solver.h"
 #include "core/covariance/kaess_recovery_solver.h"
 #include "core/covariance/sparse_solve_solver.h"
+#include "core/optimization/cholmod_support.h"
 #include "daemon/common/cli.h"
 #include "test/covariance/ceres_reference.h"
 #include "test/covariance/loop_scene.h"
@@ -85,6 +85,15 @@ double minTimeMs(int repeats, F&& f) {
   for (int r = 0; r < repeats; ++r) best = std::min(best, timeMs(f));
   return best;
 }
+
+// The sparse solve with one block ordering.
+struct SparseTimes {
+  double factor_ms = 0;
+  double pair_ms = 0;   // each pair in its own compute() call
+  double batch_ms = 0;  // all pairs in one call (keyframes solved once)
+  double reach = 0;     // mean reached columns per solved keyframe
+  double mflop = 0;     // mean Mflop of a keyframe's solve
+};
 
 struct Options {
   std::vector<int> sizes = {50, 200, 500, 1000};
@@ -228,12 +237,10 @@ struct Row {
   double batch_ms = 0;
   double big_batch_ms = -1;
   int big_batch_keyframes = 0;
-  double sparse_factor_ms = 0;
-  double sparse_pair_ms = 0;   // each pair in its own compute() call
-  double sparse_batch_ms = 0;  // all pairs in one call (keyframes solved once)
-  double sparse_reach = 0;     // mean reached columns per solved keyframe
-  double sparse_mflop = 0;     // mean Mflop of a keyframe's solve
-  double amd_nnz = 0;          // nnz(L) and Mflop of the AMD factorisation
+  SparseTimes sparse;           // the defaults (nested dissection, AVX2 kernel)
+  SparseTimes sparse_amd;       // the AMD ordering, for comparison
+  SparseTimes sparse_portable;  // the portable kernel, for comparison
+  double amd_nnz = 0;           // nnz(L) and Mflop of the AMD factorisation
   double amd_mflop = 0;
   double ceres_one_ms = -1;  // < 0: skipped
   double ceres_all_ms = -1;
@@ -310,35 +317,43 @@ Row runProblem(const BundleAdjustmentProblem& problem, const BaLinearizationConf
     }
   }
 
-  // Sparse solve: factor once, then each pair in its own call, then all pairs in one call.
+  // Sparse solve: factor once, then each pair in its own call, then all pairs in one call;
+  // with the default ordering and with AMD.
   std::vector<ConditionalCovariance> got(pairs.size());
-  {
+  auto sparseTimes = [&](const SparseSolveCovarianceSolverConfig& config) {
+    SparseTimes t;
     std::unique_ptr<SparseSolveCovarianceSolver> sparse;
-    row.sparse_factor_ms =
-        timeMs([&] { sparse = std::make_unique<SparseSolveCovarianceSolver>(S); });
+    t.factor_ms =
+        timeMs([&] { sparse = std::make_unique<SparseSolveCovarianceSolver>(S, config); });
     std::int64_t reached = 0;
     double flops = 0.0;
     int solved = 0;
     bool first = true;  // the work is counted on the first of the 3 runs
-    row.sparse_pair_ms =
-        minTimeMs(3,
-                  [&] {
-                    for (size_t p = 0; p < pairs.size(); ++p) {  // each in its own call
-                      got[p] = sparse->compute(pairs[p].i, pairs[p].j);
-                      if (!first) continue;
-                      reached += sparse->stats().reached_columns;
-                      flops += sparse->stats().flops;
-                      solved += sparse->stats().keyframes_solved;
-                    }
-                    first = false;
-                  }) /
-        n;
+    t.pair_ms = minTimeMs(3,
+                          [&] {
+                            for (size_t p = 0; p < pairs.size(); ++p) {  // each in its own call
+                              got[p] = sparse->compute(pairs[p].i, pairs[p].j);
+                              if (!first) continue;
+                              reached += sparse->stats().reached_columns;
+                              flops += sparse->stats().flops;
+                              solved += sparse->stats().keyframes_solved;
+                            }
+                            first = false;
+                          }) /
+                n;
     row.worst_difference = std::max(row.worst_difference, worstDifference(got, reference));
-    row.sparse_reach = static_cast<double>(reached) / std::max(1, solved);
-    row.sparse_mflop = flops / std::max(1, solved) / 1e6;
-    row.sparse_batch_ms = minTimeMs(3, [&] { got = sparse->compute(pairs); });
+    t.reach = static_cast<double>(reached) / std::max(1, solved);
+    t.mflop = flops / std::max(1, solved) / 1e6;
+    t.batch_ms = minTimeMs(3, [&] { got = sparse->compute(pairs); });
     row.worst_difference = std::max(row.worst_difference, worstDifference(got, reference));
-  }
+    return t;
+  };
+  row.sparse = sparseTimes({});
+  SparseSolveCovarianceSolverConfig amd, portable;
+  amd.ordering = BlockOrdering::kAmd;
+  portable.vectorized = false;
+  row.sparse_amd = sparseTimes(amd);
+  row.sparse_portable = sparseTimes(portable);
 
   // Per-pair constrained ordering with the default factor kind (kAuto) and both forced.
   auto perPairMs = [&](CholmodFactorKind kind) {
@@ -463,7 +478,7 @@ void printTables(const std::vector<Row>& rows, const Options& o) {
   for (const Row& r : rows) {
     std::printf("| %s | %d | %d | %d | %.1f | %.0f | %.1f | %.0f (of %d) | %.2f | %s | %s |\n",
                 r.label.c_str(), r.keyframes, r.landmarks, r.observations, r.blocks_per_column,
-                r.amd_nnz, r.amd_mflop, r.sparse_reach, r.columns, r.sparse_mflop,
+                r.amd_nnz, r.amd_mflop, r.sparse.reach, r.columns, r.sparse.mflop,
                 ms(r.linearize_ms).c_str(), ms(r.reduce_ms).c_str());
   }
   std::printf(
@@ -485,13 +500,28 @@ void printTables(const std::vector<Row>& rows, const Options& o) {
         ms(r.per_pair_supernodal_ms).c_str(), ms(r.per_pair_simplicial_ms).c_str(),
         ms(r.kaess_factor_ms).c_str(), ms(r.kaess_pair_cold_ms).c_str(),
         ms(r.kaess_pair_cached_ms).c_str(), ms(r.batch_ms).c_str(), ms(r.batch_ms / n).c_str(),
-        ms(r.sparse_factor_ms).c_str(), ms(r.sparse_pair_ms).c_str(),
-        ms(r.sparse_batch_ms / n).c_str(),
+        ms(r.sparse.factor_ms).c_str(), ms(r.sparse.pair_ms).c_str(),
+        ms(r.sparse.batch_ms / n).c_str(),
         r.ceres_failed ? ("failed in " + ms(r.ceres_one_ms)).c_str() : ms(r.ceres_one_ms).c_str(),
         r.ceres_failed ? ("failed in " + ms(r.ceres_all_ms)).c_str() : ms(r.ceres_all_ms).c_str(),
         ratio(r.ceres_failed ? -1 : r.ceres_one_ms, r.per_pair_ms).c_str(),
         ratio(r.ceres_failed ? -1 : r.ceres_all_ms, r.batch_ms).c_str(),
-        ratio(r.ceres_failed ? -1 : r.ceres_one_ms, r.sparse_pair_ms).c_str(), r.worst_difference);
+        ratio(r.ceres_failed ? -1 : r.ceres_one_ms, r.sparse.pair_ms).c_str(), r.worst_difference);
+  }
+  std::printf(
+      "\nThe sparse solve's block ordering and kernel (same pairs, same run; the kernel is "
+      "AVX2+FMA where the CPU has both):\n\n"
+      "| problem | keyframes | ordering, kernel | factor once | /pair (own call) | /pair (one "
+      "call) | reach cols/keyframe | Mflop/keyframe solve |\n"
+      "|---|---:|---|---:|---:|---:|---:|---:|\n");
+  for (const Row& r : rows) {
+    for (const auto& [name, t] : {std::pair{"nested dissection, vectorized (default)", r.sparse},
+                                  std::pair{"amd, vectorized", r.sparse_amd},
+                                  std::pair{"nested dissection, portable", r.sparse_portable}}) {
+      std::printf("| %s | %d | %s | %s | %s | %s | %.0f (of %d) | %.2f |\n", r.label.c_str(),
+                  r.keyframes, name, ms(t.factor_ms).c_str(), ms(t.pair_ms).c_str(),
+                  ms(t.batch_ms / r.pairs).c_str(), t.reach, r.columns, t.mflop);
+    }
   }
   if (o.big_batch > 0) {
     std::printf("\nBatch mode with %d covisible pairs:\n\n", o.big_batch);

@@ -8,10 +8,10 @@
 #include <Eigen/Eigenvalues>
 
 #include "core/covariance/batch_covariance_solver.h"
-#include "core/optimization/cholmod_support.h"
 #include "core/covariance/constrained_ordering_solver.h"
 #include "core/covariance/kaess_recovery_solver.h"
 #include "core/covariance/sparse_solve_solver.h"
+#include "core/optimization/cholmod_support.h"
 #include "test/covariance/covariance_test_util.h"
 #include "test/covariance/loop_scene.h"
 
@@ -283,6 +283,10 @@ TEST(ConditionalCovariance, InvalidConfigsAreRejected) {
               "factor.auto_supernodal_flops_per_nonzero must be > 0 and finite");
   }
   EXPECT_EQ(validate(CholmodFactorConfig{}), "");
+  SparseSolveCovarianceSolverConfig ordering;
+  ordering.ordering = static_cast<BlockOrdering>(9);
+  EXPECT_EQ(validate(ordering), "ordering is not a BlockOrdering value");
+  EXPECT_THROW(SparseSolveCovarianceSolver(S, ordering), std::invalid_argument);
 }
 
 TEST(ConditionalCovariance, ForcedPermutationIsKeptAndTrailingBlockMatchesDenseCholesky) {

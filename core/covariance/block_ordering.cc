@@ -56,19 +56,11 @@ std::vector<int> blockNestedDissectionOrdering(const ReducedCameraMatrix& S) {
   const int K = S.numBlocks();
   std::vector<int> perm(K);
   if (K == 0) return perm;
-  // A pattern-only view of the block pattern (both triangles stored; stype 1 reads the
-  // upper one). CHOLMOD does not modify its input.
-  cholmod_sparse pattern{};
-  pattern.nrow = pattern.ncol = static_cast<size_t>(K);
-  pattern.nzmax = S.block_row_index.size();
-  pattern.p = const_cast<int*>(S.block_col_ptr.data());
-  pattern.i = const_cast<int*>(S.block_row_index.data());
-  pattern.stype = 1;
-  pattern.itype = CHOLMOD_INT;
+  // A pattern-only view of the block pattern: both triangles are stored, and a view with
+  // stype 1 ignores the lower one. CHOLMOD does not modify its input.
+  cholmod_sparse pattern = cholmodUpperView(K, const_cast<int*>(S.block_col_ptr.data()),
+                                            const_cast<int*>(S.block_row_index.data()), nullptr);
   pattern.xtype = CHOLMOD_PATTERN;
-  pattern.dtype = CHOLMOD_DOUBLE;
-  pattern.sorted = 1;
-  pattern.packed = 1;
   CholmodCommon common;
   if (!cholmod_metis(&pattern, nullptr, 0, /*postorder=*/1, perm.data(), common.get()) ||
       common.get()->status < CHOLMOD_OK) {

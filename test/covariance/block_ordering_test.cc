@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "test/covariance/covariance_test_util.h"
+#include "test/test_support/enum_names.h"
 
 namespace cblox {
 namespace {
@@ -36,15 +37,8 @@ TEST(BlockOrdering, EveryOrderingIsAPermutationOfTheBlocks) {
 }
 
 TEST(BlockOrdering, NamesRoundTrip) {
-  for (const BlockOrdering o : {BlockOrdering::kAmd, BlockOrdering::kNestedDissection}) {
-    BlockOrdering back =
-        o == BlockOrdering::kAmd ? BlockOrdering::kNestedDissection : BlockOrdering::kAmd;
-    ASSERT_TRUE(parseBlockOrdering(blockOrderingName(o), &back));
-    EXPECT_EQ(back, o);
-  }
-  BlockOrdering untouched = BlockOrdering::kAmd;
-  EXPECT_FALSE(parseBlockOrdering("metis", &untouched));
-  EXPECT_EQ(untouched, BlockOrdering::kAmd);
+  test::expectNamesRoundTrip({BlockOrdering::kAmd, BlockOrdering::kNestedDissection},
+                             blockOrderingName, parseBlockOrdering, "metis");
 }
 
 }  // namespace

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test/test_support/enum_names.h"
+
 namespace cblox {
 namespace {
 
@@ -367,16 +369,9 @@ TEST(FusionSchedulerTest, MostSharedTiesGoToTheLowestIdsAndUnknownKeyframesAreNe
 }
 
 TEST(FusionSchedulerTest, PairKeyframesNamesRoundTrip) {
-  for (const PairKeyframes c : {PairKeyframes::kAnchors, PairKeyframes::kMostShared,
-                                PairKeyframes::kMostSharedOnRevisits}) {
-    PairKeyframes back =
-        c == PairKeyframes::kAnchors ? PairKeyframes::kMostShared : PairKeyframes::kAnchors;
-    ASSERT_TRUE(parsePairKeyframes(pairKeyframesName(c), &back));
-    EXPECT_EQ(back, c);
-  }
-  PairKeyframes untouched = PairKeyframes::kAnchors;
-  EXPECT_FALSE(parsePairKeyframes("nearest", &untouched));
-  EXPECT_EQ(untouched, PairKeyframes::kAnchors);
+  test::expectNamesRoundTrip(
+      {PairKeyframes::kAnchors, PairKeyframes::kMostShared, PairKeyframes::kMostSharedOnRevisits},
+      pairKeyframesName, parsePairKeyframes, "nearest");
   FusionSchedulerConfig bad;
   bad.pair_keyframes = static_cast<PairKeyframes>(7);
   EXPECT_NE(bad.validate().find("pair_keyframes"), std::string::npos);

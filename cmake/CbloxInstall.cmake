@@ -8,7 +8,8 @@
 #                                       calibration/ (CBLOX_CONFIG_DIR; /etc even for /usr/local,
 #                                       where operators look for it)
 #   <prefix>/share/cblox/               cblox_orb.vocab (the place-recognition vocabulary),
-#                                       examples/ (capture configs for real cameras)
+#                                       examples/ (capture configs for real cameras; tracker
+#                                       settings for street drives)
 #   <prefix>/share/java/                cblox_lcmtypes.jar (for lcm-spy)
 #   <prefix>/lib/systemd/system/        cblox-{capture,tracker,mapper}.service, cblox.target
 #   <prefix>/lib/sysctl.d/              60-cblox-lcm.conf (socket buffers for LCM images)

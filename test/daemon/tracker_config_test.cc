@@ -256,6 +256,21 @@ TEST(TrackerConfigTest, SlamSettingsOfAFile) {
   EXPECT_EQ(defaults->tracker.reference_ratio, TrackerConfig{}.reference_ratio);
 }
 
+// The README's street-drive example loads and sets exactly what it says.
+TEST(TrackerConfigTest, StreetDriveExampleLoads) {
+  std::string error;
+  const std::optional<SlamSystemConfig> slam = loadSlamSettings(
+      std::string(CBLOX_CONFIG_DIR) + "/examples/tracker_street_drive.yaml", &error);
+  ASSERT_TRUE(slam.has_value()) << error;
+  EXPECT_EQ(slam->tracker.reference_ratio, 0.5);
+  EXPECT_EQ(slam->tracker.close_points_min_frames, 16);
+  EXPECT_EQ(slam->tracker.close_points_turn_deg, 5.0);
+  EXPECT_EQ(slam->tracker.close_points_gap_min_inliers, 100);
+  EXPECT_EQ(slam->loop_closing.global_ba.first_pass_iterations, 30);
+  EXPECT_EQ(slam->tracker.max_frames_between_keyframes,
+            TrackerConfig{}.max_frames_between_keyframes);
+}
+
 TEST(TrackerConfigTest, RejectsBadKeysAndValuesNamingThem) {
   struct Case {
     const char* yaml;

@@ -21,7 +21,7 @@ namespace {
 
 constexpr int kBlockSetLog2Buckets = 16;
 constexpr size_t kBlocksPerClaim = 4;
-constexpr int kSearchCellPixels = 8;  // block search cell, split while its depth range is large
+constexpr int kSearchCellPixels = 8;  // block search cell (pixels per side)
 
 struct ThreadState {
   IntegrationStats stats;
@@ -108,32 +108,47 @@ ProjectiveTsdfIntegrator::ProjectiveTsdfIntegrator(const IntegratorConfig& confi
   if (!error.empty()) throw std::invalid_argument("IntegratorConfig: " + error);
 }
 
-void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0, int v0, int size,
+void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0, int v0,
                                              std::vector<uint64_t>* keys) {
   const int width = width_, height = height_;
-  const int u1 = std::min(u0 + size, width), v1 = std::min(v0 + size, height);
+  const int u1 = std::min(u0 + kSearchCellPixels, width);
+  const int v1 = std::min(v0 + kSearchCellPixels, height);
+  float depths[kSearchCellPixels * kSearchCellPixels];
+  int n = 0;
   float d_min = std::numeric_limits<float>::infinity(), d_max = 0.0f;
   for (int v = v0; v < v1; ++v) {
     const PixelSample* row = &samples_[static_cast<size_t>(v) * static_cast<size_t>(width)];
     for (int u = u0; u < u1; ++u) {
       const float d = row[u].depth;
       if (d > 0.0f) {
+        depths[n++] = d;
         d_min = std::min(d_min, d);
         d_max = std::max(d_max, d);
       }
     }
   }
-  if (d_max <= 0.0f) return;  // no valid pixel
+  if (n == 0) return;  // no valid pixel
   const float truncation = config_.truncation_distance_m;
-  if (size > 1 && d_max - d_min > truncation) {
-    const int half = size / 2;
-    for (int dv = 0; dv < size; dv += half) {
-      for (int du = 0; du < size; du += half) {
-        if (u0 + du < width && v0 + dv < height) collectBlocks(T_G_C, u0 + du, v0 + dv, half, keys);
-      }
-    }
+  if (d_max - d_min <= truncation) {
+    addSegmentBlocks(T_G_C, u0, v0, u1, v1, d_min, d_max, keys);
     return;
   }
+  // Groups of depths separated by more than the truncation: one segment each.
+  std::sort(depths, depths + n);
+  float first = depths[0];
+  for (int i = 1; i < n; ++i) {
+    if (depths[i] - depths[i - 1] > truncation) {
+      addSegmentBlocks(T_G_C, u0, v0, u1, v1, first, depths[i - 1], keys);
+      first = depths[i];
+    }
+  }
+  addSegmentBlocks(T_G_C, u0, v0, u1, v1, first, depths[n - 1], keys);
+}
+
+void ProjectiveTsdfIntegrator::addSegmentBlocks(const Transformation& T_G_C, int u0, int v0, int u1,
+                                                int v1, float d_min, float d_max,
+                                                std::vector<uint64_t>* keys) {
+  const float truncation = config_.truncation_distance_m;
   // The cell's rays leave its centre ray by at most half its diagonal (plus the half pixel
   // by which a voxel centre can miss its pixel's ray).
   const PinholeIntrinsics& K = factor_camera_;
@@ -243,7 +258,7 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
     ThreadState& state = states[static_cast<size_t>(id)];
     for (int c = next_cell.fetch_add(1); c < cells_x * cells_y; c = next_cell.fetch_add(1)) {
       collectBlocks(T_G_C, (c % cells_x) * kSearchCellPixels, (c / cells_x) * kSearchCellPixels,
-                    kSearchCellPixels, &state.block_keys);
+                    &state.block_keys);
     }
   });
 

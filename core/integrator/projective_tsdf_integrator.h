@@ -20,11 +20,13 @@ namespace cblox {
 /// pixel's depth, z the voxel centre's depth and (x_n, y_n) the pixel's normalised
 /// coordinates (a per-pixel factor computed once per camera, as Open3D does).
 ///
-/// Block search: the image is cut into 8x8-pixel cells; a cell whose valid depths span
-/// at most the truncation distance contributes the blocks around the segment of its
-/// centre ray between its nearest and farthest depth, widened by the truncation and the
-/// cell's lateral extent; a cell with a larger depth range is split in four, down to
-/// single pixels. No voxel within truncation of a measured point is missed.
+/// Block search: the image is cut into 8x8-pixel cells. A cell's valid depths, in order,
+/// fall into groups wherever two neighbours are more than the truncation distance apart
+/// (one group on a surface, one per surface across a depth edge). Each group contributes
+/// the blocks around the segment of the cell's centre ray between its nearest and farthest
+/// depth, widened by the truncation and the cell's lateral extent, so the empty space
+/// between a foreground and a background surface gets no blocks. No voxel within
+/// truncation of a measured point is missed.
 ///
 /// Compared with the ray-casting integrators it maps no free space outside the blocks
 /// of the truncation band, and it is much faster. Every voxel is owned by exactly one
@@ -51,8 +53,11 @@ class ProjectiveTsdfIntegrator {
  private:
   IntegratorConfig config_;
   TsdfLayer* layer_;
-  void collectBlocks(const Transformation& T_G_C, int u0, int v0, int size,
-                     std::vector<uint64_t>* keys);
+  // The blocks of one search cell (pixels [u0, u0 + 8) x [v0, v0 + 8), clipped to the image).
+  void collectBlocks(const Transformation& T_G_C, int u0, int v0, std::vector<uint64_t>* keys);
+  // The blocks around the cell's centre ray between depths d_min and d_max.
+  void addSegmentBlocks(const Transformation& T_G_C, int u0, int v0, int u1, int v1, float d_min,
+                        float d_max, std::vector<uint64_t>* keys);
 
   // What the voxel loop reads per pixel, interleaved so one cache line serves both.
   struct PixelSample {

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The whole pipeline at the sensor's rate from a recorded log (issue 17, item 5): a simulated
-# run is recorded once with lcm-logger (scripts/record.sh, the capture at 20 Hz), then played
+# run is recorded once with lcm-logger (scripts/record_sim.sh, the capture at 20 Hz), then played
 # with lcm-logplayer in real time into cblox-tracker + cblox-mapper with the shipped configs
 # (config/tracker.yaml, config/mapper.yaml; tracker poses), in a private network namespace
 # (scripts/netns-run.sh). No renderer runs during the measurement: the processes see what
@@ -64,16 +64,7 @@ if [[ -z "$log" ]]; then
   log="$out/$scene.lcmlog"
   recorded=1
   echo "bench_pipeline_replay: recording sim:$scene ($trajectory, $laps laps) at 20 Hz to $log"
-  CBLOX_BIN="$bin" LOG="$log" SCENE="$scene" TRAJ="$trajectory" LAPS="$laps" FRAMES="$frames" \
-    scripts/netns-run.sh bash -c '
-      url="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
-      scripts/record.sh --lcm-url "$url" --force "$LOG" > /dev/null 2>&1 &
-      logger=$!
-      sleep 0.5
-      "$CBLOX_BIN/cblox-capture" --source "sim:$SCENE" --trajectory "$TRAJ" --laps "$LAPS" \
-        --frames "$FRAMES" --rate 20 --lcm-url "$url" --quiet
-      sleep 0.5
-      kill -INT $logger; wait $logger || true'
+  scripts/record_sim.sh "$scene" "$trajectory" "$laps" "$frames" "$log"
   echo "bench_pipeline_replay: recorded $(du -h "$log" | cut -f1)"
 fi
 [[ -s "$log" ]] || { echo "bench_pipeline_replay: no log at $log" >&2; exit 1; }
@@ -138,14 +129,15 @@ t0, t1 = float(rows[0][0]), float(rows[-2][0])  # the replay: first sample to th
 def share(pts):
     inside = [p for p in pts if t0 <= p[0] <= t1]
     return (inside[-1][1] - inside[0][1]) / (inside[-1][0] - inside[0][0])
-def window_max(pts, width=10.0):
-    best = 0.0
+def window_max(pts, width=10.0):  # "-" when the replay is shorter than one window
+    best = None
     for i, (ti, ci) in enumerate(pts):
         for tj, cj in pts[i + 1:]:
             if tj - ti >= width:
-                best = max(best, (cj - ci) / (tj - ti))
+                rate = (cj - ci) / (tj - ti)
+                best = rate if best is None else max(best, rate)
                 break
-    return best
+    return "-" if best is None else f"{best:.2f}"
 tracker, mapper = series(1), series(3)
 both = [(a[0], a[1] + b[1]) for a, b in zip(tracker, mapper)]
 hwm = [int(x) / 1024 for x in open(f"{work}/hwm.txt").read().split()]
@@ -167,14 +159,14 @@ lines = [
     "|---|---|---|---|---|",
 ]
 if tr:
-    lines.append(f"| cblox-tracker | {share(tracker):.2f} | {window_max(tracker):.2f} | {hwm[0]:.0f} MiB | "
+    lines.append(f"| cblox-tracker | {share(tracker):.2f} | {window_max(tracker)} | {hwm[0]:.0f} MiB | "
                  f"{tr[0]} processed, {tr[1]} tracked, {tr[2]} lost, {tr[4]} dropped, {tr[5]} rejected; "
                  f"{tr[6]} keyframes, {tr[7]} loops; frame median {tr[9]} ms, p95 {tr[10]} ms |")
 if mp:
-    lines.append(f"| cblox-mapper | {share(mapper):.2f} | {window_max(mapper):.2f} | {hwm[1]:.0f} MiB | "
+    lines.append(f"| cblox-mapper | {share(mapper):.2f} | {window_max(mapper)} | {hwm[1]:.0f} MiB | "
                  f"{mp[0]} integrated, {mp[1]} dropped, {mp[2]} rejected; {mp[3]} subvolumes; "
                  f"integration median {mp[4]} ms, p99 {mp[5]} ms |")
-lines.append(f"| tracker + mapper | **{share(both):.2f}** | {window_max(both):.2f} | {sum(hwm):.0f} MiB | |")
+lines.append(f"| tracker + mapper | **{share(both):.2f}** | {window_max(both)} | {sum(hwm):.0f} MiB | |")
 lines.append("")
 lines.append(f"Exit status: tracker {status['tracker']}, mapper {status['mapper']}, "
              f"lcm-logplayer {status['logplayer']}.")

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Offline replay speed: records a simulated run with lcm-logger (scripts/record.sh, in a
+# Offline replay speed: records a simulated run with lcm-logger (scripts/record_sim.sh, in a
 # private network namespace), then replays it with cblox-replay (tracker + mapper in one
 # process, deterministic) and prints frames per second and the speed against real time
 # (the sensor's 20 Hz).
@@ -30,16 +30,7 @@ bin=$(cd "$BUILD_DIR/daemon" && pwd)
 log="$out/$scene.lcmlog"
 
 # Record at 20 Hz, as a live run would be (lcm-logger keeps up; capture renders in time).
-CBLOX_BIN="$bin" LOG="$log" SCENE="$scene" TRAJ="$trajectory" LAPS="$laps" FRAMES="$frames" \
-  scripts/netns-run.sh bash -c '
-    url="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
-    scripts/record.sh --lcm-url "$url" --force "$LOG" > /dev/null 2>&1 &
-    logger=$!
-    sleep 0.5
-    "$CBLOX_BIN/cblox-capture" --source "sim:$SCENE" --trajectory "$TRAJ" --laps "$LAPS" \
-      --frames "$FRAMES" --rate 20 --lcm-url "$url" --quiet
-    sleep 0.5
-    kill -INT $logger; wait $logger || true'
+scripts/record_sim.sh "$scene" "$trajectory" "$laps" "$frames" "$log"
 echo "bench_replay: recorded $(du -h "$log" | cut -f1) to $log"
 
 "$bin/cblox-replay" "$log" --out "$out/${scene}_replay" --mapper-config config/mapper.yaml \

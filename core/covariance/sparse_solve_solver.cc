@@ -259,18 +259,16 @@ std::vector<ConditionalCovariance> SparseSolveCovarianceSolver::compute(
     std::span<const KeyframePair> pairs) {
   clearCache();
   if (factor_error_.empty()) {
-    // Every keyframe the pairs need, solved in shared sweeps (each block of L read once per
-    // sweep for all of them).
+    // Every keyframe the pairs need (the cache is empty), solved in shared sweeps: each block
+    // of L is read once per sweep for all of them.
     std::vector<int> needed;
     for (const KeyframePair& pair : pairs) {
       for (const std::uint64_t id : {pair.i, pair.j}) {
-        const int block = S_.blockOf(id);
-        if (block >= 0 && cache_slot_[block] < 0 &&
-            std::find(needed.begin(), needed.end(), block) == needed.end()) {
-          needed.push_back(block);
-        }
+        if (const int block = S_.blockOf(id); block >= 0) needed.push_back(block);
       }
     }
+    std::sort(needed.begin(), needed.end());
+    needed.erase(std::unique(needed.begin(), needed.end()), needed.end());
     solveTogether(needed);
   }
   return computeValidPairs(S_, pairs, factor_error_, [&](const KeyframePair& pair) {

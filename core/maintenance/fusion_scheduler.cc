@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
 #include <stdexcept>
 
@@ -250,10 +251,8 @@ std::optional<FusionCovarianceRequest> FusionScheduler::nextRequest(int64_t acti
     pair.newer_keyframe = anchors_.at(newer);
     if (config_.pair_keyframes != PairKeyframes::kAnchors) {
       const auto [older_keyframe, newer_keyframe, shared] = mostSharedKeyframes(older, newer);
-      const int64_t gap = newer_keyframe > older_keyframe ? newer_keyframe - older_keyframe
-                                                          : older_keyframe - newer_keyframe;
       if (config_.pair_keyframes == PairKeyframes::kMostShared ||
-          gap >= config_.revisit_keyframe_gap) {
+          std::abs(newer_keyframe - older_keyframe) >= config_.revisit_keyframe_gap) {
         pair.older_keyframe = older_keyframe;
         pair.newer_keyframe = newer_keyframe;
         pair.keyframe_shared_landmarks = shared;

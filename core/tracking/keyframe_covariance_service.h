@@ -23,7 +23,7 @@ enum class CovarianceMethod {
   kConstrainedOrdering,  ///< the paper's: one CAMD ordering + factorisation per pair
   kBatch,                ///< all keyframes of the request last in one factorisation
   kKaessRecovery,        ///< one AMD factorisation, Kaess & Dellaert recovery per pair
-  kSparseSolve,          ///< one AMD factorisation, sparse forward solves per keyframe
+  kSparseSolve,          ///< one nested-dissection factorisation, sparse forward solves
 };
 /// "constrained_ordering", "batch", "kaess_recovery", "sparse_solve". Thread-safe.
 const char* covarianceMethodName(CovarianceMethod method);
@@ -40,8 +40,8 @@ struct KeyframeCovarianceServiceConfig {
   /// A linearization (S and the solver's factorisation) answers later requests while it is
   /// at most this old, the map has had no loop closure or global BA since
   /// (SparseMap::changeIndex), and every keyframe asked about has a block in it (a culled
-  /// one through the keyframe it is tied to); otherwise the map is read and linearised again (so errors on ids are
-  /// always those of the current map). 0 = a fresh linearization per request.
+  /// one through the keyframe it is tied to); otherwise the map is read and linearised again (so
+  /// errors on ids are always those of the current map). 0 = a fresh linearization per request.
   /// Local BA moves poses in the meantime: this bounds how stale an answer can be.
   double max_linearization_age_s = 5.0;
   /// The linearization: Huber reweighting on (observations that BA would call outliers

@@ -1,6 +1,7 @@
 // Conditional covariance extraction (issue 6, item 6): per-pair constrained ordering (the
-// paper's method), AMD + Kaess & Dellaert recovery, batch mode, AMD + sparse forward solves
-// (SparseSolveCovarianceSolver) and ceres::Covariance, on closed-loop synthetic BA problems
+// paper's method), AMD + Kaess & Dellaert recovery, batch mode, sparse forward solves
+// (SparseSolveCovarianceSolver; nested dissection, and AMD for comparison) and
+// ceres::Covariance, on closed-loop synthetic BA problems
 // (default; test/covariance/loop_scene.h: 50 landmarks per keyframe, 3-8 observers each, 30%
 // re-observed on the other lap) or, with --scene, on REAL sparse-SLAM BA problems: the SLAM
 // system runs in-process on the simulator scene (trajectory loop, --laps laps, at --rate) and
@@ -86,7 +87,7 @@ double minTimeMs(int repeats, F&& f) {
   return best;
 }
 
-// The sparse solve with one block ordering.
+// The sparse solve with one configuration (ordering, kernel).
 struct SparseTimes {
   double factor_ms = 0;
   double pair_ms = 0;   // each pair in its own compute() call
@@ -318,7 +319,7 @@ Row runProblem(const BundleAdjustmentProblem& problem, const BaLinearizationConf
   }
 
   // Sparse solve: factor once, then each pair in its own call, then all pairs in one call;
-  // with the default ordering and with AMD.
+  // with the defaults, with the AMD ordering and with the portable kernel.
   std::vector<ConditionalCovariance> got(pairs.size());
   auto sparseTimes = [&](const SparseSolveCovarianceSolverConfig& config) {
     SparseTimes t;

@@ -7,12 +7,13 @@
 //   (d) on     the same with map maintenance: covisible subvolumes whose conditional
 //              covariance q = 1/||Sigma_{i|j}||_2 reaches q_min are fused (one mapper per
 //              q_min of the sweep, each with its own covariance service on the live map),
-//              q asked of the two anchor keyframes (the default, the paper's); and for
-//              each q_min of --most-shared-q-min, q asked of the keyframes that share the
-//              most landmarks (maintenance.pair_keyframes: most_shared, for comparison);
-//              for each of --revisit-overlap-q-min, q asked of those keyframes only when
-//              their ids are --revisit-keyframe-gap apart, else of the anchors
-//              (maintenance.pair_keyframes: most_shared_on_revisits);
+//              q asked of the keyframes the default maintenance.pair_keyframes names
+//              (most_shared_on_revisits: the two that share the most landmarks when their
+//              ids are --revisit-keyframe-gap apart, else the anchors); for each q_min of
+//              --anchors-q-min, q always asked of the two anchor keyframes (the paper's
+//              rule, for comparison); for each of --most-shared-q-min, always of the
+//              keyframes that share the most landmarks (most_shared, for comparison); for
+//              each of --revisit-overlap-q-min, explicitly most_shared_on_revisits;
 //              with --revisit-q-min, an off map and these q_min with subvolumes also
 //              started at revisits (subvolumes.revisit_anchor_distance_m); with
 //              --revisit-frames-q-min, an off map and these q_min with frames tracked in an
@@ -38,6 +39,7 @@
 //                           [--depth exact|stereo] [--depth-noise K] [--no-sync-slam]
 //                           [--min-shared-landmarks 30] [--min-shared-ratio 0.05]
 //                           [--q-min 3e3,1e4,3e4,1e5] [--most-shared-q-min Q,...]
+//                           [--anchors-q-min Q,...]
 //                           [--revisit-overlap-q-min Q,... [--revisit-keyframe-gap 30]]
 //                           [--out DIR]
 //
@@ -106,7 +108,7 @@ struct Variant {
   std::string name;
   Kind kind = Kind::kOff;
   double q_min = 0.0;
-  PairKeyframes pair_keyframes = PairKeyframes::kAnchors;
+  PairKeyframes pair_keyframes = FusionSchedulerConfig{}.pair_keyframes;
   double revisit_m = 0.0;  ///< subvolumes.revisit_anchor_distance_m
   int revisit_frames = 0;  ///< subvolumes.revisit_after_frames
   std::mutex pairs_mutex;
@@ -156,6 +158,7 @@ int run(int argc, char** argv) {
   std::vector<double> sweep = {3e3, 1e4, 3e4, 1e5};
   std::vector<double> most_shared_sweep;
   std::vector<double> revisit_overlap_sweep;
+  std::vector<double> anchors_sweep;
   int revisit_keyframe_gap = FusionSchedulerConfig{}.revisit_keyframe_gap;
 #ifdef CBLOX_DEFAULT_VOCABULARY
   vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
@@ -243,6 +246,14 @@ int run(int argc, char** argv) {
       ->allow_extra_args(false)
       ->expected(0, 1 << 20)
       ->type_name("Q[,Q...]");
+  app.add_option("--anchors-q-min", anchors_sweep,
+                 "also these q_min with q always asked of the subvolumes' anchors "
+                 "(maintenance.pair_keyframes: anchors, the paper's rule; comma-separated; "
+                 "default none)")
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->expected(0, 1 << 20)
+      ->type_name("Q[,Q...]");
   app.add_option("--revisit-keyframe-gap", revisit_keyframe_gap,
                  "keyframe ids between the most shared keyframes of a revisit pair")
       ->capture_default_str();
@@ -322,7 +333,7 @@ int run(int argc, char** argv) {
   std::mutex positions_mutex;
   std::map<int64_t, Eigen::Vector3d> keyframe_positions;
   auto add = [&](std::string name, Kind kind, double q_min,
-                 PairKeyframes pair_keyframes = PairKeyframes::kAnchors,
+                 PairKeyframes pair_keyframes = FusionSchedulerConfig{}.pair_keyframes,
                  std::optional<double> revisit_m = std::nullopt,
                  std::optional<int> frames = std::nullopt) {
     auto v = std::make_unique<Variant>();
@@ -426,27 +437,34 @@ int run(int argc, char** argv) {
     std::snprintf(name, sizeof(name), "on q>=%.0g most shared", q);
     add(name, Kind::kOn, q, PairKeyframes::kMostShared);
   }
+  for (const double q : anchors_sweep) {
+    char name[40];
+    std::snprintf(name, sizeof(name), "on q>=%.0g anchors", q);
+    add(name, Kind::kOn, q, PairKeyframes::kAnchors);
+  }
   for (const double q : revisit_overlap_sweep) {
     char name[48];
     std::snprintf(name, sizeof(name), "on q>=%.0g revisit overlap", q);
     add(name, Kind::kOn, q, PairKeyframes::kMostSharedOnRevisits);
   }
   if (!revisit_sweep.empty()) {
-    add("off revisit", Kind::kOff, 0.0, PairKeyframes::kAnchors, revisit_variant_distance);
+    add("off revisit", Kind::kOff, 0.0, FusionSchedulerConfig{}.pair_keyframes,
+        revisit_variant_distance);
   }
   for (const double q : revisit_sweep) {
     char name[40];
     std::snprintf(name, sizeof(name), "on q>=%.0g revisit", q);
-    add(name, Kind::kOn, q, PairKeyframes::kAnchors, revisit_variant_distance);
+    add(name, Kind::kOn, q, FusionSchedulerConfig{}.pair_keyframes, revisit_variant_distance);
   }
   if (!revisit_frames_sweep.empty()) {
-    add("off frames", Kind::kOff, 0.0, PairKeyframes::kAnchors, std::nullopt,
+    add("off frames", Kind::kOff, 0.0, FusionSchedulerConfig{}.pair_keyframes, std::nullopt,
         revisit_variant_frames);
   }
   for (const double q : revisit_frames_sweep) {
     char name[40];
     std::snprintf(name, sizeof(name), "on q>=%.0g frames", q);
-    add(name, Kind::kOn, q, PairKeyframes::kAnchors, std::nullopt, revisit_variant_frames);
+    add(name, Kind::kOn, q, FusionSchedulerConfig{}.pair_keyframes, std::nullopt,
+        revisit_variant_frames);
   }
 
   std::map<uint64_t, Transformationd> truth_by_frame;  // for the trajectory alignment

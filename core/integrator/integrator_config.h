@@ -68,6 +68,12 @@ struct IntegratorConfig {
   /// set when it is kApproxHashSet).
   int approx_set_log2_buckets = 20;
 
+  // --- projective integrator only ---
+  /// Rows of voxels are updated eight at a time with AVX2 where the CPU has it and the
+  /// block's voxels_per_side is a multiple of 8; false: one voxel at a time. The results are
+  /// the same bit for bit (ProjectiveVoxelRows).
+  bool vectorized = true;
+
   /// Empty when valid, otherwise a message naming the offending field. `voxel_size` is
   /// the layer's voxel size, needed to check the truncation distance.
   std::string validate(float voxel_size) const;

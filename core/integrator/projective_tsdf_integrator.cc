@@ -11,9 +11,7 @@
 #include "core/integrator/even_coverage_order.h"
 #include "core/integrator/thread_team.h"
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
+#include "core/integrator/projective_voxel_rows.h"
 #include "core/integrator/tsdf_voxel_update.h"
 
 namespace cblox {
@@ -26,72 +24,6 @@ constexpr int kSearchCellPixels = 8;  // block search cell (pixels per side)
 struct ThreadState {
   IntegrationStats stats;
   std::vector<uint64_t> block_keys;
-};
-
-// One row of `count` voxel centres p_i = p0 + i * step (camera frame) projected into the
-// image: z_i, and the index of the nearest pixel, or -1 when the centre is behind the
-// camera or its nearest pixel is outside the image. `cx`, `cy` include the +0.5 of
-// rounding, so the nearest pixel is the truncation of (u, v) once they are >= 0.
-struct RowProjector {
-  float fx, fy, cx, cy;
-  int width, height;
-  static constexpr float kMinZ = 1e-6f;
-
-  void project(const Eigen::Vector3f& p0, const Eigen::Vector3f& step, int count, float* z_out,
-               int32_t* pixel_out) const {
-    int i = 0;
-#if defined(__SSE2__)
-    // Four voxels at a time. The pixel index is formed in float, exact while the image
-    // has fewer than 2^24 pixels.
-    if (static_cast<int64_t>(width) * height < (int64_t{1} << 24)) {
-      const __m128 eps = _mm_set1_ps(kMinZ), zero = _mm_setzero_ps();
-      const __m128 w = _mm_set1_ps(static_cast<float>(width));
-      const __m128 h = _mm_set1_ps(static_cast<float>(height));
-      const __m128 last_u = _mm_set1_ps(static_cast<float>(width - 1));
-      const __m128 last_v = _mm_set1_ps(static_cast<float>(height - 1));
-      const __m128i minus_one = _mm_set1_epi32(-1);
-      for (; i + 4 <= count; i += 4) {
-        const __m128 fi = _mm_setr_ps(static_cast<float>(i), static_cast<float>(i + 1),
-                                      static_cast<float>(i + 2), static_cast<float>(i + 3));
-        const __m128 x = _mm_add_ps(_mm_set1_ps(p0.x()), _mm_mul_ps(fi, _mm_set1_ps(step.x())));
-        const __m128 y = _mm_add_ps(_mm_set1_ps(p0.y()), _mm_mul_ps(fi, _mm_set1_ps(step.y())));
-        const __m128 z = _mm_add_ps(_mm_set1_ps(p0.z()), _mm_mul_ps(fi, _mm_set1_ps(step.z())));
-        const __m128 inv_z = _mm_div_ps(_mm_set1_ps(1.0f), _mm_max_ps(z, eps));
-        const __m128 u =
-            _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(fx), x), inv_z), _mm_set1_ps(cx));
-        const __m128 v =
-            _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(fy), y), inv_z), _mm_set1_ps(cy));
-        const __m128 inside =
-            _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(z, eps),
-                                  _mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmpge_ps(v, zero))),
-                       _mm_and_ps(_mm_cmplt_ps(u, w), _mm_cmplt_ps(v, h)));
-        const __m128i ui = _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(u, zero), last_u));
-        const __m128i vi = _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(v, zero), last_v));
-        const __m128i pixel =
-            _mm_cvttps_epi32(_mm_add_ps(_mm_mul_ps(_mm_cvtepi32_ps(vi), w), _mm_cvtepi32_ps(ui)));
-        const __m128i mask = _mm_castps_si128(inside);
-        _mm_storeu_si128(
-            reinterpret_cast<__m128i*>(pixel_out + i),
-            _mm_or_si128(_mm_and_si128(mask, pixel), _mm_andnot_si128(mask, minus_one)));
-        _mm_storeu_ps(z_out + i, z);
-      }
-    }
-#endif
-    for (; i < count; ++i) {
-      const float fi = static_cast<float>(i);
-      const float z = p0.z() + fi * step.z();
-      z_out[i] = z;
-      pixel_out[i] = -1;
-      if (!(z > kMinZ)) continue;
-      const float u = fx * (p0.x() + fi * step.x()) / z + cx;
-      const float v = fy * (p0.y() + fi * step.y()) / z + cy;
-      if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(width) &&
-            v < static_cast<float>(height))) {
-        continue;
-      }
-      pixel_out[i] = static_cast<int32_t>(v) * width + static_cast<int32_t>(u);
-    }
-  }
 };
 
 bool sameIntrinsics(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
@@ -117,7 +49,8 @@ void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0
   int n = 0;
   float d_min = std::numeric_limits<float>::infinity(), d_max = 0.0f;
   for (int v = v0; v < v1; ++v) {
-    const PixelSample* row = &samples_[static_cast<size_t>(v) * static_cast<size_t>(width)];
+    const ProjectivePixelSample* row =
+        &samples_[static_cast<size_t>(v) * static_cast<size_t>(width)];
     for (int u = u0; u < u1; ++u) {
       const float d = row[u].depth;
       if (d > 0.0f) {
@@ -286,9 +219,8 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   const Eigen::Matrix3f R_C_G = T_C_G.rotationMatrix();
   const Eigen::Vector3f t_C_G = T_C_G.translation();
   const float voxel_size = layer_->voxelSize();
-  const float truncation = config_.truncation_distance_m;
   const float fx = static_cast<float>(K.fx), fy = static_cast<float>(K.fy);
-  const float cx = static_cast<float>(K.cx) + 0.5f, cy = static_cast<float>(K.cy) + 0.5f;
+  const float cx = static_cast<float>(K.cx), cy = static_cast<float>(K.cy);
   const int vps = layer_->voxelsPerSide();
   const Eigen::Vector3f step_x = R_C_G.col(0) * voxel_size;
   const Eigen::Vector3f step_y = R_C_G.col(1) * voxel_size;
@@ -301,8 +233,8 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
     for (size_t b = 0; b < blocks.size(); ++b) {
       const Eigen::Vector3f c = R_C_G * (blocks[b]->origin() + half_block) + t_C_G;
       const float z = std::max(c.z(), 1e-3f);
-      const int u = std::clamp(static_cast<int>(fx * c.x() / z + cx), 0, width - 1) >> 4;
-      const int v = std::clamp(static_cast<int>(fy * c.y() / z + cy), 0, height - 1) >> 4;
+      const int u = std::clamp(static_cast<int>(fx * c.x() / z + cx + 0.5f), 0, width - 1) >> 4;
+      const int v = std::clamp(static_cast<int>(fy * c.y() / z + cy + 0.5f), 0, height - 1) >> 4;
       order[b] = {static_cast<uint32_t>(v * ((width >> 4) + 1) + u), b};
     }
     std::sort(order.begin(), order.end());
@@ -323,16 +255,20 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
       config_.max_integration_time_s > 0.0 ? evenCoverageOrder(static_cast<uint32_t>(num_claims))
                                            : std::vector<uint32_t>();
   std::atomic<size_t> next_claim{0};
-  const RowProjector projector{fx, fy, cx, cy, width, height};
-  // Raw pointers in locals: the compiler cannot prove voxel writes do not alias members.
-  const PixelSample* const samples = samples_.data();
-  const Color* const colors = color != nullptr && config_.color_blending != ColorBlending::kNone
-                                  ? color->data.data()
-                                  : nullptr;
+  ProjectiveVoxelRows::Frame frame;
+  frame.fx = fx;
+  frame.fy = fy;
+  frame.cx = cx;
+  frame.cy = cy;
+  frame.width = width;
+  frame.height = height;
+  frame.samples = samples_.data();
+  frame.colors = color != nullptr && config_.color_blending != ColorBlending::kNone
+                     ? color->data.data()
+                     : nullptr;
+  const ProjectiveVoxelRows rows(frame, updater, config_.vectorized);
   runThreadTeam(num_threads, [&](int id) {
     IntegrationStats& stats = states[static_cast<size_t>(id)].stats;
-    float row_z[64];  // voxels_per_side <= 64
-    int32_t row_pixel[64];
     for (size_t taken = next_claim.fetch_add(1); taken < num_claims;
          taken = next_claim.fetch_add(1)) {
       const size_t claim = claim_order.empty() ? taken : claim_order[taken];
@@ -349,23 +285,12 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
         const Eigen::Vector3f first_center_C =
             R_C_G * (block.origin() + Eigen::Vector3f::Constant(0.5f * voxel_size)) + t_C_G;
         size_t updates = 0;
-        // Per row of voxels along x: first all projections (SIMD), then lookups and updates.
+        // Row by row of voxels along x (consecutive in memory).
         for (int k = 0; k < vps; ++k) {
           for (int j = 0; j < vps; ++j, voxel += vps) {
             const Eigen::Vector3f row_C =
                 first_center_C + static_cast<float>(k) * step_z + static_cast<float>(j) * step_y;
-            projector.project(row_C, step_x, vps, row_z, row_pixel);
-            for (int i = 0; i < vps; ++i) {
-              const int32_t pixel = row_pixel[i];
-              if (pixel < 0) continue;
-              const PixelSample sample = samples[pixel];
-              const float d = sample.depth;
-              if (d <= 0.0f) continue;
-              const float sdf = (d - row_z[i]) * sample.ray_factor;
-              if (sdf < -truncation) continue;
-              const Color c = colors != nullptr ? colors[pixel] : Color{};
-              if (updater.update(sdf, updater.measurementWeight(d), c, voxel + i)) ++updates;
-            }
+            updates += rows.update(row_C, step_x, vps, voxel);
           }
         }
         if (updates > 0) {

@@ -9,6 +9,7 @@
 #include "core/integrator/approx_hash_set.h"
 #include "core/integrator/integration_stats.h"
 #include "core/integrator/integrator_config.h"
+#include "core/integrator/projective_voxel_rows.h"
 #include "core/tsdf/tsdf_layer.h"
 
 namespace cblox {
@@ -27,6 +28,9 @@ namespace cblox {
 /// depth, widened by the truncation and the cell's lateral extent, so the empty space
 /// between a foreground and a background surface gets no blocks. No voxel within
 /// truncation of a measured point is missed.
+///
+/// Voxels are updated a row at a time (ProjectiveVoxelRows: eight voxels at once on AVX2
+/// CPUs, IntegratorConfig::vectorized).
 ///
 /// Compared with the ray-casting integrators it maps no free space outside the blocks
 /// of the truncation band, and it is much faster. Every voxel is owned by exactly one
@@ -59,15 +63,9 @@ class ProjectiveTsdfIntegrator {
   void addSegmentBlocks(const Transformation& T_G_C, int u0, int v0, int u1, int v1, float d_min,
                         float d_max, std::vector<uint64_t>* keys);
 
-  // What the voxel loop reads per pixel, interleaved so one cache line serves both.
-  struct PixelSample {
-    float depth;       // the frame's depth, 0 where the pixel was rejected
-    float ray_factor;  // ||(x_n, y_n, 1)||
-  };
-
   ApproxHashSet block_set_;
   int width_ = 0, height_ = 0;
-  std::vector<PixelSample> samples_;  // per pixel; ray factors for factor_camera_
+  std::vector<ProjectivePixelSample> samples_;  // per pixel; ray factors for factor_camera_
   PinholeIntrinsics factor_camera_;
 };
 

@@ -27,6 +27,16 @@ class TsdfVoxelUpdater {
 
   /// Truncation distance, metres.
   float truncation() const { return truncation_; }
+  /// The rule's constants, for vectorised copies of update() that must agree with it bit
+  /// for bit (ProjectiveVoxelRows).
+  float maxWeight() const { return max_weight_; }
+  /// Drop-off: with usesDropoff(), a measurement with sdf < -dropoffStart() has its weight
+  /// multiplied by (truncation + sdf) * dropoffScale().
+  bool usesDropoff() const { return use_dropoff_; }
+  float dropoffStart() const { return dropoff_start_; }
+  float dropoffScale() const { return dropoff_scale_; }
+  bool inverseSquareWeight() const { return inverse_square_; }
+  ColorBlending blending() const { return blending_; }
 
   /// Weight of a measurement at camera depth `z` (metres, > 0).
   float measurementWeight(float z) const { return inverse_square_ ? 1.0f / (z * z) : 1.0f; }

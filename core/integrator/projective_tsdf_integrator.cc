@@ -7,6 +7,10 @@
 #include <limits>
 #include <stdexcept>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "core/integrator/deadline.h"
 #include "core/integrator/even_coverage_order.h"
 #include "core/integrator/thread_team.h"
@@ -25,6 +29,58 @@ struct ThreadState {
   IntegrationStats stats;
   std::vector<uint64_t> block_keys;
 };
+
+// The valid depths (> 0) of the pixels [u0, u1) x [v0, v1): how many, the nearest and
+// the farthest.
+struct DepthRange {
+  int count = 0;
+  float d_min = std::numeric_limits<float>::infinity();
+  float d_max = 0.0f;
+};
+DepthRange cellDepthRange(const ProjectivePixelSample* samples, int width, int u0, int v0, int u1,
+                          int v1) {
+  DepthRange range;
+#if defined(__SSE2__)
+  if (u1 - u0 == 8) {  // a full cell row: two vectors of four depths (the rejected are 0)
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+    __m128 lo = inf, hi = zero;
+    int count = 0;
+    for (int v = v0; v < v1; ++v) {
+      const float* p =
+          reinterpret_cast<const float*>(samples + static_cast<size_t>(v) * width + u0);
+      for (int half = 0; half < 2; ++half, p += 8) {
+        const __m128 d =
+            _mm_shuffle_ps(_mm_loadu_ps(p), _mm_loadu_ps(p + 4), _MM_SHUFFLE(2, 0, 2, 0));
+        const __m128 valid = _mm_cmpgt_ps(d, zero);
+        lo = _mm_min_ps(lo, _mm_or_ps(_mm_and_ps(valid, d), _mm_andnot_ps(valid, inf)));
+        hi = _mm_max_ps(hi, d);
+        count += __builtin_popcount(static_cast<unsigned>(_mm_movemask_ps(valid)));
+      }
+    }
+    lo = _mm_min_ps(lo, _mm_shuffle_ps(lo, lo, _MM_SHUFFLE(1, 0, 3, 2)));
+    hi = _mm_max_ps(hi, _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(1, 0, 3, 2)));
+    lo = _mm_min_ss(lo, _mm_shuffle_ps(lo, lo, _MM_SHUFFLE(2, 3, 0, 1)));
+    hi = _mm_max_ss(hi, _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(2, 3, 0, 1)));
+    range.count = count;
+    range.d_min = _mm_cvtss_f32(lo);
+    range.d_max = _mm_cvtss_f32(hi);
+    return range;
+  }
+#endif
+  for (int v = v0; v < v1; ++v) {
+    const ProjectivePixelSample* row = samples + static_cast<size_t>(v) * width;
+    for (int u = u0; u < u1; ++u) {
+      const float d = row[u].depth;
+      if (d > 0.0f) {
+        ++range.count;
+        range.d_min = std::min(range.d_min, d);
+        range.d_max = std::max(range.d_max, d);
+      }
+    }
+  }
+  return range;
+}
 
 bool sameIntrinsics(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
   return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.width == b.width &&
@@ -45,28 +101,23 @@ void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0
   const int width = width_, height = height_;
   const int u1 = std::min(u0 + kSearchCellPixels, width);
   const int v1 = std::min(v0 + kSearchCellPixels, height);
-  float depths[kSearchCellPixels * kSearchCellPixels];
+  const DepthRange range = cellDepthRange(samples_.data(), width, u0, v0, u1, v1);
+  if (range.count == 0) return;  // no valid pixel
+  const float truncation = config_.truncation_distance_m;
+  if (range.d_max - range.d_min <= truncation) {
+    addSegmentBlocks(T_G_C, u0, v0, u1, v1, range.d_min, range.d_max, keys);
+    return;
+  }
+  // Groups of depths separated by more than the truncation: one segment each.
+  float depths[kSearchCellPixels * kSearchCellPixels] = {};
   int n = 0;
-  float d_min = std::numeric_limits<float>::infinity(), d_max = 0.0f;
   for (int v = v0; v < v1; ++v) {
     const ProjectivePixelSample* row =
         &samples_[static_cast<size_t>(v) * static_cast<size_t>(width)];
     for (int u = u0; u < u1; ++u) {
-      const float d = row[u].depth;
-      if (d > 0.0f) {
-        depths[n++] = d;
-        d_min = std::min(d_min, d);
-        d_max = std::max(d_max, d);
-      }
+      if (row[u].depth > 0.0f) depths[n++] = row[u].depth;
     }
   }
-  if (n == 0) return;  // no valid pixel
-  const float truncation = config_.truncation_distance_m;
-  if (d_max - d_min <= truncation) {
-    addSegmentBlocks(T_G_C, u0, v0, u1, v1, d_min, d_max, keys);
-    return;
-  }
-  // Groups of depths separated by more than the truncation: one segment each.
   std::sort(depths, depths + n);
   float first = depths[0];
   for (int i = 1; i < n; ++i) {

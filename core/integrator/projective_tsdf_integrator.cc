@@ -30,6 +30,53 @@ struct ThreadState {
   std::vector<uint64_t> block_keys;
 };
 
+// Writes one image row's depths next to their ray factors: the depth where it is finite,
+// > 0 and its ray length (depth * ray factor) is within [min_length, max_length], else 0;
+// counts the rejected pixels.
+void validateRow(const float* depth, ProjectivePixelSample* samples, int width, float min_length,
+                 float max_length, IntegrationStats* stats) {
+  size_t invalid = 0, out_of_range = 0;
+  int u = 0;
+#if defined(__SSE2__)
+  const __m128 zero = _mm_setzero_ps();
+  const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+  const __m128 lo = _mm_set1_ps(min_length), hi = _mm_set1_ps(max_length);
+  for (; u + 4 <= width; u += 4) {
+    float* p = reinterpret_cast<float*>(samples + u);
+    const __m128 d = _mm_loadu_ps(depth + u);
+    const __m128 s01 = _mm_loadu_ps(p), s23 = _mm_loadu_ps(p + 4);
+    const __m128 ray_factor = _mm_shuffle_ps(s01, s23, _MM_SHUFFLE(3, 1, 3, 1));
+    // Finite and > 0 (NaN fails both comparisons).
+    const __m128 ok = _mm_and_ps(_mm_cmpgt_ps(d, zero), _mm_cmplt_ps(d, inf));
+    const __m128 length = _mm_mul_ps(d, ray_factor);
+    const __m128 in_range = _mm_and_ps(_mm_cmpge_ps(length, lo), _mm_cmple_ps(length, hi));
+    const __m128 valid = _mm_and_ps(ok, in_range);
+    invalid +=
+        4 - static_cast<size_t>(__builtin_popcount(static_cast<unsigned>(_mm_movemask_ps(ok))));
+    out_of_range += static_cast<size_t>(
+        __builtin_popcount(static_cast<unsigned>(_mm_movemask_ps(_mm_andnot_ps(in_range, ok)))));
+    const __m128 kept = _mm_and_ps(valid, d);
+    _mm_storeu_ps(p, _mm_unpacklo_ps(kept, ray_factor));
+    _mm_storeu_ps(p + 4, _mm_unpackhi_ps(kept, ray_factor));
+  }
+#endif
+  for (; u < width; ++u) {
+    const float d = depth[u];
+    float valid = 0.0f;
+    if (!std::isfinite(d) || d <= 0.0f) {
+      ++invalid;
+    } else if (const float length = d * samples[u].ray_factor;
+               length < min_length || length > max_length) {
+      ++out_of_range;
+    } else {
+      valid = d;
+    }
+    samples[u].depth = valid;
+  }
+  stats->points_invalid += invalid;
+  stats->points_out_of_range += out_of_range;
+}
+
 // The valid depths (> 0) of the pixels [u0, u1) x [v0, v1): how many, the nearest and
 // the farthest.
 struct DepthRange {
@@ -215,23 +262,17 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   std::vector<ThreadState> states(static_cast<size_t>(num_threads));
 
   // Phase A: validate pixels (rows), then collect the blocks of each search cell.
+  const float min_length = config_.min_ray_length_m, max_length = config_.max_ray_length_m;
   std::atomic<int> next_row{0};
   runThreadTeam(num_threads, [&](int id) {
     IntegrationStats& stats = states[static_cast<size_t>(id)].stats;
     for (int v = next_row.fetch_add(1); v < height; v = next_row.fetch_add(1)) {
       const size_t row = static_cast<size_t>(v) * static_cast<size_t>(width);
-      for (int u = 0; u < width; ++u) {
-        const float d = depth.data[row + u];
-        float valid = 0.0f;
-        if (!std::isfinite(d) || d <= 0.0f || !pose_in_range) {
-          ++stats.points_invalid;
-        } else if (const float length = d * samples_[row + u].ray_factor;
-                   length < config_.min_ray_length_m || length > config_.max_ray_length_m) {
-          ++stats.points_out_of_range;
-        } else {
-          valid = d;
-        }
-        samples_[row + u].depth = valid;
+      if (pose_in_range) {
+        validateRow(&depth.data[row], &samples_[row], width, min_length, max_length, &stats);
+      } else {  // every pixel is rejected
+        for (int u = 0; u < width; ++u) samples_[row + u].depth = 0.0f;
+        stats.points_invalid += static_cast<size_t>(width);
       }
     }
   });
@@ -320,6 +361,7 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   const ProjectiveVoxelRows rows(frame, updater, config_.vectorized);
   runThreadTeam(num_threads, [&](int id) {
     IntegrationStats& stats = states[static_cast<size_t>(id)].stats;
+    std::vector<Eigen::Vector3f> row_origins(static_cast<size_t>(vps) * static_cast<size_t>(vps));
     for (size_t taken = next_claim.fetch_add(1); taken < num_claims;
          taken = next_claim.fetch_add(1)) {
       const size_t claim = claim_order.empty() ? taken : claim_order[taken];
@@ -332,18 +374,17 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
       }
       for (size_t b = begin; b < end; ++b) {
         Block& block = *blocks[b];
-        TsdfVoxel* voxel = block.voxels();
+        TsdfVoxel* const voxel = block.voxels();
         const Eigen::Vector3f first_center_C =
             R_C_G * (block.origin() + Eigen::Vector3f::Constant(0.5f * voxel_size)) + t_C_G;
-        size_t updates = 0;
-        // Row by row of voxels along x (consecutive in memory).
-        for (int k = 0; k < vps; ++k) {
-          for (int j = 0; j < vps; ++j, voxel += vps) {
-            const Eigen::Vector3f row_C =
+        // Rows of voxels along x (consecutive in memory), all of the block in one call.
+        for (int k = 0, r = 0; k < vps; ++k) {
+          for (int j = 0; j < vps; ++j, ++r) {
+            row_origins[static_cast<size_t>(r)] =
                 first_center_C + static_cast<float>(k) * step_z + static_cast<float>(j) * step_y;
-            updates += rows.update(row_C, step_x, vps, voxel);
           }
         }
+        const size_t updates = rows.update(row_origins.data(), vps * vps, step_x, vps, voxel);
         if (updates > 0) {
           touched[b] = 1;
           block.setUpdated(true);

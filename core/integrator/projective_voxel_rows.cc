@@ -132,10 +132,15 @@ ProjectiveVoxelRows::ProjectiveVoxelRows(const Frame& frame, const TsdfVoxelUpda
       cy_rounding_(frame.cy + 0.5f),
       vectorized_(vectorized && cpuHasAvx2()) {}
 
-size_t ProjectiveVoxelRows::update(const Eigen::Vector3f& p0, const Eigen::Vector3f& step,
-                                   int count, TsdfVoxel* row) const {
-  if (vectorized_ && count % 8 == 0) return updateAvx2(p0, step, count, row);
-  return updatePortable(p0, step, count, row);
+size_t ProjectiveVoxelRows::update(const Eigen::Vector3f* origins, int num_rows,
+                                   const Eigen::Vector3f& step, int count,
+                                   TsdfVoxel* voxels) const {
+  if (vectorized_ && count % 8 == 0) return updateAvx2(origins, num_rows, step, count, voxels);
+  size_t updates = 0;
+  for (int r = 0; r < num_rows; ++r, voxels += count) {
+    updates += updatePortable(origins[r], step, count, voxels);
+  }
+  return updates;
 }
 
 size_t ProjectiveVoxelRows::updatePortable(const Eigen::Vector3f& p0, const Eigen::Vector3f& step,
@@ -163,10 +168,9 @@ size_t ProjectiveVoxelRows::updatePortable(const Eigen::Vector3f& p0, const Eige
 }
 
 #if CBLOX_HAVE_X86
-__attribute__((target("avx2"))) size_t ProjectiveVoxelRows::updateAvx2(const Eigen::Vector3f& p0,
-                                                                       const Eigen::Vector3f& step,
-                                                                       int count,
-                                                                       TsdfVoxel* row) const {
+__attribute__((target("avx2"))) size_t ProjectiveVoxelRows::updateAvx2(
+    const Eigen::Vector3f* origins, int num_rows, const Eigen::Vector3f& step, int count,
+    TsdfVoxel* voxels) const {
   const __m256 eps = _mm256_set1_ps(kMinZ), zero = _mm256_setzero_ps();
   const __m256 w = _mm256_set1_ps(static_cast<float>(frame_.width));
   const __m256 h = _mm256_set1_ps(static_cast<float>(frame_.height));
@@ -188,120 +192,129 @@ __attribute__((target("avx2"))) size_t ProjectiveVoxelRows::updateAvx2(const Eig
   const int last_pixel = frame_.width * frame_.height - 1;
   const __m256i last_pixel_v = _mm256_set1_epi32(last_pixel);
   const __m256i rgb = _mm256_set1_epi32(0x00FFFFFF);
+  const __m256 step_x = _mm256_set1_ps(step.x()), step_y = _mm256_set1_ps(step.y()),
+               step_z = _mm256_set1_ps(step.z());
   size_t updates = 0;
-  for (int i0 = 0; i0 < count; i0 += 8) {
-    // Projection: RowProjector's arithmetic in eight lanes.
-    const __m256 fi = _mm256_setr_ps(static_cast<float>(i0), static_cast<float>(i0 + 1),
-                                     static_cast<float>(i0 + 2), static_cast<float>(i0 + 3),
-                                     static_cast<float>(i0 + 4), static_cast<float>(i0 + 5),
-                                     static_cast<float>(i0 + 6), static_cast<float>(i0 + 7));
-    const __m256 x =
-        _mm256_add_ps(_mm256_set1_ps(p0.x()), _mm256_mul_ps(fi, _mm256_set1_ps(step.x())));
-    const __m256 y =
-        _mm256_add_ps(_mm256_set1_ps(p0.y()), _mm256_mul_ps(fi, _mm256_set1_ps(step.y())));
-    const __m256 z =
-        _mm256_add_ps(_mm256_set1_ps(p0.z()), _mm256_mul_ps(fi, _mm256_set1_ps(step.z())));
-    const __m256 inv_z = _mm256_div_ps(one, _mm256_max_ps(z, eps));
-    const __m256 u =
-        _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(frame_.fx), x), inv_z),
-                      _mm256_set1_ps(cx_rounding_));
-    const __m256 v =
-        _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(frame_.fy), y), inv_z),
-                      _mm256_set1_ps(cy_rounding_));
-    const __m256 inside = _mm256_and_ps(
-        _mm256_and_ps(
-            _mm256_cmp_ps(z, eps, _CMP_GT_OQ),
-            _mm256_and_ps(_mm256_cmp_ps(u, zero, _CMP_GE_OQ), _mm256_cmp_ps(v, zero, _CMP_GE_OQ))),
-        _mm256_and_ps(_mm256_cmp_ps(u, w, _CMP_LT_OQ), _mm256_cmp_ps(v, h, _CMP_LT_OQ)));
-    if (_mm256_movemask_ps(inside) == 0) continue;
-    const __m256i ui = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(u, zero), last_u));
-    const __m256i vi = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(v, zero), last_v));
-    const __m256i pixel = _mm256_cvttps_epi32(
-        _mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(vi), w), _mm256_cvtepi32_ps(ui)));
-    // The pixels' samples; lanes outside the image read nothing and stay 0 (no depth).
-    const __m256i sample_index = _mm256_slli_epi32(pixel, 1);
-    const __m256 d = _mm256_mask_i32gather_ps(zero, samples, sample_index, inside, 4);
-    const __m256 ray_factor = _mm256_mask_i32gather_ps(zero, samples + 1, sample_index, inside, 4);
-    const __m256 sdf = _mm256_mul_ps(_mm256_sub_ps(d, z), ray_factor);
-    // Kept: a depth, and not more than the truncation behind it (!(sdf < -truncation)).
-    __m256 update = _mm256_and_ps(_mm256_and_ps(inside, _mm256_cmp_ps(d, zero, _CMP_GT_OQ)),
-                                  _mm256_cmp_ps(sdf, minus_truncation, _CMP_NLT_UQ));
-    if (_mm256_movemask_ps(update) == 0) continue;
-    __m256 weight = inverse_square ? _mm256_div_ps(one, _mm256_mul_ps(d, d)) : one;
-    if (dropoff) {
-      const __m256 behind = _mm256_cmp_ps(sdf, minus_dropoff_start, _CMP_LT_OQ);
-      const __m256 dropped =
-          _mm256_mul_ps(weight, _mm256_mul_ps(_mm256_add_ps(truncation, sdf), dropoff_scale));
-      weight = _mm256_blendv_ps(weight, dropped, behind);
-      update =
-          _mm256_andnot_ps(_mm256_and_ps(behind, _mm256_cmp_ps(weight, zero, _CMP_LE_OQ)), update);
-    }
-    const int update_bits = _mm256_movemask_ps(update);
-    if (update_bits == 0) continue;
-    updates += static_cast<size_t>(__builtin_popcount(static_cast<unsigned>(update_bits)));
+  for (int r = 0; r < num_rows; ++r, voxels += count) {
+    const Eigen::Vector3f& p0 = origins[r];
+    TsdfVoxel* const row = voxels;
+    for (int i0 = 0; i0 < count; i0 += 8) {
+      // Projection: RowProjector's arithmetic in eight lanes.
+      const __m256 fi = _mm256_setr_ps(static_cast<float>(i0), static_cast<float>(i0 + 1),
+                                       static_cast<float>(i0 + 2), static_cast<float>(i0 + 3),
+                                       static_cast<float>(i0 + 4), static_cast<float>(i0 + 5),
+                                       static_cast<float>(i0 + 6), static_cast<float>(i0 + 7));
+      const __m256 x = _mm256_add_ps(_mm256_set1_ps(p0.x()), _mm256_mul_ps(fi, step_x));
+      const __m256 y = _mm256_add_ps(_mm256_set1_ps(p0.y()), _mm256_mul_ps(fi, step_y));
+      const __m256 z = _mm256_add_ps(_mm256_set1_ps(p0.z()), _mm256_mul_ps(fi, step_z));
+      const __m256 inv_z = _mm256_div_ps(one, _mm256_max_ps(z, eps));
+      const __m256 u =
+          _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(frame_.fx), x), inv_z),
+                        _mm256_set1_ps(cx_rounding_));
+      const __m256 v =
+          _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(frame_.fy), y), inv_z),
+                        _mm256_set1_ps(cy_rounding_));
+      const __m256 inside = _mm256_and_ps(
+          _mm256_and_ps(_mm256_cmp_ps(z, eps, _CMP_GT_OQ),
+                        _mm256_and_ps(_mm256_cmp_ps(u, zero, _CMP_GE_OQ),
+                                      _mm256_cmp_ps(v, zero, _CMP_GE_OQ))),
+          _mm256_and_ps(_mm256_cmp_ps(u, w, _CMP_LT_OQ), _mm256_cmp_ps(v, h, _CMP_LT_OQ)));
+      if (_mm256_movemask_ps(inside) == 0) continue;
+      const __m256i ui = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(u, zero), last_u));
+      const __m256i vi = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(v, zero), last_v));
+      const __m256i pixel = _mm256_cvttps_epi32(
+          _mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(vi), w), _mm256_cvtepi32_ps(ui)));
+      // The pixels' samples; lanes outside the image read nothing and stay 0 (no depth).
+      const __m256i sample_index = _mm256_slli_epi32(pixel, 1);
+      const __m256 d = _mm256_mask_i32gather_ps(zero, samples, sample_index, inside, 4);
+      const __m256 ray_factor =
+          _mm256_mask_i32gather_ps(zero, samples + 1, sample_index, inside, 4);
+      const __m256 sdf = _mm256_mul_ps(_mm256_sub_ps(d, z), ray_factor);
+      // Kept: a depth, and not more than the truncation behind it (!(sdf < -truncation)).
+      __m256 update = _mm256_and_ps(_mm256_and_ps(inside, _mm256_cmp_ps(d, zero, _CMP_GT_OQ)),
+                                    _mm256_cmp_ps(sdf, minus_truncation, _CMP_NLT_UQ));
+      if (_mm256_movemask_ps(update) == 0) continue;
+      __m256 weight = inverse_square ? _mm256_div_ps(one, _mm256_mul_ps(d, d)) : one;
+      if (dropoff) {
+        const __m256 behind = _mm256_cmp_ps(sdf, minus_dropoff_start, _CMP_LT_OQ);
+        const __m256 dropped =
+            _mm256_mul_ps(weight, _mm256_mul_ps(_mm256_add_ps(truncation, sdf), dropoff_scale));
+        weight = _mm256_blendv_ps(weight, dropped, behind);
+        update = _mm256_andnot_ps(_mm256_and_ps(behind, _mm256_cmp_ps(weight, zero, _CMP_LE_OQ)),
+                                  update);
+      }
+      const int update_bits = _mm256_movemask_ps(update);
+      if (update_bits == 0) continue;
+      updates += static_cast<size_t>(__builtin_popcount(static_cast<unsigned>(update_bits)));
 
-    TsdfVoxel* const voxels = row + i0;
-    Soa voxel = loadVoxels(voxels);
-    const __m256 new_weight = _mm256_add_ps(voxel.weight, weight);
-    const __m256 inv_new_weight = _mm256_div_ps(one, new_weight);
-    const __m256 in_band = _mm256_cmp_ps(sdf, truncation, _CMP_LT_OQ);
-    const __m256 measured = _mm256_blendv_ps(truncation, sdf, in_band);
-    const __m256 distance = _mm256_min_ps(
-        _mm256_max_ps(_mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(voxel.distance, voxel.weight),
-                                                  _mm256_mul_ps(measured, weight)),
-                                    inv_new_weight),
-                      minus_truncation),
-        truncation);
-    const __m256 colour_lanes = _mm256_and_ps(update, in_band);
-    if (blending != ColorBlending::kNone && _mm256_movemask_ps(colour_lanes) != 0) {
-      const __m256i old_c = _mm256_castps_si256(voxel.color);
-      __m256i new_c = _mm256_setzero_si256();
-      if (color_words != nullptr) {
-        const __m256i is_last = _mm256_cmpeq_epi32(pixel, last_pixel_v);
-        const __m256i gather_lanes =
-            _mm256_andnot_si256(is_last, _mm256_castps_si256(colour_lanes));
-        new_c = _mm256_mask_i32gather_epi32(new_c, color_words,
-                                            _mm256_add_epi32(pixel, _mm256_add_epi32(pixel, pixel)),
-                                            gather_lanes, 1);
-        const int last_bits =
-            _mm256_movemask_ps(_mm256_and_ps(_mm256_castsi256_ps(is_last), colour_lanes));
-        if (last_bits != 0) {
-          alignas(32) int32_t words[8];
-          _mm256_store_si256(reinterpret_cast<__m256i*>(words), new_c);
-          const Color& c = frame_.colors[last_pixel];
-          for (int k = 0; k < 8; ++k) {
-            if (last_bits & (1 << k)) words[k] = c.r | (c.g << 8) | (c.b << 16);
+      TsdfVoxel* const eight = row + i0;
+      Soa voxel = loadVoxels(eight);
+      const __m256 new_weight = _mm256_add_ps(voxel.weight, weight);
+      const __m256 inv_new_weight = _mm256_div_ps(one, new_weight);
+      const __m256 in_band = _mm256_cmp_ps(sdf, truncation, _CMP_LT_OQ);
+      const __m256 measured = _mm256_blendv_ps(truncation, sdf, in_band);
+      const __m256 distance = _mm256_min_ps(
+          _mm256_max_ps(_mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(voxel.distance, voxel.weight),
+                                                    _mm256_mul_ps(measured, weight)),
+                                      inv_new_weight),
+                        minus_truncation),
+          truncation);
+      const __m256 colour_lanes = _mm256_and_ps(update, in_band);
+      if (blending != ColorBlending::kNone && _mm256_movemask_ps(colour_lanes) != 0) {
+        const __m256i old_c = _mm256_castps_si256(voxel.color);
+        __m256i new_c = _mm256_setzero_si256();
+        if (color_words != nullptr) {
+          const __m256i is_last = _mm256_cmpeq_epi32(pixel, last_pixel_v);
+          const __m256i gather_lanes =
+              _mm256_andnot_si256(is_last, _mm256_castps_si256(colour_lanes));
+          new_c = _mm256_mask_i32gather_epi32(
+              new_c, color_words, _mm256_add_epi32(pixel, _mm256_add_epi32(pixel, pixel)),
+              gather_lanes, 1);
+          const int last_bits =
+              _mm256_movemask_ps(_mm256_and_ps(_mm256_castsi256_ps(is_last), colour_lanes));
+          if (last_bits != 0) {
+            alignas(32) int32_t words[8];
+            _mm256_store_si256(reinterpret_cast<__m256i*>(words), new_c);
+            const Color& c = frame_.colors[last_pixel];
+            for (int k = 0; k < 8; ++k) {
+              if (last_bits & (1 << k)) words[k] = c.r | (c.g << 8) | (c.b << 16);
+            }
+            new_c = _mm256_load_si256(reinterpret_cast<const __m256i*>(words));
           }
-          new_c = _mm256_load_si256(reinterpret_cast<const __m256i*>(words));
         }
+        __m256i blended;
+        if (blending == ColorBlending::kWeightedAverage) {
+          // The new colour's share in 1/256, as TsdfVoxelUpdater::update rounds it.
+          const __m256i b = _mm256_cvttps_epi32(_mm256_add_ps(
+              _mm256_mul_ps(_mm256_mul_ps(weight, inv_new_weight), _mm256_set1_ps(256.0f)),
+              _mm256_set1_ps(0.5f)));
+          const __m256i a = _mm256_sub_epi32(_mm256_set1_epi32(256), b);
+          blended = _mm256_or_si256(_mm256_or_si256(blendChannel(old_c, new_c, a, b, 0),
+                                                    blendChannel(old_c, new_c, a, b, 8)),
+                                    blendChannel(old_c, new_c, a, b, 16));
+        } else {  // kOverwrite
+          blended = _mm256_and_si256(new_c, rgb);
+        }
+        // The padding byte is the voxel's own.
+        blended = _mm256_or_si256(blended, _mm256_andnot_si256(rgb, old_c));
+        voxel.color = _mm256_blendv_ps(voxel.color, _mm256_castsi256_ps(blended), colour_lanes);
       }
-      __m256i blended;
-      if (blending == ColorBlending::kWeightedAverage) {
-        // The new colour's share in 1/256, as TsdfVoxelUpdater::update rounds it.
-        const __m256i b = _mm256_cvttps_epi32(_mm256_add_ps(
-            _mm256_mul_ps(_mm256_mul_ps(weight, inv_new_weight), _mm256_set1_ps(256.0f)),
-            _mm256_set1_ps(0.5f)));
-        const __m256i a = _mm256_sub_epi32(_mm256_set1_epi32(256), b);
-        blended = _mm256_or_si256(_mm256_or_si256(blendChannel(old_c, new_c, a, b, 0),
-                                                  blendChannel(old_c, new_c, a, b, 8)),
-                                  blendChannel(old_c, new_c, a, b, 16));
-      } else {  // kOverwrite
-        blended = _mm256_and_si256(new_c, rgb);
-      }
-      // The padding byte is the voxel's own.
-      blended = _mm256_or_si256(blended, _mm256_andnot_si256(rgb, old_c));
-      voxel.color = _mm256_blendv_ps(voxel.color, _mm256_castsi256_ps(blended), colour_lanes);
+      voxel.distance = _mm256_blendv_ps(voxel.distance, distance, update);
+      voxel.weight = _mm256_blendv_ps(voxel.weight, _mm256_min_ps(new_weight, max_weight), update);
+      storeVoxels(voxel, eight);
     }
-    voxel.distance = _mm256_blendv_ps(voxel.distance, distance, update);
-    voxel.weight = _mm256_blendv_ps(voxel.weight, _mm256_min_ps(new_weight, max_weight), update);
-    storeVoxels(voxel, voxels);
   }
   return updates;
 }
 #else
-size_t ProjectiveVoxelRows::updateAvx2(const Eigen::Vector3f& p0, const Eigen::Vector3f& step,
-                                       int count, TsdfVoxel* row) const {
-  return updatePortable(p0, step, count, row);
+size_t ProjectiveVoxelRows::updateAvx2(const Eigen::Vector3f* origins, int num_rows,
+                                       const Eigen::Vector3f& step, int count,
+                                       TsdfVoxel* voxels) const {
+  size_t updates = 0;
+  for (int r = 0; r < num_rows; ++r, voxels += count) {
+    updates += updatePortable(origins[r], step, count, voxels);
+  }
+  return updates;
 }
 #endif
 

@@ -52,7 +52,14 @@ class ProjectiveVoxelRows {
 
   /// Updates row[0, count) (count <= kMaxRow); returns the number of voxels updated.
   size_t update(const Eigen::Vector3f& p0, const Eigen::Vector3f& step, int count,
-                TsdfVoxel* row) const;
+                TsdfVoxel* row) const {
+    return update(&p0, 1, step, count, row);
+  }
+  /// Updates `num_rows` rows of `count` voxels (count <= kMaxRow): row r is
+  /// voxels[r * count, (r + 1) * count) with centres origins[r] + i * step. Returns the
+  /// number of voxels updated. One call per block saves the per-row set-up.
+  size_t update(const Eigen::Vector3f* origins, int num_rows, const Eigen::Vector3f& step,
+                int count, TsdfVoxel* voxels) const;
 
   /// True when rows whose length is a multiple of 8 run on AVX2.
   bool vectorized() const { return vectorized_; }
@@ -64,8 +71,8 @@ class ProjectiveVoxelRows {
  private:
   size_t updatePortable(const Eigen::Vector3f& p0, const Eigen::Vector3f& step, int count,
                         TsdfVoxel* row) const;
-  size_t updateAvx2(const Eigen::Vector3f& p0, const Eigen::Vector3f& step, int count,
-                    TsdfVoxel* row) const;
+  size_t updateAvx2(const Eigen::Vector3f* origins, int num_rows, const Eigen::Vector3f& step,
+                    int count, TsdfVoxel* voxels) const;
 
   Frame frame_;
   TsdfVoxelUpdater updater_;

@@ -1,6 +1,7 @@
 // cblox-bench-integrators: ms per frame of the simple, fast and projective integrators on
 // the 50 frames of ../shared/data/7scenes-rgbd-50 (voxel 2 cm, truncation 4 voxels, max
-// depth 4 m), 1 and 2 threads, 8^3 vs 16^3 blocks, Open3D's ScalableTSDFVolume on the
+// depth 4 m), 1 and 2 threads, 8^3 vs 16^3 blocks, the projective integrator also one voxel
+// at a time (1 thread, IntegratorConfig::vectorized off), Open3D's ScalableTSDFVolume on the
 // same frames in the same run (when built with Open3D), mesh extraction time, and the
 // accuracy of each mesh against the simple integrator's TSDF (the fused reference).
 //
@@ -82,12 +83,17 @@ struct Run {
   Mesh mesh;
 };
 
-enum class Kind { kSimple, kFast, kProjective };
+// kProjectivePortable: the projective integrator updating one voxel at a time
+// (IntegratorConfig::vectorized off), to show what the AVX2 rows gain in the same run.
+enum class Kind { kSimple, kFast, kProjective, kProjectivePortable };
 
 Run integrateOnce(const BenchSequence& seq, Kind kind, int threads, int voxels_per_side,
                   size_t max_frames, VisitedVoxelSet visited) {
   Run run;
-  run.name = kind == Kind::kSimple ? "simple" : kind == Kind::kFast ? "fast" : "projective";
+  run.name = kind == Kind::kSimple               ? "simple"
+             : kind == Kind::kFast               ? "fast"
+             : kind == Kind::kProjectivePortable ? "projective, one voxel at a time"
+                                                 : "projective";
   run.threads = threads;
   run.voxels_per_side = voxels_per_side;
   run.layer = std::make_shared<TsdfLayer>(LayerConfig{kVoxelSize, voxels_per_side});
@@ -96,6 +102,7 @@ Run integrateOnce(const BenchSequence& seq, Kind kind, int threads, int voxels_p
   config.max_ray_length_m = kMaxDepth * 1.3f;  // depth is cut at 4 m below; keep the rays
   config.num_threads = threads;
   config.visited_voxel_set = visited;
+  config.vectorized = kind != Kind::kProjectivePortable;
   if (visited == VisitedVoxelSet::kApproxHashSet) run.name += " (paper hash set)";
   const PinholeCamera camera(seq.intrinsics);
   DepthConversionConfig conversion;
@@ -103,7 +110,7 @@ Run integrateOnce(const BenchSequence& seq, Kind kind, int threads, int voxels_p
   conversion.max_depth_m = kMaxDepth;
   std::unique_ptr<RayCastingIntegrator> rays;
   std::unique_ptr<ProjectiveTsdfIntegrator> projective;
-  if (kind == Kind::kProjective) {
+  if (kind == Kind::kProjective || kind == Kind::kProjectivePortable) {
     projective = std::make_unique<ProjectiveTsdfIntegrator>(config, run.layer.get());
   } else {
     rays = std::make_unique<RayCastingIntegrator>(kind == Kind::kFast
@@ -281,9 +288,10 @@ int main(int argc, char** argv) {
   auto add = [&](Kind kind, int threads, int vps, size_t frames, int reps,
                  cblox::VisitedVoxelSet visited = cblox::VisitedVoxelSet::kBlockBitmap) {
     std::printf("running %s, %d thread(s), %d^3 blocks, %d repetition(s) ...\n",
-                kind == Kind::kSimple ? "simple"
-                : kind == Kind::kFast ? "fast"
-                                      : "projective",
+                kind == Kind::kSimple               ? "simple"
+                : kind == Kind::kFast               ? "fast"
+                : kind == Kind::kProjectivePortable ? "projective (one voxel at a time)"
+                                                    : "projective",
                 threads, vps, reps);
     std::fflush(stdout);
     runs.push_back(integrate(seq, kind, threads, vps, frames, visited, reps));
@@ -295,6 +303,7 @@ int main(int argc, char** argv) {
   add(Kind::kFast, 2, 8, seq.frames.size(), repeats, cblox::VisitedVoxelSet::kApproxHashSet);
   for (int threads : {1, 2}) add(Kind::kProjective, threads, 8, seq.frames.size(), repeats);
   add(Kind::kProjective, 2, 16, seq.frames.size(), repeats);
+  add(Kind::kProjectivePortable, 1, 8, seq.frames.size(), repeats);
   const bool reference_complete = simple_frames >= seq.frames.size();
   for (size_t i = 2; i < runs.size() && reference_complete; ++i)
     compareToReference(runs[0], &runs[i]);

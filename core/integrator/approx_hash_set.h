@@ -42,6 +42,13 @@ class ApproxHashSet {
     return false;
   }
 
+  /// True when `key` is in the set (inserted since the last clear() and not forgotten).
+  /// Thread-safe; a concurrent insert of the same key may or may not be seen.
+  bool contains(uint64_t key) const {
+    const uint64_t hash = mixHash(key);
+    const uint64_t entry = (epoch_ << kFingerprintBits) | (hash >> (64 - kFingerprintBits));
+    return buckets_[hash & mask_].load(std::memory_order_relaxed) == entry;
+  }
   /// The same set semantics for keys made of a cluster key and a member index in
   /// [0, 2^member_bits): the members of one cluster (e.g. the voxels of one block) occupy
   /// consecutive buckets, so spatially coherent queries stay in cache. Identity: the

@@ -21,6 +21,21 @@ TEST(ApproxHashSet, InsertReportsNewKeysOnce) {
   EXPECT_FALSE(set.insert(0));
 }
 
+TEST(ApproxHashSet, ContainsSeesInsertedKeysUntilClear) {
+  ApproxHashSet set(16);
+  EXPECT_FALSE(set.contains(0));  // a never-written bucket holds no key, not key 0
+  EXPECT_FALSE(set.contains(42));
+  EXPECT_TRUE(set.insert(42));
+  EXPECT_TRUE(set.contains(42));
+  EXPECT_FALSE(set.contains(43));
+  EXPECT_TRUE(set.insert(0));
+  EXPECT_TRUE(set.contains(0));
+  set.clear();
+  EXPECT_FALSE(set.contains(42));
+  EXPECT_FALSE(set.contains(0));
+  EXPECT_TRUE(set.insert(42));  // contains() did not insert
+}
+
 TEST(ApproxHashSet, ClearForgetsEverythingAndSurvivesEpochWrap) {
   ApproxHashSet set(16);
   for (int round = 0; round < 70000; ++round) {  // > 2^16 clears: the epoch wraps

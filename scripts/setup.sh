@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs every Debian package cblox needs to build, test and run (Debian 12, as root).
 # Idempotent: safe to run again. Usage: scripts/setup.sh [--bench]
-#   --bench   also install the benchmark peers (Open3D, Google Benchmark is always in).
+#   --bench   also install the benchmark peers (Open3D, Google Benchmark is always in), and
+#             glog + protobuf for the voxblox peer (voxblox itself is not in Debian: that
+#             peer needs a build of voxblox's core, see test/bench/CMakeLists.txt).
 set -euo pipefail
 
 packages=(
@@ -18,7 +20,7 @@ packages=(
   clang-14 libclang-rt-14-dev  # scripts/fuzz.sh: libFuzzer, ASan, UBSan
 )
 if [[ "${1:-}" == "--bench" ]]; then
-  packages+=(libopen3d-dev)
+  packages+=(libopen3d-dev libgoogle-glog-dev libprotobuf-dev protobuf-compiler)
 fi
 
 SUDO=""

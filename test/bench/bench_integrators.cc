@@ -1,20 +1,26 @@
 // cblox-bench-integrators: ms per frame of the simple, fast and projective integrators on
 // the 50 frames of ../shared/data/7scenes-rgbd-50 (voxel 2 cm, truncation 4 voxels, max
 // depth 4 m), 1 and 2 threads, 8^3 vs 16^3 blocks, the projective integrator also one voxel
-// at a time (1 thread, IntegratorConfig::vectorized off), Open3D's ScalableTSDFVolume on the
-// same frames in the same run (when built with Open3D), mesh extraction time, and the
-// accuracy of each mesh against the simple integrator's TSDF (the fused reference).
+// at a time (1 thread, IntegratorConfig::vectorized off), and two peers on the same frames
+// in the same run: Open3D's ScalableTSDFVolume (when built with Open3D) and voxblox's own
+// FastTsdfIntegrator (when built with voxblox: see test/bench/CMakeLists.txt); mesh
+// extraction time, and the accuracy of each mesh (voxblox's too) against the simple
+// integrator's TSDF (the fused reference).
 //
 //   build/test/bench/cblox-bench-integrators [--data DIR] [--simple-frames N] [--repeats R]
 //                                            [--json FILE]
 //   build/test/bench/cblox-bench-integrators --only fast      # peak memory of one integrator
 //
-// Exit status: 0; 3 when built without the Open3D peer (every figure but the ratios is
-// printed); 1 or 2 on a data or usage error.
+// Exit status: 0 with both peers; a peer that is not built gets no row and no ratio, says
+// so, and the run ends with 3 when the Open3D peer is missing, 4 when the voxblox peer is
+// missing, 5 when both are (every other figure is printed); 1 or 2 on a data or usage error
+// (--only with a peer that is not built: 3 or 4 as well).
 //
-// Timing: each configuration runs R times (default 3) on a fresh volume; per frame the
-// fastest repetition is kept (interference from other jobs only adds time), and the
-// table gives the median and 95th percentile over the frames.
+// Timing: R rounds (default 3); in each, every configuration runs once on a fresh volume,
+// ours and the peers in turn, so a peer's ratio is measured seconds, not minutes, from its
+// row (this host's speed drifts over minutes). Per frame the fastest round is kept
+// (interference from other jobs only adds time), and the table gives the median and 95th
+// percentile over the frames. The simple rows (the accuracy reference) run in round 1 only.
 
 #include <sys/resource.h>
 
@@ -43,6 +49,9 @@
 #ifdef CBLOX_HAVE_OPEN3D
 #include "test/bench/open3d_peer.h"
 #endif
+#ifdef CBLOX_HAVE_VOXBLOX
+#include "test/bench/voxblox_peer.h"
+#endif
 
 namespace cblox::bench {
 namespace {
@@ -50,6 +59,14 @@ namespace {
 constexpr float kVoxelSize = 0.02f;
 constexpr float kTruncation = 4 * kVoxelSize;
 constexpr float kMaxDepth = 4.0f;
+// Depth is cut at kMaxDepth by the point cloud conversion; the rays to off-axis pixels are
+// longer than their depth, so the ray-length limit keeps a margin (ours and voxblox's).
+constexpr float kMaxRayLength = kMaxDepth * 1.3f;
+
+// Exit statuses of a run whose peer is not built (see the header comment).
+constexpr int kExitNoOpen3d = 3;
+constexpr int kExitNoVoxblox = 4;
+constexpr int kExitNoPeers = 5;
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -81,11 +98,38 @@ struct Run {
   double unobserved_in_reference = -1.0;  // share of vertices where the reference is empty
   std::shared_ptr<TsdfLayer> layer;
   Mesh mesh;
+  std::vector<double> conversion_ms;  // voxblox rows: depthToPointCloud alone, per frame
 };
+
+// Keeps, per frame, the faster of two runs of one configuration: the machine is shared,
+// and interference only ever adds time.
+void keepFastest(Run* best, const Run& again) {
+  for (size_t i = 0; i < best->frame_ms.size() && i < again.frame_ms.size(); ++i) {
+    best->frame_ms[i] = std::min(best->frame_ms[i], again.frame_ms[i]);
+  }
+  for (size_t i = 0; i < best->conversion_ms.size() && i < again.conversion_ms.size(); ++i) {
+    best->conversion_ms[i] = std::min(best->conversion_ms[i], again.conversion_ms[i]);
+  }
+  best->mesh_ms = std::min(best->mesh_ms, again.mesh_ms);
+}
 
 // kProjectivePortable: the projective integrator updating one voxel at a time
 // (IntegratorConfig::vectorized off), to show what the AVX2 rows gain in the same run.
 enum class Kind { kSimple, kFast, kProjective, kProjectivePortable };
+
+// Marching cubes over the whole layer plus the connected extraction, with the run's
+// threads; fills mesh, mesh_ms and mesh_vertices.
+void meshRun(Run* run) {
+  MeshConfig mesh_config;
+  mesh_config.num_threads = run->threads;
+  MeshIntegrator mesher(*run->layer, mesh_config);
+  const auto start = std::chrono::steady_clock::now();
+  mesher.update(false, true);
+  run->mesh = mesher.extractMesh(true);
+  run->mesh_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  run->mesh_vertices = run->mesh.numVertices();
+}
 
 Run integrateOnce(const BenchSequence& seq, Kind kind, int threads, int voxels_per_side,
                   size_t max_frames, VisitedVoxelSet visited) {
@@ -99,7 +143,7 @@ Run integrateOnce(const BenchSequence& seq, Kind kind, int threads, int voxels_p
   run.layer = std::make_shared<TsdfLayer>(LayerConfig{kVoxelSize, voxels_per_side});
   IntegratorConfig config;
   config.truncation_distance_m = kTruncation;
-  config.max_ray_length_m = kMaxDepth * 1.3f;  // depth is cut at 4 m below; keep the rays
+  config.max_ray_length_m = kMaxRayLength;
   config.num_threads = threads;
   config.visited_voxel_set = visited;
   config.vectorized = kind != Kind::kProjectivePortable;
@@ -143,32 +187,30 @@ Run integrateOnce(const BenchSequence& seq, Kind kind, int threads, int voxels_p
   }
   run.blocks = run.layer->numBlocks();
   run.layer_mib = run.layer->memoryBytes() / 1048576.0;
-  MeshConfig mesh_config;
-  mesh_config.num_threads = threads;
-  MeshIntegrator mesher(*run.layer, mesh_config);
-  const auto start = std::chrono::steady_clock::now();
-  mesher.update(false, true);
-  run.mesh = mesher.extractMesh(true);
-  run.mesh_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  run.mesh_vertices = run.mesh.numVertices();
+  meshRun(&run);
   return run;
 }
 
-// Runs integrateOnce `repeats` times and keeps, per frame, the fastest repetition: the
-// machine is shared, and interference only ever adds time.
-Run integrate(const BenchSequence& seq, Kind kind, int threads, int voxels_per_side,
-              size_t max_frames, VisitedVoxelSet visited, int repeats) {
-  Run best = integrateOnce(seq, kind, threads, voxels_per_side, max_frames, visited);
-  for (int r = 1; r < repeats; ++r) {
-    const Run again = integrateOnce(seq, kind, threads, voxels_per_side, max_frames, visited);
-    for (size_t i = 0; i < best.frame_ms.size(); ++i) {
-      best.frame_ms[i] = std::min(best.frame_ms[i], again.frame_ms[i]);
-    }
-    best.mesh_ms = std::min(best.mesh_ms, again.mesh_ms);
-  }
-  return best;
+#ifdef CBLOX_HAVE_VOXBLOX
+// voxblox's FastTsdfIntegrator once on a fresh layer; its TSDF (copied into a cblox layer)
+// is meshed like ours. conversion_ms holds depthToPointCloud alone per frame, which our
+// fast rows' clock includes and voxblox's does not.
+Run integrateVoxblox(const BenchSequence& seq, int threads, int voxels_per_side) {
+  VoxbloxResult result = runVoxbloxFastTsdf(seq, kVoxelSize, kTruncation, kMaxDepth, kMaxRayLength,
+                                            threads, voxels_per_side);
+  Run run;
+  run.name = "voxblox fast";
+  run.threads = threads;
+  run.voxels_per_side = voxels_per_side;
+  run.frame_ms = std::move(result.frame_ms);
+  run.conversion_ms = std::move(result.conversion_ms);
+  run.blocks = result.blocks;
+  run.layer_mib = result.layer_mib;  // voxblox's own count: its blocks, no hash map
+  run.layer = std::move(result.layer);
+  meshRun(&run);
+  return run;
 }
+#endif
 
 // Accuracy against the reference (the simple integrator's TSDF, the fused reference):
 // RMSE of |reference TSDF| interpolated at this mesh's vertices, over the vertices where
@@ -226,8 +268,8 @@ int main(int argc, char** argv) {
   std::string only;  // run one integrator (2 threads, 8^3) for its peak memory
   CLI::App app{
       "cblox-bench-integrators: ms per frame of the simple, fast and projective integrators on\n"
-      "7-Scenes frames (and Open3D's ScalableTSDFVolume when built with it), mesh time and\n"
-      "accuracy against the simple integrator's TSDF.",
+      "7-Scenes frames (and Open3D's ScalableTSDFVolume and voxblox's fast integrator when\n"
+      "built with them), mesh time and accuracy against the simple integrator's TSDF.",
       "cblox-bench-integrators"};
   app.add_option("--data", data, "7-Scenes folder")->capture_default_str();
   app.add_option("--simple-frames", simple_frames, "frames of the (slow) simple integrator")
@@ -236,7 +278,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--json", json_path, "also write the figures as JSON")->type_name("FILE");
   app.add_option("--only", only,
-                 "simple | fast | projective | open3d: one integrator (2 threads,\n"
+                 "simple | fast | projective | open3d | voxblox: one integrator (2 threads,\n"
                  "8^3 blocks) for its peak memory");
   if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
   repeats = std::max(1, repeats);
@@ -261,8 +303,18 @@ int main(int argc, char** argv) {
 #ifdef CBLOX_HAVE_OPEN3D
       runOpen3dScalableTsdf(seq, kVoxelSize, kTruncation, kMaxDepth, 2);
 #else
-      std::fprintf(stderr, "built without Open3D\n");
-      return 1;
+      std::fprintf(stderr, "built without the Open3D peer\n");
+      return kExitNoOpen3d;
+#endif
+    } else if (only == "voxblox") {
+#ifdef CBLOX_HAVE_VOXBLOX
+      const VoxbloxResult peer = runVoxbloxFastTsdf(seq, kVoxelSize, kTruncation, kMaxDepth,
+                                                    kMaxRayLength, 2, 8, /*copy_layer=*/false);
+      blocks = peer.blocks;
+      layer_mib = peer.layer_mib;
+#else
+      std::fprintf(stderr, "built without the voxblox peer\n");
+      return kExitNoVoxblox;
 #endif
     } else if (only == "simple" || only == "fast" || only == "projective") {
       const Kind kind = only == "simple" ? Kind::kSimple
@@ -273,7 +325,7 @@ int main(int argc, char** argv) {
       blocks = run.blocks;
       layer_mib = run.layer_mib;
     } else {
-      std::fprintf(stderr, "--only takes simple, fast, projective or open3d, got '%s'\n",
+      std::fprintf(stderr, "--only takes simple, fast, projective, open3d or voxblox, got '%s'\n",
                    only.c_str());
       return 2;
     }
@@ -284,17 +336,28 @@ int main(int argc, char** argv) {
     return 0;
   }
 
-  std::vector<Run> runs;
-  auto add = [&](Kind kind, int threads, int vps, size_t frames, int reps,
+  // Every configuration runs once per round, in `repeats` rounds (the simple rows, the
+  // reference, in the first only), and keeps per frame its fastest round. The host's speed
+  // drifts over minutes, so the peers run in the same rounds as ours, seconds apart: a slow
+  // spell slows both, and the ratios hold where the absolute times do not.
+  struct Job {
+    std::string label;
+    int rounds;
+    std::function<Run()> once;
+  };
+  std::vector<Job> jobs;
+  auto add = [&](Kind kind, int threads, int vps, size_t frames, int rounds,
                  cblox::VisitedVoxelSet visited = cblox::VisitedVoxelSet::kBlockBitmap) {
-    std::printf("running %s, %d thread(s), %d^3 blocks, %d repetition(s) ...\n",
-                kind == Kind::kSimple               ? "simple"
-                : kind == Kind::kFast               ? "fast"
-                : kind == Kind::kProjectivePortable ? "projective (one voxel at a time)"
-                                                    : "projective",
-                threads, vps, reps);
-    std::fflush(stdout);
-    runs.push_back(integrate(seq, kind, threads, vps, frames, visited, reps));
+    char label[96];
+    std::snprintf(label, sizeof(label), "%s, %d thread(s), %d^3 blocks",
+                  kind == Kind::kSimple               ? "simple"
+                  : kind == Kind::kFast               ? "fast"
+                  : kind == Kind::kProjectivePortable ? "projective (one voxel at a time)"
+                                                      : "projective",
+                  threads, vps);
+    jobs.push_back({label, rounds, [&seq, kind, threads, vps, frames, visited] {
+                      return integrateOnce(seq, kind, threads, vps, frames, visited);
+                    }});
   };
   add(Kind::kSimple, 2, 8, simple_frames, 1);
   add(Kind::kSimple, 1, 8, std::min<size_t>(simple_frames, 10), 1);
@@ -304,6 +367,53 @@ int main(int argc, char** argv) {
   for (int threads : {1, 2}) add(Kind::kProjective, threads, 8, seq.frames.size(), repeats);
   add(Kind::kProjective, 2, 16, seq.frames.size(), repeats);
   add(Kind::kProjectivePortable, 1, 8, seq.frames.size(), repeats);
+#ifdef CBLOX_HAVE_OPEN3D
+  // Right after our projective rows, the peer of their ratios.
+  for (int threads : {1, 2}) {
+    jobs.push_back({"Open3D ScalableTSDFVolume, " + std::to_string(threads) + " thread(s)", repeats,
+                    [&seq, threads] {
+                      Open3dResult peer =
+                          runOpen3dScalableTsdf(seq, kVoxelSize, kTruncation, kMaxDepth, threads);
+                      Run run;
+                      run.name = "Open3D ScalableTSDFVolume";
+                      run.threads = threads;
+                      run.voxels_per_side = 16;
+                      run.frame_ms = std::move(peer.frame_ms);
+                      run.mesh_vertices = peer.mesh_vertices;
+                      return run;
+                    }});
+  }
+#endif
+#ifdef CBLOX_HAVE_VOXBLOX
+  // voxblox's FastTsdfIntegrator beside our fast rows: 1 and 2 threads with 8^3 blocks, and
+  // 2 threads with 16^3 (voxblox_ros's default block size) beside ours with 16^3.
+  for (const auto& [threads, vps] : {std::pair{1, 8}, std::pair{2, 8}, std::pair{2, 16}}) {
+    jobs.push_back({"voxblox fast, " + std::to_string(threads) + " thread(s), " +
+                        std::to_string(vps) + "^3 blocks",
+                    repeats, [&seq, threads = threads, vps = vps] {
+                      return integrateVoxblox(seq, threads, vps);
+                    }});
+  }
+#endif
+  std::vector<Run> all(jobs.size());
+  for (int round = 0; round < repeats; ++round) {
+    for (size_t j = 0; j < jobs.size(); ++j) {
+      if (round >= jobs[j].rounds) continue;
+      std::printf("round %d of %d: %s ...\n", round + 1, repeats, jobs[j].label.c_str());
+      std::fflush(stdout);
+      Run run = jobs[j].once();
+      if (round == 0) {
+        all[j] = std::move(run);
+      } else {
+        keepFastest(&all[j], run);
+      }
+    }
+  }
+  // Ours and voxblox's in `runs`, Open3D's (no layer) apart.
+  std::vector<Run> runs, open3d_runs;
+  for (Run& run : all) {
+    (run.name.rfind("Open3D", 0) == 0 ? open3d_runs : runs).push_back(std::move(run));
+  }
   const bool reference_complete = simple_frames >= seq.frames.size();
   for (size_t i = 2; i < runs.size() && reference_complete; ++i)
     compareToReference(runs[0], &runs[i]);
@@ -326,25 +436,34 @@ int main(int argc, char** argv) {
                 optional(run.unobserved_in_reference, 100.0, "%").c_str(),
                 optional(run.reference_coverage, 100.0, "%").c_str());
   }
+  // Ratios of median ms per frame, all measured in this run: {row, threads, block, peer,
+  // ratio}. A peer that is not built gives no ratio (the targets are ratios).
+  struct Ratio {
+    std::string integrator;
+    int threads;
+    int voxels_per_side;
+    std::string peer;
+    double ratio;
+  };
+  std::vector<Ratio> ratios;
+  nlohmann::ordered_json open3d_json = nlohmann::ordered_json::array();
 #ifdef CBLOX_HAVE_OPEN3D
   std::vector<std::pair<int, double>> open3d_medians;
-  for (int threads : {1, 2}) {
-    std::printf("running Open3D ScalableTSDFVolume, %d thread(s) ...\n", threads);
-    std::fflush(stdout);
-    Open3dResult peer = runOpen3dScalableTsdf(seq, kVoxelSize, kTruncation, kMaxDepth, threads);
-    for (int r = 1; r < repeats; ++r) {
-      const Open3dResult again =
-          runOpen3dScalableTsdf(seq, kVoxelSize, kTruncation, kMaxDepth, threads);
-      for (size_t i = 0; i < peer.frame_ms.size(); ++i) {
-        peer.frame_ms[i] = std::min(peer.frame_ms[i], again.frame_ms[i]);
-      }
-    }
-    open3d_medians.emplace_back(threads, median(peer.frame_ms));
-    std::printf(
-        "| Open3D ScalableTSDFVolume | %d | 16^3 | %.2f | %.2f | - | - | - | %zu | - | - | - |\n",
-        threads, median(peer.frame_ms), percentile(peer.frame_ms, 0.95), peer.mesh_vertices);
+  for (const Run& peer : open3d_runs) {
+    open3d_medians.emplace_back(peer.threads, median(peer.frame_ms));
+    open3d_json.push_back({{"integrator", peer.name},
+                           {"threads", peer.threads},
+                           {"voxels_per_side", 16},
+                           {"median_ms", median(peer.frame_ms)},
+                           {"p95_ms", percentile(peer.frame_ms, 0.95)},
+                           {"mesh_vertices", peer.mesh_vertices}});
+    std::printf("| %s | %d | 16^3 | %.2f | %.2f | - | - | - | %zu | - | - | - |\n",
+                peer.name.c_str(), peer.threads, median(peer.frame_ms),
+                percentile(peer.frame_ms, 0.95), peer.mesh_vertices);
   }
-  std::printf("\nratios ours / Open3D (median ms per frame, same threads, same run):\n");
+  std::printf(
+      "\nratios to Open3D (median ms per frame, same threads, same run; the voxblox rows are "
+      "voxblox / Open3D):\n");
   for (const Run& run : runs) {
     if (run.voxels_per_side != 8 || run.name.rfind("simple", 0) == 0 ||
         run.name.find("hash") != std::string::npos) {
@@ -352,20 +471,51 @@ int main(int argc, char** argv) {
     }
     for (const auto& [threads, o3d] : open3d_medians) {
       if (threads == run.threads) {
-        std::printf("  %s, %d thread(s): %.2f\n", run.name.c_str(), threads,
-                    median(run.frame_ms) / o3d);
+        const double ratio = median(run.frame_ms) / o3d;
+        ratios.push_back({run.name, threads, run.voxels_per_side, "Open3D", ratio});
+        std::printf("  %s / Open3D, %d thread(s): %.2f\n", run.name.c_str(), threads, ratio);
       }
     }
   }
 #else
-  // No peer, no ratio: the targets are ratios to Open3D measured in the same run.
   std::printf(
-      "\nno ratio: the Open3D peer is not built (install libopen3d-dev: "
+      "\nno ratio to Open3D: the Open3D peer is not built (install libopen3d-dev: "
       "scripts/setup.sh --bench, then rebuild)\n");
+#endif
+#ifdef CBLOX_HAVE_VOXBLOX
+  double conversion_ms = 0.0;
+  for (const Run& run : runs) {
+    if (!run.conversion_ms.empty()) conversion_ms = median(run.conversion_ms);
+  }
+  std::printf(
+      "\nratios to voxblox's fast integrator (median ms per frame, same threads, same block "
+      "size, same run):\n");
+  for (const Run& run : runs) {
+    if (run.name != "fast" && run.name != "projective") continue;
+    for (const Run& peer : runs) {
+      if (peer.name == "voxblox fast" && peer.threads == run.threads &&
+          peer.voxels_per_side == run.voxels_per_side) {
+        const double ratio = median(run.frame_ms) / median(peer.frame_ms);
+        ratios.push_back({run.name, run.threads, run.voxels_per_side, "voxblox fast", ratio});
+        std::printf("  %s / voxblox fast, %d thread(s), %d^3: %.2f (voxblox %.1fx slower)\n",
+                    run.name.c_str(), run.threads, run.voxels_per_side, ratio, 1.0 / ratio);
+      }
+    }
+  }
+  std::printf(
+      "  (our fast rows' clock includes the depth -> point cloud conversion, %.2f ms median "
+      "per frame; voxblox's clock is integratePointCloud alone)\n",
+      conversion_ms);
+#else
+  std::printf(
+      "\nno ratio to voxblox: the voxblox peer is not built (it needs a build of voxblox's "
+      "core: see test/bench/CMakeLists.txt, CBLOX_VOXBLOX_ROOT)\n");
 #endif
   std::printf("\npeak RSS of the whole benchmark process: %.0f MiB\n", peakRssMiB());
   if (!json_path.empty()) {
-    nlohmann::ordered_json json = {{"runs", nlohmann::ordered_json::array()}};
+    nlohmann::ordered_json json = {{"runs", nlohmann::ordered_json::array()},
+                                   {"open3d", open3d_json},
+                                   {"ratios", nlohmann::ordered_json::array()}};
     for (const Run& r : runs) {
       json["runs"].push_back({{"integrator", r.name},
                               {"threads", r.threads},
@@ -380,12 +530,32 @@ int main(int argc, char** argv) {
                               {"outside_simple", r.unobserved_in_reference},
                               {"covers_simple", r.reference_coverage}});
     }
+    for (const Ratio& r : ratios) {
+      json["ratios"].push_back({{"integrator", r.integrator},
+                                {"threads", r.threads},
+                                {"voxels_per_side", r.voxels_per_side},
+                                {"over", r.peer},
+                                {"ratio", r.ratio}});
+    }
     std::ofstream(json_path) << json.dump() << "\n";
   }
-#ifndef CBLOX_HAVE_OPEN3D
-  std::fprintf(stderr, "cblox-bench-integrators: the Open3D peer is missing (exit 3)\n");
-  return 3;
-#else
-  return 0;
+  bool have_open3d = false, have_voxblox = false;
+#ifdef CBLOX_HAVE_OPEN3D
+  have_open3d = true;
 #endif
+#ifdef CBLOX_HAVE_VOXBLOX
+  have_voxblox = true;
+#endif
+  if (!have_open3d || !have_voxblox) {
+    const int code = !have_open3d && !have_voxblox ? kExitNoPeers
+                     : !have_open3d                ? kExitNoOpen3d
+                                                   : kExitNoVoxblox;
+    std::fprintf(stderr, "cblox-bench-integrators: %s missing (exit %d)\n",
+                 code == kExitNoPeers    ? "the Open3D and voxblox peers are"
+                 : code == kExitNoOpen3d ? "the Open3D peer is"
+                                         : "the voxblox peer is",
+                 code);
+    return code;
+  }
+  return 0;
 }

@@ -185,7 +185,7 @@ __attribute__((target("avx2"))) size_t ProjectiveVoxelRows::updateAvx2(
   const bool dropoff = updater_.usesDropoff();
   const bool inverse_square = updater_.inverseSquareWeight();
   const ColorBlending blending = updater_.blending();
-  const float* const samples = reinterpret_cast<const float*>(frame_.samples);
+  const long long* const samples = reinterpret_cast<const long long*>(frame_.samples);
   const int* const color_words = reinterpret_cast<const int*>(frame_.colors);
   // A colour is gathered as the 4 bytes at its offset: the last pixel's would read past
   // the image, so its lanes are filled one by one.
@@ -225,10 +225,23 @@ __attribute__((target("avx2"))) size_t ProjectiveVoxelRows::updateAvx2(
       const __m256i pixel = _mm256_cvttps_epi32(
           _mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(vi), w), _mm256_cvtepi32_ps(ui)));
       // The pixels' samples; lanes outside the image read nothing and stay 0 (no depth).
-      const __m256i sample_index = _mm256_slli_epi32(pixel, 1);
-      const __m256 d = _mm256_mask_i32gather_ps(zero, samples, sample_index, inside, 4);
-      const __m256 ray_factor =
-          _mm256_mask_i32gather_ps(zero, samples + 1, sample_index, inside, 4);
+      // Each sample (depth, ray factor) is one 8-byte load: two gathers of four, then
+      // the depths and ray factors are sorted out of the pairs.
+      const __m256i inside_bits = _mm256_castps_si256(inside);
+      const __m256i pairs_lo = _mm256_mask_i32gather_epi64(
+          _mm256_setzero_si256(), samples, _mm256_castsi256_si128(pixel),
+          _mm256_cvtepi32_epi64(_mm256_castsi256_si128(inside_bits)), 8);
+      const __m256i pairs_hi = _mm256_mask_i32gather_epi64(
+          _mm256_setzero_si256(), samples, _mm256_extracti128_si256(pixel, 1),
+          _mm256_cvtepi32_epi64(_mm256_extracti128_si256(inside_bits, 1)), 8);
+      const __m256 lo = _mm256_castsi256_ps(pairs_lo), hi = _mm256_castsi256_ps(pairs_hi);
+      // [d0 d1 d4 d5 | d2 d3 d6 d7] -> d0..d7 (64-bit units 0, 2, 1, 3), and so for the factors.
+      const __m256 d = _mm256_castpd_ps(_mm256_permute4x64_pd(
+          _mm256_castps_pd(_mm256_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0))),
+          _MM_SHUFFLE(3, 1, 2, 0)));
+      const __m256 ray_factor = _mm256_castpd_ps(_mm256_permute4x64_pd(
+          _mm256_castps_pd(_mm256_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1))),
+          _MM_SHUFFLE(3, 1, 2, 0)));
       const __m256 sdf = _mm256_mul_ps(_mm256_sub_ps(d, z), ray_factor);
       // Kept: a depth, and not more than the truncation behind it (!(sdf < -truncation)).
       __m256 update = _mm256_and_ps(_mm256_and_ps(inside, _mm256_cmp_ps(d, zero, _CMP_GT_OQ)),

@@ -16,6 +16,7 @@ struct ProjectivePixelSample {
   float depth;       ///< the frame's depth, 0 where the pixel was rejected
   float ray_factor;  ///< ||(x_n, y_n, 1)|| of the pixel's normalised coordinates
 };
+static_assert(sizeof(ProjectivePixelSample) == 8, "the AVX2 rows load a sample as 8 bytes");
 
 /// The voxel loop of ProjectiveTsdfIntegrator for one frame. A row of voxels (consecutive
 /// in memory, centres p0 + i * step in the camera frame) is projected into the image, to

@@ -198,9 +198,10 @@ void ProjectiveTsdfIntegrator::addSegmentBlocks(const Transformation& T_G_C, int
   const BlockIndex hi =
       gridIndexFromPoint(Eigen::Vector3f(a.cwiseMax(b).array() + radius), block_size_inv);
   // Keep the blocks of that box that can hold a voxel within `radius` of the segment a-b:
-  // block centre within radius + half the block diagonal of it.
+  // block centre within radius + the largest distance from it to one of its voxel centres
+  // (half the diagonal of the cube the centres span, block size less one voxel).
   const float block_size = layer_->blockSize();
-  const float reach = radius + 0.8661f * block_size;
+  const float reach = radius + 0.8661f * (block_size - layer_->voxelSize());
   const Eigen::Vector3f ab = b - a;
   const float ab_squared = std::max(ab.squaredNorm(), 1e-12f);
   for (int z = lo.z(); z <= hi.z(); ++z) {

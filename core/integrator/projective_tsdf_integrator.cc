@@ -15,6 +15,7 @@
 #include "core/integrator/even_coverage_order.h"
 #include "core/integrator/thread_team.h"
 
+#include "core/integrator/projective_block_screen.h"
 #include "core/integrator/projective_voxel_rows.h"
 #include "core/integrator/tsdf_voxel_update.h"
 
@@ -149,6 +150,8 @@ void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0
   const int u1 = std::min(u0 + kSearchCellPixels, width);
   const int v1 = std::min(v0 + kSearchCellPixels, height);
   const DepthRange range = cellDepthRange(samples_.data(), width, u0, v0, u1, v1);
+  cell_max_depth_[static_cast<size_t>(v0 / kSearchCellPixels) * cells_x_ + u0 / kSearchCellPixels] =
+      range.count > 0 ? range.d_max : 0.0f;
   if (range.count == 0) return;  // no valid pixel
   const float truncation = config_.truncation_distance_m;
   if (range.d_max - range.d_min <= truncation) {
@@ -282,6 +285,8 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   });
   const int cells_x = (width + kSearchCellPixels - 1) / kSearchCellPixels;
   const int cells_y = (height + kSearchCellPixels - 1) / kSearchCellPixels;
+  cells_x_ = cells_x;
+  cell_max_depth_.resize(static_cast<size_t>(cells_x) * static_cast<size_t>(cells_y));
   std::atomic<int> next_cell{0};
   runThreadTeam(num_threads, [&](int id) {
     ThreadState& state = states[static_cast<size_t>(id)];
@@ -291,32 +296,61 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
     }
   });
 
-  // Allocation, single-threaded. The approximate set can report a key twice (after an
-  // eviction), and every block must be visited exactly once, so deduplicate first.
+  // Allocation, single-threaded (after the screen below, in parallel). The approximate set can
+  // report a key twice (after an eviction), and every block must be visited exactly once, so
+  // deduplicate first.
   std::vector<uint64_t> keys;
   for (const ThreadState& state : states) {
     keys.insert(keys.end(), state.block_keys.begin(), state.block_keys.end());
   }
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  std::vector<Block*> blocks;
-  std::vector<uint8_t> newly_allocated;
-  blocks.reserve(keys.size());
-  newly_allocated.reserve(keys.size());
-  for (const uint64_t key : keys) {
-    bool is_new = false;
-    blocks.push_back(layer_->allocateBlock(unpackGridIndex(key), &is_new));
-    newly_allocated.push_back(is_new ? 1 : 0);
-  }
-
-  // Phase B: every voxel of those blocks, projected into the image; one thread per block.
-  const TsdfVoxelUpdater updater(config_, layer_->voxelSize());
   const Transformation T_C_G = T_G_C.inverse();
   const Eigen::Matrix3f R_C_G = T_C_G.rotationMatrix();
   const Eigen::Vector3f t_C_G = T_C_G.translation();
   const float voxel_size = layer_->voxelSize();
   const float fx = static_cast<float>(K.fx), fy = static_cast<float>(K.fy);
   const float cx = static_cast<float>(K.cx), cy = static_cast<float>(K.cy);
+  // Blocks no voxel of which can be updated are neither allocated nor visited (on the
+  // 7-Scenes frames half of the blocks that were allocated for a frame and freed unused).
+  const ProjectiveBlockScreen screen{R_C_G,
+                                     t_C_G,
+                                     fx,
+                                     fy,
+                                     cx + 0.5f,
+                                     cy + 0.5f,
+                                     width,
+                                     height,
+                                     0.5f * voxel_size,
+                                     layer_->blockSize() - voxel_size,
+                                     config_.truncation_distance_m,
+                                     cell_max_depth_.data(),
+                                     cells_x,
+                                     kSearchCellPixels};
+  std::vector<Block*> blocks;
+  std::vector<uint8_t> newly_allocated;
+  blocks.reserve(keys.size());
+  newly_allocated.reserve(keys.size());
+  std::vector<uint8_t> keep(keys.size());
+  std::atomic<size_t> next_key{0};
+  constexpr size_t kKeysPerClaim = 64;
+  runThreadTeam(num_threads, [&](int) {
+    for (size_t k0 = next_key.fetch_add(kKeysPerClaim); k0 < keys.size();
+         k0 = next_key.fetch_add(kKeysPerClaim)) {
+      for (size_t k = k0; k < std::min(k0 + kKeysPerClaim, keys.size()); ++k) {
+        keep[k] = screen.mayUpdate(unpackGridIndex(keys[k]).cast<float>() * layer_->blockSize());
+      }
+    }
+  });
+  for (size_t k = 0; k < keys.size(); ++k) {
+    if (!keep[k]) continue;
+    bool is_new = false;
+    blocks.push_back(layer_->allocateBlock(unpackGridIndex(keys[k]), &is_new));
+    newly_allocated.push_back(is_new ? 1 : 0);
+  }
+
+  // Phase B: every voxel of those blocks, projected into the image; one thread per block.
+  const TsdfVoxelUpdater updater(config_, layer_->voxelSize());
   const int vps = layer_->voxelsPerSide();
   const Eigen::Vector3f step_x = R_C_G.col(0) * voxel_size;
   const Eigen::Vector3f step_y = R_C_G.col(1) * voxel_size;

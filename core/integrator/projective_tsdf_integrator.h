@@ -27,7 +27,9 @@ namespace cblox {
 /// the blocks around the segment of the cell's centre ray between its nearest and farthest
 /// depth, widened by the truncation and the cell's lateral extent, so the empty space
 /// between a foreground and a background surface gets no blocks. No voxel within
-/// truncation of a measured point is missed.
+/// truncation of a measured point is missed. A block found this way is then screened
+/// (ProjectiveBlockScreen): if all its voxels lie more than the truncation behind the deepest
+/// valid pixel under it, or outside the image, it is neither allocated nor visited.
 ///
 /// Voxels are updated a row at a time (ProjectiveVoxelRows: eight voxels at once on AVX2
 /// CPUs, IntegratorConfig::vectorized).
@@ -65,7 +67,10 @@ class ProjectiveTsdfIntegrator {
 
   ApproxHashSet block_set_;
   int width_ = 0, height_ = 0;
-  std::vector<ProjectivePixelSample> samples_;  // per pixel; ray factors for factor_camera_
+  std::vector<ProjectivePixelSample> samples_;
+  // Per 8x8-pixel search cell of the current frame: its deepest valid depth, 0 if none.
+  std::vector<float> cell_max_depth_;
+  int cells_x_ = 0;  // per pixel; ray factors for factor_camera_
   PinholeIntrinsics factor_camera_;
 };
 

@@ -385,18 +385,11 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
       config_.max_integration_time_s > 0.0 ? evenCoverageOrder(static_cast<uint32_t>(num_claims))
                                            : std::vector<uint32_t>();
   std::atomic<size_t> next_claim{0};
-  ProjectiveVoxelRows::Frame frame;
-  frame.fx = fx;
-  frame.fy = fy;
-  frame.cx = cx;
-  frame.cy = cy;
-  frame.width = width;
-  frame.height = height;
-  frame.samples = samples_.data();
-  frame.colors = color != nullptr && config_.color_blending != ColorBlending::kNone
-                     ? color->data.data()
-                     : nullptr;
-  const ProjectiveVoxelRows rows(frame, updater, config_.vectorized);
+  const Color* const colors = color != nullptr && config_.color_blending != ColorBlending::kNone
+                                  ? color->data.data()
+                                  : nullptr;
+  const ProjectiveVoxelRows rows({fx, fy, cx, cy, width, height, samples_.data(), colors}, updater,
+                                 config_.vectorized);
   runThreadTeam(num_threads, [&](int id) {
     IntegrationStats& stats = states[static_cast<size_t>(id)].stats;
     std::vector<Eigen::Vector3f> row_origins(static_cast<size_t>(vps) * static_cast<size_t>(vps));

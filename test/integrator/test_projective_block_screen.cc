@@ -65,15 +65,8 @@ TEST(ProjectiveBlockScreen, ARejectedBlockIsNeverUpdated) {
                                        cell_max.data(),
                                        cells_x,
                                        kCell};
-    ProjectiveVoxelRows::Frame frame;
-    frame.fx = fx;
-    frame.fy = fy;
-    frame.cx = cx;
-    frame.cy = cy;
-    frame.width = kWidth;
-    frame.height = kHeight;
-    frame.samples = samples.data();
-    const ProjectiveVoxelRows rows(frame, updater, false);
+    const ProjectiveVoxelRows rows({fx, fy, cx, cy, kWidth, kHeight, samples.data(), nullptr},
+                                   updater, /*vectorized=*/false);
     for (int b = 0; b < 400; ++b) {
       // A point on a random pixel's ray at 0.5-4 m, and the block holding it.
       const Eigen::Vector3f ray((unit(rng) * kWidth - cx) / fx, (unit(rng) * kHeight - cy) / fy,

@@ -33,7 +33,7 @@ class ApproxHashSet {
   /// True when `key` was not in the set (it is now); false when it already was.
   bool insert(uint64_t key) {
     const uint64_t hash = mixHash(key);
-    const uint64_t entry = (epoch_ << kFingerprintBits) | (hash >> (64 - kFingerprintBits));
+    const uint64_t entry = entryOf(hash);
     std::atomic<uint64_t>& bucket = buckets_[hash & mask_];
     uint64_t current = bucket.load(std::memory_order_relaxed);
     while (current != entry) {
@@ -46,7 +46,7 @@ class ApproxHashSet {
   /// Thread-safe; a concurrent insert of the same key may or may not be seen.
   bool contains(uint64_t key) const {
     const uint64_t hash = mixHash(key);
-    const uint64_t entry = (epoch_ << kFingerprintBits) | (hash >> (64 - kFingerprintBits));
+    const uint64_t entry = entryOf(hash);
     return buckets_[hash & mask_].load(std::memory_order_relaxed) == entry;
   }
   /// The same set semantics for keys made of a cluster key and a member index in
@@ -58,7 +58,7 @@ class ApproxHashSet {
   /// integrators' settings). `member_bits` < log2_buckets.
   bool insertInCluster(uint64_t cluster_key, uint32_t member, int member_bits) {
     const uint64_t hash = mixHash(cluster_key);
-    const uint64_t entry = (epoch_ << kFingerprintBits) | (hash >> (64 - kFingerprintBits));
+    const uint64_t entry = entryOf(hash);
     std::atomic<uint64_t>& bucket = buckets_[((hash << member_bits) | member) & mask_];
     uint64_t current = bucket.load(std::memory_order_relaxed);
     while (current != entry) {
@@ -87,6 +87,10 @@ class ApproxHashSet {
 
  private:
   static constexpr int kFingerprintBits = 48;
+  // What a bucket holds for a key of hash `hash` in the current epoch.
+  uint64_t entryOf(uint64_t hash) const {
+    return (epoch_ << kFingerprintBits) | (hash >> (64 - kFingerprintBits));
+  }
   uint64_t mask_;
   std::unique_ptr<std::atomic<uint64_t>[]> buckets_;
   uint64_t epoch_ = 1;  // 0 marks a never-written bucket

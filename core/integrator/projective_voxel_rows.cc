@@ -14,6 +14,11 @@
 namespace cblox {
 namespace {
 
+// Pixel indices are formed in float by the vectorised projections: exact below 2^24 pixels.
+bool indexExactInFloat(int width, int height) {
+  return static_cast<int64_t>(width) * height < (int64_t{1} << 24);
+}
+
 constexpr float kMinZ = 1e-6f;  // a voxel centre closer to the image plane projects nowhere
 
 // One row of `count` voxel centres p_i = p0 + i * step (camera frame) projected into the
@@ -25,34 +30,38 @@ void projectRow(float fx, float fy, float cx, float cy, int width, int height,
                 int32_t* pixel_out) {
   int i = 0;
 #if defined(__SSE2__)
-  // Four voxels at a time. The pixel index is formed in float, exact while the image
-  // has fewer than 2^24 pixels (the AVX2 rows form it in the same way).
-  const __m128 eps = _mm_set1_ps(kMinZ), zero = _mm_setzero_ps();
-  const __m128 w = _mm_set1_ps(static_cast<float>(width));
-  const __m128 h = _mm_set1_ps(static_cast<float>(height));
-  const __m128 last_u = _mm_set1_ps(static_cast<float>(width - 1));
-  const __m128 last_v = _mm_set1_ps(static_cast<float>(height - 1));
-  const __m128i minus_one = _mm_set1_epi32(-1);
-  for (; i + 4 <= count; i += 4) {
-    const __m128 fi = _mm_setr_ps(static_cast<float>(i), static_cast<float>(i + 1),
-                                  static_cast<float>(i + 2), static_cast<float>(i + 3));
-    const __m128 x = _mm_add_ps(_mm_set1_ps(p0.x()), _mm_mul_ps(fi, _mm_set1_ps(step.x())));
-    const __m128 y = _mm_add_ps(_mm_set1_ps(p0.y()), _mm_mul_ps(fi, _mm_set1_ps(step.y())));
-    const __m128 z = _mm_add_ps(_mm_set1_ps(p0.z()), _mm_mul_ps(fi, _mm_set1_ps(step.z())));
-    const __m128 inv_z = _mm_div_ps(_mm_set1_ps(1.0f), _mm_max_ps(z, eps));
-    const __m128 u = _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(fx), x), inv_z), _mm_set1_ps(cx));
-    const __m128 v = _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(fy), y), inv_z), _mm_set1_ps(cy));
-    const __m128 inside = _mm_and_ps(
-        _mm_and_ps(_mm_cmpgt_ps(z, eps), _mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmpge_ps(v, zero))),
-        _mm_and_ps(_mm_cmplt_ps(u, w), _mm_cmplt_ps(v, h)));
-    const __m128i ui = _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(u, zero), last_u));
-    const __m128i vi = _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(v, zero), last_v));
-    const __m128i pixel =
-        _mm_cvttps_epi32(_mm_add_ps(_mm_mul_ps(_mm_cvtepi32_ps(vi), w), _mm_cvtepi32_ps(ui)));
-    const __m128i mask = _mm_castps_si128(inside);
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(pixel_out + i),
-                     _mm_or_si128(_mm_and_si128(mask, pixel), _mm_andnot_si128(mask, minus_one)));
-    _mm_storeu_ps(z_out + i, z);
+  // Four voxels at a time (the AVX2 rows form the pixel index in the same way).
+  if (indexExactInFloat(width, height)) {
+    const __m128 eps = _mm_set1_ps(kMinZ), zero = _mm_setzero_ps();
+    const __m128 w = _mm_set1_ps(static_cast<float>(width));
+    const __m128 h = _mm_set1_ps(static_cast<float>(height));
+    const __m128 last_u = _mm_set1_ps(static_cast<float>(width - 1));
+    const __m128 last_v = _mm_set1_ps(static_cast<float>(height - 1));
+    const __m128i minus_one = _mm_set1_epi32(-1);
+    for (; i + 4 <= count; i += 4) {
+      const __m128 fi = _mm_setr_ps(static_cast<float>(i), static_cast<float>(i + 1),
+                                    static_cast<float>(i + 2), static_cast<float>(i + 3));
+      const __m128 x = _mm_add_ps(_mm_set1_ps(p0.x()), _mm_mul_ps(fi, _mm_set1_ps(step.x())));
+      const __m128 y = _mm_add_ps(_mm_set1_ps(p0.y()), _mm_mul_ps(fi, _mm_set1_ps(step.y())));
+      const __m128 z = _mm_add_ps(_mm_set1_ps(p0.z()), _mm_mul_ps(fi, _mm_set1_ps(step.z())));
+      const __m128 inv_z = _mm_div_ps(_mm_set1_ps(1.0f), _mm_max_ps(z, eps));
+      const __m128 u =
+          _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(fx), x), inv_z), _mm_set1_ps(cx));
+      const __m128 v =
+          _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(fy), y), inv_z), _mm_set1_ps(cy));
+      const __m128 inside =
+          _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(z, eps),
+                                _mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmpge_ps(v, zero))),
+                     _mm_and_ps(_mm_cmplt_ps(u, w), _mm_cmplt_ps(v, h)));
+      const __m128i ui = _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(u, zero), last_u));
+      const __m128i vi = _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(v, zero), last_v));
+      const __m128i pixel =
+          _mm_cvttps_epi32(_mm_add_ps(_mm_mul_ps(_mm_cvtepi32_ps(vi), w), _mm_cvtepi32_ps(ui)));
+      const __m128i mask = _mm_castps_si128(inside);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(pixel_out + i),
+                       _mm_or_si128(_mm_and_si128(mask, pixel), _mm_andnot_si128(mask, minus_one)));
+      _mm_storeu_ps(z_out + i, z);
+    }
   }
 #endif
   for (; i < count; ++i) {
@@ -130,7 +139,7 @@ ProjectiveVoxelRows::ProjectiveVoxelRows(const Frame& frame, const TsdfVoxelUpda
       updater_(updater),
       cx_rounding_(frame.cx + 0.5f),
       cy_rounding_(frame.cy + 0.5f),
-      vectorized_(vectorized && cpuHasAvx2()) {}
+      vectorized_(vectorized && cpuHasAvx2() && indexExactInFloat(frame.width, frame.height)) {}
 
 size_t ProjectiveVoxelRows::update(const Eigen::Vector3f* origins, int num_rows,
                                    const Eigen::Vector3f& step, int count,

@@ -41,9 +41,9 @@ class ProjectiveVoxelRows {
  public:
   /// One frame's image side. The pointers must outlive the object.
   struct Frame {
-    float fx = 0.0f, fy = 0.0f;                      ///< focal lengths, pixels
-    float cx = 0.0f, cy = 0.0f;                      ///< principal point, pixels
-    int width = 0, height = 0;                       ///< image size; width * height < 2^24
+    float fx = 0.0f, fy = 0.0f;  ///< focal lengths, pixels
+    float cx = 0.0f, cy = 0.0f;  ///< principal point, pixels
+    int width = 0, height = 0;   ///< image size (SIMD paths: width * height < 2^24)
     const ProjectivePixelSample* samples = nullptr;  ///< width * height, row-major
     const Color* colors = nullptr;  ///< width * height, or null (colours not blended)
   };
@@ -62,7 +62,8 @@ class ProjectiveVoxelRows {
   size_t update(const Eigen::Vector3f* origins, int num_rows, const Eigen::Vector3f& step,
                 int count, TsdfVoxel* voxels) const;
 
-  /// True when rows whose length is a multiple of 8 run on AVX2.
+  /// True when rows whose length is a multiple of 8 run on AVX2 (asked for, the CPU has it,
+  /// and the image has fewer than 2^24 pixels).
   bool vectorized() const { return vectorized_; }
   /// True when this CPU has AVX2.
   static bool cpuHasAvx2();

@@ -117,6 +117,21 @@ void keepFastest(Run* best, const Run& again) {
 // (IntegratorConfig::vectorized off), to show what the AVX2 rows gain in the same run.
 enum class Kind { kSimple, kFast, kProjective, kProjectivePortable };
 
+// The name of a kind's rows (tables, JSON, progress lines).
+const char* kindName(Kind kind) {
+  switch (kind) {
+    case Kind::kSimple:
+      return "simple";
+    case Kind::kFast:
+      return "fast";
+    case Kind::kProjective:
+      return "projective";
+    case Kind::kProjectivePortable:
+      return "projective, one voxel at a time";
+  }
+  return "?";
+}
+
 // Marching cubes over the whole layer plus the connected extraction, with the run's
 // threads; fills mesh, mesh_ms and mesh_vertices.
 void meshRun(Run* run) {
@@ -134,10 +149,7 @@ void meshRun(Run* run) {
 Run integrateOnce(const BenchSequence& seq, Kind kind, int threads, int voxels_per_side,
                   size_t max_frames, VisitedVoxelSet visited) {
   Run run;
-  run.name = kind == Kind::kSimple               ? "simple"
-             : kind == Kind::kFast               ? "fast"
-             : kind == Kind::kProjectivePortable ? "projective, one voxel at a time"
-                                                 : "projective";
+  run.name = kindName(kind);
   run.threads = threads;
   run.voxels_per_side = voxels_per_side;
   run.layer = std::make_shared<TsdfLayer>(LayerConfig{kVoxelSize, voxels_per_side});
@@ -349,12 +361,8 @@ int main(int argc, char** argv) {
   auto add = [&](Kind kind, int threads, int vps, size_t frames, int rounds,
                  cblox::VisitedVoxelSet visited = cblox::VisitedVoxelSet::kBlockBitmap) {
     char label[96];
-    std::snprintf(label, sizeof(label), "%s, %d thread(s), %d^3 blocks",
-                  kind == Kind::kSimple               ? "simple"
-                  : kind == Kind::kFast               ? "fast"
-                  : kind == Kind::kProjectivePortable ? "projective (one voxel at a time)"
-                                                      : "projective",
-                  threads, vps);
+    std::snprintf(label, sizeof(label), "%s, %d thread(s), %d^3 blocks", kindName(kind), threads,
+                  vps);
     jobs.push_back({label, rounds, [&seq, kind, threads, vps, frames, visited] {
                       return integrateOnce(seq, kind, threads, vps, frames, visited);
                     }});

@@ -332,6 +332,7 @@ int run(int argc, char** argv) {
   // Keyframe positions when they were made (for the distance of the pairs asked about).
   std::mutex positions_mutex;
   std::map<int64_t, Eigen::Vector3d> keyframe_positions;
+  const PairKeyframes default_pairs = FusionSchedulerConfig{}.pair_keyframes;
   auto add = [&](std::string name, Kind kind, double q_min,
                  PairKeyframes pair_keyframes = FusionSchedulerConfig{}.pair_keyframes,
                  std::optional<double> revisit_m = std::nullopt,
@@ -448,23 +449,20 @@ int run(int argc, char** argv) {
     add(name, Kind::kOn, q, PairKeyframes::kMostSharedOnRevisits);
   }
   if (!revisit_sweep.empty()) {
-    add("off revisit", Kind::kOff, 0.0, FusionSchedulerConfig{}.pair_keyframes,
-        revisit_variant_distance);
+    add("off revisit", Kind::kOff, 0.0, default_pairs, revisit_variant_distance);
   }
   for (const double q : revisit_sweep) {
     char name[40];
     std::snprintf(name, sizeof(name), "on q>=%.0g revisit", q);
-    add(name, Kind::kOn, q, FusionSchedulerConfig{}.pair_keyframes, revisit_variant_distance);
+    add(name, Kind::kOn, q, default_pairs, revisit_variant_distance);
   }
   if (!revisit_frames_sweep.empty()) {
-    add("off frames", Kind::kOff, 0.0, FusionSchedulerConfig{}.pair_keyframes, std::nullopt,
-        revisit_variant_frames);
+    add("off frames", Kind::kOff, 0.0, default_pairs, std::nullopt, revisit_variant_frames);
   }
   for (const double q : revisit_frames_sweep) {
     char name[40];
     std::snprintf(name, sizeof(name), "on q>=%.0g frames", q);
-    add(name, Kind::kOn, q, FusionSchedulerConfig{}.pair_keyframes, std::nullopt,
-        revisit_variant_frames);
+    add(name, Kind::kOn, q, default_pairs, std::nullopt, revisit_variant_frames);
   }
 
   std::map<uint64_t, Transformationd> truth_by_frame;  // for the trajectory alignment

@@ -1,7 +1,8 @@
 // cblox-bench-integrators: ms per frame of the simple, fast and projective integrators on
 // the 50 frames of ../shared/data/7scenes-rgbd-50 (voxel 2 cm, truncation 4 voxels, max
-// depth 4 m), 1 and 2 threads, 8^3 vs 16^3 blocks, the projective integrator also one voxel
-// at a time (1 thread, IntegratorConfig::vectorized off), and two peers on the same frames
+// depth 4 m), 1 and 2 threads, 8^3 vs 16^3 blocks, the fast integrator also with the paper's
+// hash set and with voxblox's start cells of half a voxel, the projective integrator also one
+// voxel at a time (1 thread, IntegratorConfig::vectorized off), and two peers on the same frames
 // in the same run: Open3D's ScalableTSDFVolume (when built with Open3D) and voxblox's own
 // FastTsdfIntegrator (when built with voxblox: see test/bench/CMakeLists.txt); mesh
 // extraction time, and the accuracy of each mesh (voxblox's too) against the simple
@@ -93,9 +94,10 @@ struct Run {
   double layer_mib = 0.0;
   double mesh_ms = 0.0;
   size_t mesh_vertices = 0;
-  double rmse_to_reference_mm = -1.0;     // mesh vertices -> reference surface
-  double reference_coverage = -1.0;       // share of reference vertices near this surface
-  double unobserved_in_reference = -1.0;  // share of vertices where the reference is empty
+  double rmse_to_reference_mm = -1.0;        // mesh vertices -> reference surface
+  double mean_signed_to_reference_mm = 0.0;  // > 0: the surface lies in front of the reference's
+  double reference_coverage = -1.0;          // share of reference vertices near this surface
+  double unobserved_in_reference = -1.0;     // share of vertices where the reference is empty
   std::shared_ptr<TsdfLayer> layer;
   Mesh mesh;
   std::vector<double> conversion_ms;  // voxblox rows: depthToPointCloud alone, per frame
@@ -146,8 +148,14 @@ void meshRun(Run* run) {
   run->mesh_vertices = run->mesh.numVertices();
 }
 
+// A fast-integrator setting other than the default, shown beside it in the same rounds.
+struct FastVariant {
+  VisitedVoxelSet visited = VisitedVoxelSet::kBlockBitmap;
+  float start_voxel_subsampling_factor = IntegratorConfig{}.start_voxel_subsampling_factor;
+};
+
 Run integrateOnce(const BenchSequence& seq, Kind kind, int threads, int voxels_per_side,
-                  size_t max_frames, VisitedVoxelSet visited) {
+                  size_t max_frames, const FastVariant& variant) {
   Run run;
   run.name = kindName(kind);
   run.threads = threads;
@@ -157,9 +165,16 @@ Run integrateOnce(const BenchSequence& seq, Kind kind, int threads, int voxels_p
   config.truncation_distance_m = kTruncation;
   config.max_ray_length_m = kMaxRayLength;
   config.num_threads = threads;
-  config.visited_voxel_set = visited;
+  config.visited_voxel_set = variant.visited;
+  config.start_voxel_subsampling_factor = variant.start_voxel_subsampling_factor;
   config.vectorized = kind != Kind::kProjectivePortable;
-  if (visited == VisitedVoxelSet::kApproxHashSet) run.name += " (paper hash set)";
+  if (variant.visited == VisitedVoxelSet::kApproxHashSet) run.name += " (paper hash set)";
+  if (variant.start_voxel_subsampling_factor != IntegratorConfig{}.start_voxel_subsampling_factor) {
+    char suffix[48];
+    std::snprintf(suffix, sizeof(suffix), " (start factor %g)",
+                  variant.start_voxel_subsampling_factor);
+    run.name += suffix;
+  }
   const PinholeCamera camera(seq.intrinsics);
   DepthConversionConfig conversion;
   conversion.min_depth_m = 0.1f;
@@ -227,19 +242,23 @@ Run integrateVoxblox(const BenchSequence& seq, int threads, int voxels_per_side)
 // Accuracy against the reference (the simple integrator's TSDF, the fused reference):
 // RMSE of |reference TSDF| interpolated at this mesh's vertices, over the vertices where
 // the reference is observed (the distance to the reference surface, valid within the
-// truncation band), the share of vertices where it is not, and the share of reference
-// vertices within one voxel of this TSDF's surface.
+// truncation band), its mean with sign (positive: this surface lies on the sensor's side
+// of the reference's, i.e. this TSDF is biased towards "inside"), the share of vertices
+// where it is not observed, and the share of reference vertices within one voxel of this
+// TSDF's surface.
 void compareToReference(const Run& reference, Run* run) {
   const TsdfInterpolator ref(*reference.layer);
-  double sum_sq = 0.0;
+  double sum = 0.0, sum_sq = 0.0;
   size_t observed = 0;
   for (const Eigen::Vector3f& v : run->mesh.vertices) {
     float d = 0.0f;
     if (!ref.getInterpolatedDistance(v, &d)) continue;
+    sum += d;
     sum_sq += static_cast<double>(d) * d;
     ++observed;
   }
   run->rmse_to_reference_mm = observed == 0 ? 0.0 : 1e3 * std::sqrt(sum_sq / observed);
+  run->mean_signed_to_reference_mm = observed == 0 ? 0.0 : 1e3 * sum / observed;
   run->unobserved_in_reference =
       run->mesh.vertices.empty() ? 0.0
                                  : 1.0 - static_cast<double>(observed) / run->mesh.vertices.size();
@@ -332,8 +351,7 @@ int main(int argc, char** argv) {
       const Kind kind = only == "simple" ? Kind::kSimple
                         : only == "fast" ? Kind::kFast
                                          : Kind::kProjective;
-      const Run run =
-          integrateOnce(seq, kind, 2, 8, seq.frames.size(), cblox::VisitedVoxelSet::kBlockBitmap);
+      const Run run = integrateOnce(seq, kind, 2, 8, seq.frames.size(), FastVariant{});
       blocks = run.blocks;
       layer_mib = run.layer_mib;
     } else {
@@ -359,19 +377,22 @@ int main(int argc, char** argv) {
   };
   std::vector<Job> jobs;
   auto add = [&](Kind kind, int threads, int vps, size_t frames, int rounds,
-                 cblox::VisitedVoxelSet visited = cblox::VisitedVoxelSet::kBlockBitmap) {
+                 const FastVariant& variant = FastVariant{}) {
     char label[96];
     std::snprintf(label, sizeof(label), "%s, %d thread(s), %d^3 blocks", kindName(kind), threads,
                   vps);
-    jobs.push_back({label, rounds, [&seq, kind, threads, vps, frames, visited] {
-                      return integrateOnce(seq, kind, threads, vps, frames, visited);
+    jobs.push_back({label, rounds, [&seq, kind, threads, vps, frames, variant] {
+                      return integrateOnce(seq, kind, threads, vps, frames, variant);
                     }});
   };
   add(Kind::kSimple, 2, 8, simple_frames, 1);
   add(Kind::kSimple, 1, 8, std::min<size_t>(simple_frames, 10), 1);
   for (int threads : {1, 2}) add(Kind::kFast, threads, 8, seq.frames.size(), repeats);
   add(Kind::kFast, 2, 16, seq.frames.size(), repeats);
-  add(Kind::kFast, 2, 8, seq.frames.size(), repeats, cblox::VisitedVoxelSet::kApproxHashSet);
+  add(Kind::kFast, 2, 8, seq.frames.size(), repeats,
+      {.visited = cblox::VisitedVoxelSet::kApproxHashSet});
+  // voxblox's default start cells (half a voxel), the default until commit d354c6c.
+  add(Kind::kFast, 2, 8, seq.frames.size(), repeats, {.start_voxel_subsampling_factor = 2.0f});
   for (int threads : {1, 2}) add(Kind::kProjective, threads, 8, seq.frames.size(), repeats);
   add(Kind::kProjective, 2, 16, seq.frames.size(), repeats);
   add(Kind::kProjectivePortable, 1, 8, seq.frames.size(), repeats);
@@ -434,14 +455,19 @@ int main(int argc, char** argv) {
   };
   std::printf(
       "\n| integrator | threads | block | median ms/frame | p95 ms | blocks | layer MiB | "
-      "mesh ms | mesh vertices | RMSE to simple | vertices outside simple | covers simple |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "mesh ms | mesh vertices | RMSE to simple | mean to simple, signed | "
+      "vertices outside simple | covers simple |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Run& run : runs) {
-    std::printf("| %s | %d | %d^3 | %.2f | %.2f | %zu | %.1f | %.1f | %zu | %s | %s | %s |\n",
+    char signed_mean[32] = "-";  // only where the RMSE is measured
+    if (run.rmse_to_reference_mm >= 0) {
+      std::snprintf(signed_mean, sizeof(signed_mean), "%+.1f mm", run.mean_signed_to_reference_mm);
+    }
+    std::printf("| %s | %d | %d^3 | %.2f | %.2f | %zu | %.1f | %.1f | %zu | %s | %s | %s | %s |\n",
                 run.name.c_str(), run.threads, run.voxels_per_side, median(run.frame_ms),
                 percentile(run.frame_ms, 0.95), run.blocks, run.layer_mib, run.mesh_ms,
                 run.mesh_vertices, optional(run.rmse_to_reference_mm, 1.0, " mm").c_str(),
-                optional(run.unobserved_in_reference, 100.0, "%").c_str(),
+                signed_mean, optional(run.unobserved_in_reference, 100.0, "%").c_str(),
                 optional(run.reference_coverage, 100.0, "%").c_str());
   }
   // Ratios of median ms per frame, all measured in this run: {row, threads, block, peer,
@@ -465,7 +491,7 @@ int main(int argc, char** argv) {
                            {"median_ms", median(peer.frame_ms)},
                            {"p95_ms", percentile(peer.frame_ms, 0.95)},
                            {"mesh_vertices", peer.mesh_vertices}});
-    std::printf("| %s | %d | 16^3 | %.2f | %.2f | - | - | - | %zu | - | - | - |\n",
+    std::printf("| %s | %d | 16^3 | %.2f | %.2f | - | - | - | %zu | - | - | - | - |\n",
                 peer.name.c_str(), peer.threads, median(peer.frame_ms),
                 percentile(peer.frame_ms, 0.95), peer.mesh_vertices);
   }
@@ -535,6 +561,7 @@ int main(int argc, char** argv) {
                               {"mesh_ms", r.mesh_ms},
                               {"mesh_vertices", r.mesh_vertices},
                               {"rmse_to_simple_mm", r.rmse_to_reference_mm},
+                              {"mean_signed_to_simple_mm", r.mean_signed_to_reference_mm},
                               {"outside_simple", r.unobserved_in_reference},
                               {"covers_simple", r.reference_coverage}});
     }

@@ -49,6 +49,11 @@ struct IntegratorConfig {
   ColorBlending color_blending = ColorBlending::kWeightedAverage;
   /// Worker threads for one frame (1 = the calling thread only).
   int num_threads = 2;
+  /// AVX2 where the CPU has it, with the same results bit for bit; false: one at a time.
+  /// Projective: rows of voxels are updated eight at a time where the block's
+  /// voxels_per_side is a multiple of 8 (ProjectiveVoxelRows). Simple and fast: points are
+  /// checked and given their start cells eight at a time (RayPointScreen).
+  bool vectorized = true;
 
   // --- fast ray-casting integrator only ---
   /// The start-voxel set has cells of voxel_size / factor: a point whose cell was already
@@ -72,12 +77,6 @@ struct IntegratorConfig {
   /// log2 of the bucket count of each approximate set (start set, and the visited-voxel
   /// set when it is kApproxHashSet).
   int approx_set_log2_buckets = 20;
-
-  // --- projective integrator only ---
-  /// Rows of voxels are updated eight at a time with AVX2 where the CPU has it and the
-  /// block's voxels_per_side is a multiple of 8; false: one voxel at a time. The results are
-  /// the same bit for bit (ProjectiveVoxelRows).
-  bool vectorized = true;
 
   /// Empty when valid, otherwise a message naming the offending field. `voxel_size` is
   /// the layer's voxel size, needed to check the truncation distance.

@@ -6,10 +6,8 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-#if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
-#define CBLOX_HAVE_X86 1
-#endif
+
+#include "core/integrator/cpu_features.h"
 
 namespace cblox {
 namespace {
@@ -123,15 +121,6 @@ __attribute__((target("avx2"))) inline __m256i blendChannel(__m256i old_c, __m25
 #endif
 
 }  // namespace
-
-bool ProjectiveVoxelRows::cpuHasAvx2() {
-#if CBLOX_HAVE_X86
-  static const bool has = __builtin_cpu_supports("avx2");
-  return has;
-#else
-  return false;
-#endif
-}
 
 ProjectiveVoxelRows::ProjectiveVoxelRows(const Frame& frame, const TsdfVoxelUpdater& updater,
                                          bool vectorized)

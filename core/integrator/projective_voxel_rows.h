@@ -65,8 +65,6 @@ class ProjectiveVoxelRows {
   /// True when rows whose length is a multiple of 8 run on AVX2 (asked for, the CPU has it,
   /// and the image has fewer than 2^24 pixels).
   bool vectorized() const { return vectorized_; }
-  /// True when this CPU has AVX2.
-  static bool cpuHasAvx2();
 
   static constexpr int kMaxRow = 64;
 

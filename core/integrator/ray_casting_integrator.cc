@@ -9,6 +9,7 @@
 #include "core/integrator/deadline.h"
 #include "core/integrator/even_coverage_order.h"
 #include "core/integrator/grid_ray_traversal.h"
+#include "core/integrator/ray_point_screen.h"
 #include "core/integrator/thread_team.h"
 #include "core/integrator/tsdf_voxel_update.h"
 
@@ -41,11 +42,9 @@ struct RayCastingIntegrator::Frame {
   Eigen::Vector3f origin_G;
   Deadline deadline;
   TsdfVoxelUpdater updater;
-  uint64_t epoch;            // this call's Block::markVisited epoch
-  float coordinate_limit;    // |coordinate| bound keeping every ray inside the packable grid
-  bool origin_in_range;      // the sensor itself is inside that bound
-  float min_length_squared;  // accepted ray lengths, squared
-  float max_length_squared;
+  uint64_t epoch;  // this call's Block::markVisited epoch
+  // Range, finiteness and grid checks of the points, and their start cells.
+  RayPointScreen screen;
   std::atomic<size_t> cursor{0};
   std::atomic<bool> out_of_time{false};
 
@@ -84,17 +83,20 @@ IntegrationStats RayCastingIntegrator::integratePointCloud(const Transformation&
     throw std::invalid_argument("RayCastingIntegrator: colours and points differ in size");
   }
   const bool fast = mode_ == Mode::kFast;
+  const float min_length = std::max(config_.min_ray_length_m, 1e-6f);
+  const RayPointScreen::Frame screen_frame{
+      T_G_C.rotationMatrix(), T_G_C.translation(), min_length * min_length,
+      config_.max_ray_length_m * config_.max_ray_length_m,
+      // |coordinate| bound keeping every ray inside the packable grid
+      (kGridIndexMax - 2) * layer_->voxelSize() - config_.truncation_distance_m,
+      layer_->voxelSizeInv() * config_.start_voxel_subsampling_factor};
   Frame frame{T_G_C.rotationMatrix(),
               cloud_C,
               T_G_C.translation(),
               Deadline(fast ? config_.max_integration_time_s : 0.0),
               TsdfVoxelUpdater(config_, layer_->voxelSize()),
               layer_->nextIntegrationEpoch(),
-              (kGridIndexMax - 2) * layer_->voxelSize() - config_.truncation_distance_m,
-              false,
-              std::max(config_.min_ray_length_m, 1e-6f) * std::max(config_.min_ray_length_m, 1e-6f),
-              config_.max_ray_length_m * config_.max_ray_length_m};
-  frame.origin_in_range = frame.origin_G.cwiseAbs().maxCoeff() < frame.coordinate_limit;
+              RayPointScreen(screen_frame, config_.vectorized)};
   const size_t num_chunks = (cloud_C.size() + kPointsPerChunk - 1) / kPointsPerChunk;
   if (chunk_order_.size() != num_chunks) {
     chunk_order_ = evenCoverageOrder(static_cast<uint32_t>(num_chunks));
@@ -183,6 +185,7 @@ void RayCastingIntegrator::castChunks(Frame& frame, ThreadState* state) {
   const bool fast = mode_ == Mode::kFast;
   const size_t n = frame.cloud_C.size();
   IntegrationStats& stats = state->stats;
+  ScreenedPoint screened[kPointsPerChunk];
   StartCell candidates[kPointsPerChunk];
   for (size_t c = frame.cursor.fetch_add(1, std::memory_order_relaxed); c < chunk_order_.size();
        c = frame.cursor.fetch_add(1, std::memory_order_relaxed)) {
@@ -194,12 +197,15 @@ void RayCastingIntegrator::castChunks(Frame& frame, ThreadState* state) {
     }
     // First screen the whole chunk and prefetch the start-set buckets, so that the
     // set's cache misses overlap; then insert and cast.
+    const size_t accepted = frame.screen.screen(
+        &frame.cloud_C.points[begin], static_cast<uint32_t>(begin), end - begin, screened, &stats);
     size_t count = 0;
     uint64_t last_cell = kNoBlock;  // consecutive points often share a start cell
-    for (size_t i = begin; i < end; ++i) {
+    for (size_t k = 0; k < accepted; ++k) {
       StartCell& candidate = candidates[count];
-      if (!screenPoint(frame, static_cast<uint32_t>(i), &stats, &candidate)) continue;
+      candidate.index = screened[k].index;
       if (fast) {
+        candidate.cell = screened[k].cell;
         if (candidate.cell == last_cell) {  // what the set would answer, without a lookup
           ++stats.points_subsampled;
           continue;
@@ -236,32 +242,6 @@ void RayCastingIntegrator::resumeParked(Frame& frame, const std::vector<ParkedRa
     }
     for (size_t i = begin; i < end; ++i) walkRay(frame, parked[i].index, &parked[i], state);
   }
-}
-
-bool RayCastingIntegrator::screenPoint(const Frame& frame, uint32_t index, IntegrationStats* stats,
-                                       StartCell* start_cell) const {
-  const Eigen::Vector3f& point_C = frame.cloud_C.points[index];
-  if (!point_C.allFinite()) {
-    ++stats->points_invalid;
-    return false;
-  }
-  const float length_squared = point_C.squaredNorm();
-  if (length_squared < frame.min_length_squared || length_squared > frame.max_length_squared) {
-    ++stats->points_out_of_range;
-    return false;
-  }
-  const Eigen::Vector3f point_G = frame.R_G_C * point_C + frame.origin_G;
-  // Rays whose ends fall outside the packable grid (absurd poses) are rejected whole.
-  if (!frame.origin_in_range || !(point_G.cwiseAbs().maxCoeff() < frame.coordinate_limit)) {
-    ++stats->points_invalid;
-    return false;
-  }
-  start_cell->index = index;
-  if (mode_ == Mode::kFast) {
-    start_cell->cell = packGridIndex(gridIndexFromPointUnchecked(
-        point_G, layer_->voxelSizeInv() * config_.start_voxel_subsampling_factor));
-  }
-  return true;
 }
 
 void RayCastingIntegrator::walkRay(Frame& frame, uint32_t index, const ParkedRay* resume,

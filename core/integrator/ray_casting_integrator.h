@@ -31,7 +31,9 @@ namespace cblox {
 /// Point order: the cloud is cut into runs of kPointsPerChunk consecutive points (a row
 /// segment of a depth image) and the runs are visited in evenCoverageOrder, so a frame
 /// cut short by the budget still covers the whole image, while the points of one run are
-/// neighbours and keep the hash sets and blocks in cache. Threads claim runs.
+/// neighbours and keep the hash sets and blocks in cache. Threads claim runs. A run's
+/// points are first checked and given their start cells together (RayPointScreen, eight at
+/// a time on AVX2).
 ///
 /// Allocation never happens while threads walk rays: a ray that enters a missing block
 /// is parked (its traversal state kept); after the parallel pass the missing blocks are
@@ -67,8 +69,6 @@ class RayCastingIntegrator {
   struct StartCell;
   void castChunks(Frame& frame, ThreadState* state);
   void resumeParked(Frame& frame, const std::vector<ParkedRay>& parked, ThreadState* state);
-  bool screenPoint(const Frame& frame, uint32_t index, IntegrationStats* stats,
-                   StartCell* start_cell) const;
   // Walks the ray of point `index`: a new one when `resume` is null, else the parked one.
   void walkRay(Frame& frame, uint32_t index, const ParkedRay* resume, ThreadState* state);
 

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/integrator/cpu_features.h"
 #include "core/integrator/projective_tsdf_integrator.h"
 #include "test/integrator/sphere_views.h"
 
@@ -34,7 +35,7 @@ void paintPattern(ColorImage* color) {
 // and 64 voxels whose centres fall inside, outside and behind the image, on pixels with
 // and without depth (the last pixel included).
 TEST(ProjectiveVoxelRows, Avx2RowsMatchThePortableLoopBitForBit) {
-  if (!ProjectiveVoxelRows::cpuHasAvx2()) GTEST_SKIP() << "this CPU has no AVX2";
+  if (!cpuHasAvx2()) GTEST_SKIP() << "this CPU has no AVX2";
   constexpr int kWidth = 40, kHeight = 30;
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
@@ -109,7 +110,7 @@ TEST(ProjectiveVoxelRows, Avx2RowsMatchThePortableLoopBitForBit) {
 // The last pixel's colour is blended (gathered one by one: a 4-byte read would pass the
 // image's end).
 TEST(ProjectiveVoxelRows, TheLastPixelsColourIsBlended) {
-  if (!ProjectiveVoxelRows::cpuHasAvx2()) GTEST_SKIP() << "this CPU has no AVX2";
+  if (!cpuHasAvx2()) GTEST_SKIP() << "this CPU has no AVX2";
   std::vector<ProjectivePixelSample> samples(4 * 4, ProjectivePixelSample{1.0f, 1.0f});
   std::vector<Color> colors(samples.size(), Color{0, 0, 0});
   colors.back() = Color{255, 128, 1};
@@ -133,7 +134,7 @@ TEST(ProjectiveVoxelRows, TheLastPixelsColourIsBlended) {
 // Whole frames of the sphere and of a wall filling the image: the integrator with
 // vectorized rows builds the same layer, byte for byte, as without, for 8^3 and 16^3 blocks.
 TEST(ProjectiveVoxelRows, IntegratorLayersAreIdenticalWithAndWithoutAvx2) {
-  if (!ProjectiveVoxelRows::cpuHasAvx2()) GTEST_SKIP() << "this CPU has no AVX2";
+  if (!cpuHasAvx2()) GTEST_SKIP() << "this CPU has no AVX2";
   const PinholeCamera camera = test::smallCamera();
   std::vector<test::View> views = test::renderSphereViews(6);
   for (test::View& view : views) paintPattern(&view.color);

@@ -1,0 +1,21 @@
+#pragma once
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define CBLOX_HAVE_X86 1
+#endif
+
+namespace cblox {
+
+/// True when this CPU has AVX2 (asked once, then cached). The integrators' AVX2 paths are
+/// compiled with target attributes and chosen at run time with this. Thread-safe.
+inline bool cpuHasAvx2() {
+#if CBLOX_HAVE_X86
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+#else
+  return false;
+#endif
+}
+
+}  // namespace cblox

@@ -23,6 +23,8 @@ namespace cblox {
 namespace {
 
 constexpr int kBlockSetLog2Buckets = 16;
+// The largest block cube of the search (2 MiB of bits): 5 m rays and 16 cm blocks take 57 KiB.
+constexpr size_t kBlockCubeMaxBits = size_t{1} << 24;
 constexpr size_t kBlocksPerClaim = 4;
 constexpr int kSearchCellPixels = 8;  // block search cell (pixels per side)
 
@@ -138,13 +140,26 @@ bool sameIntrinsics(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
 }  // namespace
 
 ProjectiveTsdfIntegrator::ProjectiveTsdfIntegrator(const IntegratorConfig& config, TsdfLayer* layer)
-    : config_(config), layer_(layer), block_set_(kBlockSetLog2Buckets) {
+    : config_(config),
+      layer_(layer),
+      block_cube_(kBlockCubeMaxBits),
+      block_set_(kBlockSetLog2Buckets) {
   if (layer == nullptr) throw std::invalid_argument("ProjectiveTsdfIntegrator: layer is null");
   const std::string error = config.validate(layer->voxelSize());
   if (!error.empty()) throw std::invalid_argument("IntegratorConfig: " + error);
 }
 
-void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0, int v0,
+// A search cell's centre ray in the layer frame, and how far the cell's rays can leave it.
+struct ProjectiveTsdfIntegrator::CellRay {
+  Eigen::Vector3f origin_G;     // the sensor
+  Eigen::Vector3f direction_G;  // R_G_C (x_n, y_n, 1) of the cell's centre: depth d is at
+                                // origin_G + d * direction_G
+  float truncation_radius;      // the truncation along that ray, truncation * ||(x_n, y_n, 1)||
+  float lateral_per_depth;      // the cell's half diagonal plus half a pixel, per metre of depth
+};
+
+void ProjectiveTsdfIntegrator::collectBlocks(const Eigen::Matrix3f& R_G_C,
+                                             const Eigen::Vector3f& t_G_C, int u0, int v0,
                                              std::vector<uint64_t>* keys) {
   const int width = width_, height = height_;
   const int u1 = std::min(u0 + kSearchCellPixels, width);
@@ -154,8 +169,18 @@ void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0
       range.count > 0 ? range.d_max : 0.0f;
   if (range.count == 0) return;  // no valid pixel
   const float truncation = config_.truncation_distance_m;
+  // The cell's rays leave its centre ray by at most half its diagonal (plus the half pixel
+  // by which a voxel centre can miss its pixel's ray).
+  const PinholeIntrinsics& K = factor_camera_;
+  const float f_min = static_cast<float>(std::min(K.fx, K.fy));
+  const float uc = 0.5f * static_cast<float>(u0 + u1 - 1),
+              vc = 0.5f * static_cast<float>(v0 + v1 - 1);
+  const Eigen::Vector3f ray_C((uc - static_cast<float>(K.cx)) / static_cast<float>(K.fx),
+                              (vc - static_cast<float>(K.cy)) / static_cast<float>(K.fy), 1.0f);
+  const CellRay ray{t_G_C, R_G_C * ray_C, truncation * ray_C.norm(),
+                    (0.7072f * static_cast<float>(std::max(u1 - u0, v1 - v0)) + 0.5f) / f_min};
   if (range.d_max - range.d_min <= truncation) {
-    addSegmentBlocks(T_G_C, u0, v0, u1, v1, range.d_min, range.d_max, keys);
+    addSegmentBlocks(ray, range.d_min, range.d_max, keys);
     return;
   }
   // Groups of depths separated by more than the truncation: one segment each.
@@ -172,34 +197,25 @@ void ProjectiveTsdfIntegrator::collectBlocks(const Transformation& T_G_C, int u0
   float first = depths[0];
   for (int i = 1; i < n; ++i) {
     if (depths[i] - depths[i - 1] > truncation) {
-      addSegmentBlocks(T_G_C, u0, v0, u1, v1, first, depths[i - 1], keys);
+      addSegmentBlocks(ray, first, depths[i - 1], keys);
       first = depths[i];
     }
   }
-  addSegmentBlocks(T_G_C, u0, v0, u1, v1, first, depths[n - 1], keys);
+  addSegmentBlocks(ray, first, depths[n - 1], keys);
 }
 
-void ProjectiveTsdfIntegrator::addSegmentBlocks(const Transformation& T_G_C, int u0, int v0, int u1,
-                                                int v1, float d_min, float d_max,
+void ProjectiveTsdfIntegrator::addSegmentBlocks(const CellRay& ray, float d_min, float d_max,
                                                 std::vector<uint64_t>* keys) {
-  const float truncation = config_.truncation_distance_m;
-  // The cell's rays leave its centre ray by at most half its diagonal (plus the half pixel
-  // by which a voxel centre can miss its pixel's ray).
-  const PinholeIntrinsics& K = factor_camera_;
-  const float f_min = static_cast<float>(std::min(K.fx, K.fy));
-  const float uc = 0.5f * static_cast<float>(u0 + u1 - 1),
-              vc = 0.5f * static_cast<float>(v0 + v1 - 1);
-  const Eigen::Vector3f ray((uc - static_cast<float>(K.cx)) / static_cast<float>(K.fx),
-                            (vc - static_cast<float>(K.cy)) / static_cast<float>(K.fy), 1.0f);
-  const float lateral = (0.7072f * static_cast<float>(std::max(u1 - u0, v1 - v0)) + 0.5f) / f_min;
-  const float radius = truncation * ray.norm() + lateral * d_max;
-  const Eigen::Vector3f a = T_G_C * Eigen::Vector3f(ray * d_min);
-  const Eigen::Vector3f b = T_G_C * Eigen::Vector3f(ray * d_max);
+  const float radius = ray.truncation_radius + ray.lateral_per_depth * d_max;
+  const Eigen::Vector3f a = ray.origin_G + ray.direction_G * d_min;
+  const Eigen::Vector3f b = ray.origin_G + ray.direction_G * d_max;
+  // Finite and inside the packable grid: the frame's pose was checked, and rejected pixels
+  // have no depth.
   const float block_size_inv = layer_->blockSizeInv();
   const BlockIndex lo =
-      gridIndexFromPoint(Eigen::Vector3f(a.cwiseMin(b).array() - radius), block_size_inv);
+      gridIndexFromPointUnchecked(Eigen::Vector3f(a.cwiseMin(b).array() - radius), block_size_inv);
   const BlockIndex hi =
-      gridIndexFromPoint(Eigen::Vector3f(a.cwiseMax(b).array() + radius), block_size_inv);
+      gridIndexFromPointUnchecked(Eigen::Vector3f(a.cwiseMax(b).array() + radius), block_size_inv);
   // Keep the blocks of that box that can hold a voxel within `radius` of the segment a-b:
   // block centre within radius + the largest distance from it to one of its voxel centres
   // (half the diagonal of the cube the centres span, block size less one voxel).
@@ -207,19 +223,34 @@ void ProjectiveTsdfIntegrator::addSegmentBlocks(const Transformation& T_G_C, int
   const float reach = radius + 0.8661f * (block_size - layer_->voxelSize());
   const Eigen::Vector3f ab = b - a;
   const float ab_squared = std::max(ab.squaredNorm(), 1e-12f);
+  const auto withinReach = [&](int x, int y, int z) {
+    const Eigen::Vector3f centre =
+        (Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)) +
+         Eigen::Vector3f::Constant(0.5f)) *
+        block_size;
+    const float t = std::clamp((centre - a).dot(ab) / ab_squared, 0.0f, 1.0f);
+    return (a + t * ab - centre).squaredNorm() <= reach * reach;
+  };
+  // Neighbouring cells find mostly the same blocks (98 % of the blocks within reach on the
+  // 7-Scenes frames): those already found skip the distance test.
+  if (block_cube_.covers(lo, hi)) {
+    for (int z = lo.z(); z <= hi.z(); ++z) {
+      for (int y = lo.y(); y <= hi.y(); ++y) {
+        const size_t row = block_cube_.bitOf(lo.x(), y, z);
+        for (int x = lo.x(); x <= hi.x(); ++x) {
+          const size_t bit = row + static_cast<size_t>(x - lo.x());
+          if (block_cube_.contains(bit) || !withinReach(x, y, z)) continue;
+          if (block_cube_.insert(bit)) keys->push_back(packGridIndex(BlockIndex(x, y, z)));
+        }
+      }
+    }
+    return;
+  }
   for (int z = lo.z(); z <= hi.z(); ++z) {
     for (int y = lo.y(); y <= hi.y(); ++y) {
       for (int x = lo.x(); x <= hi.x(); ++x) {
-        // Neighbouring cells find mostly the same blocks (98 % of the blocks within reach
-        // on the 7-Scenes frames): those already found skip the distance test.
         const uint64_t key = packGridIndex(BlockIndex(x, y, z));
-        if (block_set_.contains(key)) continue;
-        const Eigen::Vector3f centre =
-            (Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)) +
-             Eigen::Vector3f::Constant(0.5f)) *
-            block_size;
-        const float t = std::clamp((centre - a).dot(ab) / ab_squared, 0.0f, 1.0f);
-        if ((a + t * ab - centre).squaredNorm() > reach * reach) continue;
+        if (block_set_.contains(key) || !withinReach(x, y, z)) continue;
         if (block_set_.insert(key)) keys->push_back(key);
       }
     }
@@ -266,6 +297,20 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   width_ = width;
   height_ = height;
   block_set_.clear();
+  // The cube around the sensor holding every segment box: the boxes reach a ray length
+  // (<= max_ray_length, times the few per cent by which a cell's centre ray can be longer
+  // than its pixels') plus the truncation and the cell's width; any box outside it, or a
+  // cube too large, falls back to block_set_.
+  const float cube_half_side =
+      std::ceil((1.1f * config_.max_ray_length_m + 2.0f * config_.truncation_distance_m) *
+                layer_->blockSizeInv()) +
+      2.0f;
+  if (pose_in_range && cube_half_side < 1024.0f) {  // larger cubes exceed kBlockCubeMaxBits
+    block_cube_.reset(gridIndexFromPointUnchecked(T_G_C.translation(), layer_->blockSizeInv()),
+                      static_cast<int>(cube_half_side));
+  } else {
+    block_cube_.reset(BlockIndex::Zero(), -1);  // unusable: every box goes to block_set_
+  }
   std::vector<ThreadState> states(static_cast<size_t>(num_threads));
 
   // Phase A: validate pixels (rows), then collect the blocks of each search cell.
@@ -283,6 +328,8 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
       }
     }
   });
+  const Eigen::Matrix3f R_G_C = T_G_C.rotationMatrix();  // one matrix per frame, not per cell
+  const Eigen::Vector3f t_G_C = T_G_C.translation();
   const int cells_x = (width + kSearchCellPixels - 1) / kSearchCellPixels;
   const int cells_y = (height + kSearchCellPixels - 1) / kSearchCellPixels;
   cells_x_ = cells_x;
@@ -291,8 +338,8 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   runThreadTeam(num_threads, [&](int id) {
     ThreadState& state = states[static_cast<size_t>(id)];
     for (int c = next_cell.fetch_add(1); c < cells_x * cells_y; c = next_cell.fetch_add(1)) {
-      collectBlocks(T_G_C, (c % cells_x) * kSearchCellPixels, (c / cells_x) * kSearchCellPixels,
-                    &state.block_keys);
+      collectBlocks(R_G_C, t_G_C, (c % cells_x) * kSearchCellPixels,
+                    (c / cells_x) * kSearchCellPixels, &state.block_keys);
     }
   });
 

@@ -7,6 +7,7 @@
 #include "core/geometry/pinhole_camera.h"
 #include "core/geometry/se3.h"
 #include "core/integrator/approx_hash_set.h"
+#include "core/integrator/block_cube_set.h"
 #include "core/integrator/integration_stats.h"
 #include "core/integrator/integrator_config.h"
 #include "core/integrator/projective_voxel_rows.h"
@@ -29,7 +30,9 @@ namespace cblox {
 /// between a foreground and a background surface gets no blocks. No voxel within
 /// truncation of a measured point is missed. A block found this way is then screened
 /// (ProjectiveBlockScreen): if all its voxels lie more than the truncation behind the deepest
-/// valid pixel under it, or outside the image, it is neither allocated nor visited.
+/// valid pixel under it, or outside the image, it is neither allocated nor visited. The
+/// blocks found so far are kept in one bit each of a cube of blocks around the sensor
+/// (BlockCubeSet), as neighbouring cells find mostly the same blocks.
 ///
 /// Voxels are updated a row at a time (ProjectiveVoxelRows: eight voxels at once on AVX2
 /// CPUs, IntegratorConfig::vectorized).
@@ -60,11 +63,16 @@ class ProjectiveTsdfIntegrator {
   IntegratorConfig config_;
   TsdfLayer* layer_;
   // The blocks of one search cell (pixels [u0, u0 + 8) x [v0, v0 + 8), clipped to the image).
-  void collectBlocks(const Transformation& T_G_C, int u0, int v0, std::vector<uint64_t>* keys);
+  void collectBlocks(const Eigen::Matrix3f& R_G_C, const Eigen::Vector3f& t_G_C, int u0, int v0,
+                     std::vector<uint64_t>* keys);
   // The blocks around the cell's centre ray between depths d_min and d_max.
-  void addSegmentBlocks(const Transformation& T_G_C, int u0, int v0, int u1, int v1, float d_min,
-                        float d_max, std::vector<uint64_t>* keys);
+  struct CellRay;
+  void addSegmentBlocks(const CellRay& ray, float d_min, float d_max, std::vector<uint64_t>* keys);
 
+  // The blocks found so far this frame: the cube of blocks around the sensor that holds every
+  // block within reach of a valid depth, or, for a segment outside it (or a cube too large),
+  // the approximate hash set.
+  BlockCubeSet block_cube_;
   ApproxHashSet block_set_;
   int width_ = 0, height_ = 0;
   std::vector<ProjectivePixelSample> samples_;

@@ -132,6 +132,20 @@ TEST(ProjectiveTsdfIntegrator, SphereNearSurfaceVoxelsMatchTheTrueSignedDistance
   EXPECT_EQ(voxel->color, (Color{200, 60, 20}));
 }
 
+// The two layers hold the same blocks with the same voxels, bit for bit.
+void expectBitIdenticalLayers(const TsdfLayer& one, const TsdfLayer& two) {
+  ASSERT_EQ(one.numBlocks(), two.numBlocks());
+  for (const auto& [key, block] : one.blocks()) {
+    const Block* other = two.getBlock(block->index());
+    ASSERT_NE(other, nullptr);
+    for (int i = 0; i < block->numVoxels(); ++i) {
+      ASSERT_EQ(block->voxel(i).distance, other->voxel(i).distance);
+      ASSERT_EQ(block->voxel(i).weight, other->voxel(i).weight);
+      ASSERT_EQ(block->voxel(i).color, other->voxel(i).color);
+    }
+  }
+}
+
 TEST(ProjectiveTsdfIntegrator, ThreadsOneAndTwoAreBitIdentical) {
   TsdfLayer one(LayerConfig{kVoxelSize, 8});
   TsdfLayer two(LayerConfig{kVoxelSize, 8});
@@ -145,16 +159,26 @@ TEST(ProjectiveTsdfIntegrator, ThreadsOneAndTwoAreBitIdentical) {
     integrator_one.integrateDepthImage(view.T_G_C.cast<float>(), view.depth, camera, &view.color);
     integrator_two.integrateDepthImage(view.T_G_C.cast<float>(), view.depth, camera, &view.color);
   }
-  ASSERT_EQ(one.numBlocks(), two.numBlocks());
-  for (const auto& [key, block] : one.blocks()) {
-    const Block* other = two.getBlock(block->index());
-    ASSERT_NE(other, nullptr);
-    for (int i = 0; i < block->numVoxels(); ++i) {
-      ASSERT_EQ(block->voxel(i).distance, other->voxel(i).distance);
-      ASSERT_EQ(block->voxel(i).weight, other->voxel(i).weight);
-      ASSERT_EQ(block->voxel(i).color, other->voxel(i).color);
-    }
+  expectBitIdenticalLayers(one, two);
+}
+
+// The block search keeps the blocks it found in a cube of bits around the sensor; with rays
+// so long that the cube would be too large it uses the hash set instead. Both find the same
+// blocks: the layers are bit-identical (every depth here is far below either ray limit).
+TEST(ProjectiveTsdfIntegrator, BlockCubeAndHashSetSearchesAreBitIdentical) {
+  TsdfLayer cube(LayerConfig{kVoxelSize, 8});
+  TsdfLayer hash(LayerConfig{kVoxelSize, 8});
+  IntegratorConfig config;
+  ProjectiveTsdfIntegrator cube_integrator(config, &cube);
+  config.max_ray_length_m = 1e4f;  // a cube of (2 * 1.1e4 / 0.16)^3 blocks: too large
+  ProjectiveTsdfIntegrator hash_integrator(config, &hash);
+  const PinholeCamera camera = test::smallCamera();
+  for (const test::View& view : test::renderSphereViews(5)) {
+    cube_integrator.integrateDepthImage(view.T_G_C.cast<float>(), view.depth, camera, &view.color);
+    hash_integrator.integrateDepthImage(view.T_G_C.cast<float>(), view.depth, camera, &view.color);
   }
+  EXPECT_GT(cube.numBlocks(), 100u);
+  expectBitIdenticalLayers(cube, hash);
 }
 
 TEST(ProjectiveTsdfIntegrator, TimeBudgetCutsTheFrameAndCountsWhatItSkipped) {
@@ -162,9 +186,9 @@ TEST(ProjectiveTsdfIntegrator, TimeBudgetCutsTheFrameAndCountsWhatItSkipped) {
   const test::View view = test::renderSphereViews(1).front();
   IntegratorConfig config;
   TsdfLayer full_layer(LayerConfig{kVoxelSize, 8});
-  const IntegrationStats full = ProjectiveTsdfIntegrator(config, &full_layer)
-                                    .integrateDepthImage(view.T_G_C.cast<float>(), view.depth,
-                                                         camera, &view.color);
+  const IntegrationStats full =
+      ProjectiveTsdfIntegrator(config, &full_layer)
+          .integrateDepthImage(view.T_G_C.cast<float>(), view.depth, camera, &view.color);
   EXPECT_FALSE(full.budget_exhausted);
   EXPECT_EQ(full.blocks_not_reached, 0u);
   ASSERT_GT(full.voxel_updates, 0u);
@@ -173,9 +197,9 @@ TEST(ProjectiveTsdfIntegrator, TimeBudgetCutsTheFrameAndCountsWhatItSkipped) {
   // frame needed is counted as not reached, and no empty block is left in the layer.
   config.max_integration_time_s = 1e-9;
   TsdfLayer cut_layer(LayerConfig{kVoxelSize, 8});
-  const IntegrationStats cut = ProjectiveTsdfIntegrator(config, &cut_layer)
-                                   .integrateDepthImage(view.T_G_C.cast<float>(), view.depth,
-                                                        camera, &view.color);
+  const IntegrationStats cut =
+      ProjectiveTsdfIntegrator(config, &cut_layer)
+          .integrateDepthImage(view.T_G_C.cast<float>(), view.depth, camera, &view.color);
   EXPECT_TRUE(cut.budget_exhausted);
   EXPECT_EQ(cut.voxel_updates, 0u);
   EXPECT_GE(cut.blocks_not_reached, full_layer.numBlocks());
@@ -184,9 +208,9 @@ TEST(ProjectiveTsdfIntegrator, TimeBudgetCutsTheFrameAndCountsWhatItSkipped) {
   // A generous budget changes nothing: bit-identical to the unlimited run.
   config.max_integration_time_s = 60.0;
   TsdfLayer generous_layer(LayerConfig{kVoxelSize, 8});
-  const IntegrationStats generous = ProjectiveTsdfIntegrator(config, &generous_layer)
-                                        .integrateDepthImage(view.T_G_C.cast<float>(),
-                                                             view.depth, camera, &view.color);
+  const IntegrationStats generous =
+      ProjectiveTsdfIntegrator(config, &generous_layer)
+          .integrateDepthImage(view.T_G_C.cast<float>(), view.depth, camera, &view.color);
   EXPECT_FALSE(generous.budget_exhausted);
   EXPECT_EQ(generous.voxel_updates, full.voxel_updates);
   ASSERT_EQ(generous_layer.numBlocks(), full_layer.numBlocks());

@@ -44,6 +44,9 @@ void validateRow(const float* depth, ProjectivePixelSample* samples, int width, 
   const __m128 zero = _mm_setzero_ps();
   const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
   const __m128 lo = _mm_set1_ps(min_length), hi = _mm_set1_ps(max_length);
+  // Per-lane counts: a true mask is -1, so subtracting it counts one (a lane sees at most
+  // width / 4 pixels).
+  __m128i ok_count = _mm_setzero_si128(), out_count = _mm_setzero_si128();
   for (; u + 4 <= width; u += 4) {
     float* p = reinterpret_cast<float*>(samples + u);
     const __m128 d = _mm_loadu_ps(depth + u);
@@ -54,13 +57,18 @@ void validateRow(const float* depth, ProjectivePixelSample* samples, int width, 
     const __m128 length = _mm_mul_ps(d, ray_factor);
     const __m128 in_range = _mm_and_ps(_mm_cmpge_ps(length, lo), _mm_cmple_ps(length, hi));
     const __m128 valid = _mm_and_ps(ok, in_range);
-    invalid +=
-        4 - static_cast<size_t>(__builtin_popcount(static_cast<unsigned>(_mm_movemask_ps(ok))));
-    out_of_range += static_cast<size_t>(
-        __builtin_popcount(static_cast<unsigned>(_mm_movemask_ps(_mm_andnot_ps(in_range, ok)))));
+    ok_count = _mm_sub_epi32(ok_count, _mm_castps_si128(ok));
+    out_count = _mm_sub_epi32(out_count, _mm_castps_si128(_mm_andnot_ps(in_range, ok)));
     const __m128 kept = _mm_and_ps(valid, d);
     _mm_storeu_ps(p, _mm_unpacklo_ps(kept, ray_factor));
     _mm_storeu_ps(p + 4, _mm_unpackhi_ps(kept, ray_factor));
+  }
+  alignas(16) int32_t ok_lanes[4], out_lanes[4];
+  _mm_store_si128(reinterpret_cast<__m128i*>(ok_lanes), ok_count);
+  _mm_store_si128(reinterpret_cast<__m128i*>(out_lanes), out_count);
+  for (int k = 0; k < 4; ++k) {
+    invalid += static_cast<size_t>(u / 4 - ok_lanes[k]);
+    out_of_range += static_cast<size_t>(out_lanes[k]);
   }
 #endif
   for (; u < width; ++u) {
@@ -402,6 +410,15 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   const Eigen::Vector3f step_x = R_C_G.col(0) * voxel_size;
   const Eigen::Vector3f step_y = R_C_G.col(1) * voxel_size;
   const Eigen::Vector3f step_z = R_C_G.col(2) * voxel_size;
+  // Rows of voxels run along x (consecutive in memory); row r = k * vps + j starts at the
+  // block's first voxel centre plus k * step_z + j * step_y, the same for every block.
+  std::vector<Eigen::Vector3f> row_offsets(static_cast<size_t>(vps) * static_cast<size_t>(vps));
+  for (int k = 0, r = 0; k < vps; ++k) {
+    for (int j = 0; j < vps; ++j, ++r) {
+      row_offsets[static_cast<size_t>(r)] =
+          static_cast<float>(k) * step_z + static_cast<float>(j) * step_y;
+    }
+  }
   // Visit blocks in image order (16-pixel tiles of their centre's projection), so that
   // consecutive blocks read neighbouring depth and colour pixels.
   {
@@ -455,12 +472,9 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
         TsdfVoxel* const voxel = block.voxels();
         const Eigen::Vector3f first_center_C =
             R_C_G * (block.origin() + Eigen::Vector3f::Constant(0.5f * voxel_size)) + t_C_G;
-        // Rows of voxels along x (consecutive in memory), all of the block in one call.
-        for (int k = 0, r = 0; k < vps; ++k) {
-          for (int j = 0; j < vps; ++j, ++r) {
-            row_origins[static_cast<size_t>(r)] =
-                first_center_C + static_cast<float>(k) * step_z + static_cast<float>(j) * step_y;
-          }
+        // All the rows of the block in one call.
+        for (size_t r = 0; r < row_origins.size(); ++r) {
+          row_origins[r] = first_center_C + row_offsets[r];
         }
         const size_t updates = rows.update(row_origins.data(), vps * vps, step_x, vps, voxel);
         if (updates > 0) {

@@ -192,16 +192,16 @@ __attribute__((target("avx2"))) size_t ProjectiveVoxelRows::updateAvx2(
   const __m256i rgb = _mm256_set1_epi32(0x00FFFFFF);
   const __m256 step_x = _mm256_set1_ps(step.x()), step_y = _mm256_set1_ps(step.y()),
                step_z = _mm256_set1_ps(step.z());
+  const __m256 lanes = _mm256_setr_ps(0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f);
   size_t updates = 0;
   for (int r = 0; r < num_rows; ++r, voxels += count) {
     const Eigen::Vector3f& p0 = origins[r];
     TsdfVoxel* const row = voxels;
     for (int i0 = 0; i0 < count; i0 += 8) {
       // Projection: RowProjector's arithmetic in eight lanes.
-      const __m256 fi = _mm256_setr_ps(static_cast<float>(i0), static_cast<float>(i0 + 1),
-                                       static_cast<float>(i0 + 2), static_cast<float>(i0 + 3),
-                                       static_cast<float>(i0 + 4), static_cast<float>(i0 + 5),
-                                       static_cast<float>(i0 + 6), static_cast<float>(i0 + 7));
+      // i0 + lane, exact in float (i0 < kMaxRow).
+      const __m256 fi =
+          i0 == 0 ? lanes : _mm256_add_ps(lanes, _mm256_set1_ps(static_cast<float>(i0)));
       const __m256 x = _mm256_add_ps(_mm256_set1_ps(p0.x()), _mm256_mul_ps(fi, step_x));
       const __m256 y = _mm256_add_ps(_mm256_set1_ps(p0.y()), _mm256_mul_ps(fi, step_y));
       const __m256 z = _mm256_add_ps(_mm256_set1_ps(p0.z()), _mm256_mul_ps(fi, step_z));

@@ -90,7 +90,7 @@ IntegrationStats RayCastingIntegrator::integratePointCloud(const Transformation&
       // |coordinate| bound keeping every ray inside the packable grid
       (kGridIndexMax - 2) * layer_->voxelSize() - config_.truncation_distance_m,
       layer_->voxelSizeInv() * config_.start_voxel_subsampling_factor};
-  Frame frame{T_G_C.rotationMatrix(),
+  Frame frame{screen_frame.R_G_C,
               cloud_C,
               T_G_C.translation(),
               Deadline(fast ? config_.max_integration_time_s : 0.0),

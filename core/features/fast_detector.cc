@@ -4,6 +4,8 @@
 #include <array>
 #include <stdexcept>
 
+#include "core/geometry/cpu_features.h"
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -169,10 +171,6 @@ __attribute__((target("avx2"))) void scoreRowAvx2(const uint8_t* row, int w,
   }
 }
 
-bool hasAvx2() {
-  static const bool has = __builtin_cpu_supports("avx2");
-  return has;
-}
 #endif
 
 }  // namespace
@@ -201,7 +199,7 @@ void FastDetector::detect(const cv::Mat& image, int threshold, std::vector<FastC
     const uint8_t* row = image.ptr<uint8_t>(y);
     uint8_t* score_row = &scoreAt(0, y);
 #if defined(CBLOX_FAST_AVX2)
-    if (w - 6 >= 32 && hasAvx2()) {
+    if (w - 6 >= 32 && cpuHasAvx2()) {
       scoreRowAvx2(row, w, offset, threshold, score_row);
       continue;
     }

@@ -19,7 +19,8 @@ inline constexpr int kRotatedBriefRadius = 19;
 /// OpenCV's ORB (and ORB-SLAM2) compute it: for pair i with points a, b of the pattern and
 /// the keypoint angle theta, a' = round(R(theta) a) (round half to even, float arithmetic as
 /// OpenCV), bit i = I(center + a') < I(center + b'), on the Gaussian-blurred level image.
-/// Immutable after construction: thread-safe.
+/// On CPUs with AVX2 the tests run eight pairs at a time (gathered pixels), with the same
+/// float operations, so the bits are the same. Immutable after construction: thread-safe.
 class RotatedBrief {
  public:
   RotatedBrief();
@@ -37,10 +38,17 @@ class RotatedBrief {
   /// *padded (a buffer reused when its size matches). Thread-safe apart from the outputs.
   static void blurLevel(const cv::Mat& level, cv::Mat* padded, cv::Mat* dst);
 
+  /// The descriptor without the AVX2 path (SSE2 offsets, scalar tests): the reference the
+  /// AVX2 path is tested against. Same contract as compute().
+  OrbDescriptor computePortable(const cv::Mat& blurred_level, float x, float y,
+                                float angle_deg) const;
+
  private:
-  // Pattern coordinates as floats, points interleaved: [2i] = a of pair i, [2i+1] = b.
-  alignas(16) std::array<float, 2 * kOrbPatternPairs> px_{};
-  alignas(16) std::array<float, 2 * kOrbPatternPairs> py_{};
+  // Pattern coordinates as floats, by pair: a_x_[i], a_y_[i] is point a of pair i.
+  alignas(32) std::array<float, kOrbPatternPairs> a_x_{};
+  alignas(32) std::array<float, kOrbPatternPairs> a_y_{};
+  alignas(32) std::array<float, kOrbPatternPairs> b_x_{};
+  alignas(32) std::array<float, kOrbPatternPairs> b_y_{};
 };
 
 }  // namespace cblox

@@ -7,7 +7,7 @@
 #include <emmintrin.h>
 #endif
 
-#include "core/integrator/cpu_features.h"
+#include "core/geometry/cpu_features.h"
 
 namespace cblox {
 namespace {

@@ -3,7 +3,7 @@
 #include <cfloat>
 #include <cmath>
 
-#include "core/integrator/cpu_features.h"
+#include "core/geometry/cpu_features.h"
 #include "core/tsdf/block_index.h"
 
 namespace cblox {

@@ -99,6 +99,10 @@ class Keyframe {
 
   /// Bookkeeping of the threads (keyframe/frame ids of the last use), ORB-SLAM2 style.
   uint64_t track_reference_frame = 0;
+  /// The tracker's count of the current frame's landmarks this keyframe observes, valid when
+  /// track_counted_frame is the tracker's current frame.
+  uint64_t track_counted_frame = 0;
+  int track_shared_landmarks = 0;
   KeyframeId fuse_target_for_keyframe = -1;
   KeyframeId ba_local_for_keyframe = -1;
   KeyframeId ba_fixed_for_keyframe = -1;

@@ -83,8 +83,18 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
   current_ = Frame(frame_id, timestamp_ns, std::move(features));
   current_index_ = ++frames_processed_;
   KeyframeReason create_keyframe = KeyframeReason::kNone;
+  // Takes a lock of the map's mutex, adding the time it waited to result.map_wait_ms.
+  const auto waitFor = [&result](auto lock) {
+    const auto asked = std::chrono::steady_clock::now();
+    lock.lock();
+    result.map_wait_ms +=
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - asked).count();
+    return lock;
+  };
+  using SharedLock = std::shared_lock<std::shared_mutex>;
+  using UniqueLock = std::unique_lock<std::shared_mutex>;
   {
-    std::shared_lock<std::shared_mutex> lock(map_->mutex());
+    const SharedLock lock = waitFor(SharedLock(map_->mutex(), std::defer_lock));
     if (map_->changeIndex() != map_change_index_) {
       map_change_index_ = map_->changeIndex();
       result.map_corrected = state_ != TrackingState::kNotInitialized;
@@ -129,7 +139,7 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
   }
   if (state_ == TrackingState::kNotInitialized && result.reason.empty()) {
     computeBow();  // before the first keyframe is shared (not under the map's lock)
-    std::unique_lock<std::shared_mutex> lock(map_->mutex());
+    const UniqueLock lock = waitFor(UniqueLock(map_->mutex(), std::defer_lock));
     if (initialize(T_C_G_initial, &result)) {
       state_ = TrackingState::kOk;
       result.state = state_;
@@ -138,7 +148,7 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
     }
   } else if (create_keyframe != KeyframeReason::kNone) {
     computeBow();
-    std::unique_lock<std::shared_mutex> lock(map_->mutex());
+    const UniqueLock lock = waitFor(UniqueLock(map_->mutex(), std::defer_lock));
     result.new_keyframe = createKeyframe();
     if (result.new_keyframe != nullptr) result.keyframe_reason = create_keyframe;
   }
@@ -154,7 +164,7 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
   last_frame_ = current_;
   current_features_.reset();  // shared from here on (last frame, maybe a keyframe)
   if (current_.T_C_G && reference_keyframe_ != nullptr) {
-    std::shared_lock<std::shared_mutex> lock(map_->mutex());
+    const SharedLock lock = waitFor(SharedLock(map_->mutex(), std::defer_lock));
     last_reference_ = reference_keyframe_;
     T_last_reference_ = *current_.T_C_G * reference_keyframe_->T_G_C();
   } else {
@@ -315,8 +325,10 @@ bool Tracker::trackReferenceKeyframe(int* matches, int* inliers) {
 }
 
 void Tracker::updateLocalMap() {
-  // Keyframes that observe the frame's landmarks, by number of shared landmarks.
-  std::map<Keyframe*, int, KeyframeIdLess> counter;
+  // Keyframes that observe the frame's landmarks, by number of shared landmarks (counted in
+  // the keyframes themselves, then visited in id order as ORB-SLAM2's std::map would).
+  const uint64_t stamp = current_index_;
+  observers_.clear();
   for (size_t i = 0; i < current_.size(); ++i) {
     const std::shared_ptr<Landmark>& landmark = current_.landmarks[i];
     if (!landmark) continue;
@@ -324,14 +336,22 @@ void Tracker::updateLocalMap() {
       current_.landmarks[i] = nullptr;
       continue;
     }
-    for (const auto& [keyframe, index] : landmark->observations()) ++counter[keyframe];
+    for (const auto& [keyframe, index] : landmark->observations()) {
+      if (keyframe->track_counted_frame != stamp) {
+        keyframe->track_counted_frame = stamp;
+        keyframe->track_shared_landmarks = 0;
+        observers_.push_back(keyframe);
+      }
+      ++keyframe->track_shared_landmarks;
+    }
   }
+  std::sort(observers_.begin(), observers_.end(), KeyframeIdLess{});
   local_keyframes_.clear();
   Keyframe* best = nullptr;
   int best_count = 0;
-  const uint64_t stamp = current_index_;
-  for (const auto& [keyframe, count] : counter) {
+  for (Keyframe* keyframe : observers_) {
     if (keyframe->bad()) continue;
+    const int count = keyframe->track_shared_landmarks;
     if (count > best_count) {
       best_count = count;
       best = keyframe;
@@ -367,7 +387,7 @@ void Tracker::updateLocalMap() {
     for (Landmark* l : k->landmarks()) {
       if (l == nullptr || l->bad() || l->track_reference_frame == stamp) continue;
       l->track_reference_frame = stamp;
-      local_landmarks_.push_back(l->shared_from_this());
+      local_landmarks_.push_back(l);
     }
   }
 }
@@ -380,9 +400,9 @@ int Tracker::searchLocalMap() {
     landmark->last_seen_frame = stamp;
   }
   std::vector<LandmarkProjection> projections;
-  for (const auto& landmark : local_landmarks_) {
+  for (Landmark* landmark : local_landmarks_) {
     if (landmark->last_seen_frame == stamp || landmark->bad()) continue;
-    if (const auto p = projectLandmark(landmark.get(), *current_.T_C_G, camera_, pyramid_)) {
+    if (const auto p = projectLandmark(landmark, *current_.T_C_G, camera_, pyramid_)) {
       landmark->increaseVisible();
       projections.push_back(*p);
     }

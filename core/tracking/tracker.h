@@ -64,6 +64,9 @@ struct TrackingResult {
   std::string reason;
   /// Milliseconds spent in track() (features excluded: they are built before).
   double time_ms = 0.0;
+  /// Of time_ms, the milliseconds spent waiting for the map's lock (held exclusively by local
+  /// mapping or loop closing meanwhile).
+  double map_wait_ms = 0.0;
 };
 
 /// ORB-SLAM2's tracking thread logic for stereo and RGB-D (no threads of its own): stereo
@@ -166,7 +169,9 @@ class Tracker {
   Keyframe* last_reference_ = nullptr;  // last frame's reference keyframe
   Transformationd T_last_reference_;    // T_Clast_Kref
   std::vector<Keyframe*> local_keyframes_;
-  std::vector<std::shared_ptr<Landmark>> local_landmarks_;
+  /// The local map's landmarks, valid while the map's lock taken by track() is held.
+  std::vector<Landmark*> local_landmarks_;
+  std::vector<Keyframe*> observers_;  // updateLocalMap's scratch
 };
 
 }  // namespace cblox

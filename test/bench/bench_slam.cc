@@ -173,7 +173,7 @@ int run(int argc, char** argv) {
 
   StampedTrajectory truth, online, before_loop;
   std::map<uint64_t, Transformationd> truth_by_frame;
-  std::vector<double> frame_ms, track_ms;
+  std::vector<double> frame_ms, track_ms, wait_ms;
   std::map<std::string, size_t> keyframe_reasons;  // keyframes made, by KeyframeReason
   // Inliers of every tracked frame, and of the frames that made a keyframe, by reason.
   std::vector<double> inliers;
@@ -202,6 +202,7 @@ int run(int argc, char** argv) {
     frame_ms.push_back(
         std::chrono::duration<double, std::milli>(Clock::now() - frame_start).count());
     track_ms.push_back(r.time_ms);
+    wait_ms.push_back(r.map_wait_ms);
     if (r.new_keyframe != nullptr) {
       ++keyframe_reasons[keyframeReasonName(r.keyframe_reason)];
       keyframe_inliers[keyframeReasonName(r.keyframe_reason)].push_back(r.inliers);
@@ -297,11 +298,17 @@ int run(int argc, char** argv) {
       "median %.1f ms%s\n",
       percentile(frame_ms, 0.5), percentile(frame_ms, 0.95), percentile(track_ms, 0.5),
       one_core ? " (one core)" : " (left/right extraction on 2 threads)");
+  double wait_sum = 0.0;
+  for (const double w : wait_ms) wait_sum += w;
+  std::printf(
+      "  of which waiting for the map's lock (local mapping or loop closing held it): median "
+      "%.2f ms, p95 %.2f ms, mean %.2f ms\n",
+      percentile(wait_ms, 0.5), percentile(wait_ms, 0.95),
+      wait_ms.empty() ? 0.0 : wait_sum / static_cast<double>(wait_ms.size()));
   const LocalMapperStats lm = slam.localMappingStats();
   std::printf("  keyframes made by reason:");
   for (const auto& [name, count] : keyframe_reasons) std::printf(" %s %zu", name.c_str(), count);
-  std::printf(" (none: the first); culled %lu\n",
-              static_cast<unsigned long>(lm.keyframes_culled));
+  std::printf(" (none: the first); culled %lu\n", static_cast<unsigned long>(lm.keyframes_culled));
   std::printf("  inliers of tracked frames: median %.0f, p5 %.0f; of the frames that made",
               percentile(inliers, 0.5), percentile(inliers, 0.05));
   for (const auto& [name, values] : keyframe_inliers) {
@@ -315,8 +322,8 @@ int run(int argc, char** argv) {
       "observations (p95 %.0f)\n",
       ba_ms.size(), static_cast<unsigned long>(lm.bundle_adjustments),
       static_cast<unsigned long>(lm.bundle_adjustments_aborted), percentile(ba_ms, 0.5),
-      percentile(ba_ms, 0.95), percentile(ba_free, 0.5),
-      percentile(ba_fixed, 0.5), percentile(ba_landmarks, 0.5), percentile(ba_observations, 0.5),
+      percentile(ba_ms, 0.95), percentile(ba_free, 0.5), percentile(ba_fixed, 0.5),
+      percentile(ba_landmarks, 0.5), percentile(ba_observations, 0.5),
       percentile(ba_observations, 0.95));
   std::printf(
       "  loops: %zu closed (%zu false), %lu rejected after verification (%lu candidates by "
@@ -352,6 +359,8 @@ int run(int argc, char** argv) {
         {"frame_ms_median", percentile(frame_ms, 0.5)},
         {"frame_ms_p95", percentile(frame_ms, 0.95)},
         {"track_ms_median", percentile(track_ms, 0.5)},
+        {"map_wait_ms_median", percentile(wait_ms, 0.5)},
+        {"map_wait_ms_p95", percentile(wait_ms, 0.95)},
         {"local_ba_ms_median", percentile(ba_ms, 0.5)},
         {"local_ba_ms_p95", percentile(ba_ms, 0.95)},
         {"local_bas", lm.bundle_adjustments},

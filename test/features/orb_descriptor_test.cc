@@ -1,6 +1,9 @@
 // Our orientation and rotated BRIEF against OpenCV's ORB: the same angles for the same
 // keypoints, and bit-identical descriptors for the same keypoint, angle and level image.
 
+#include <sys/mman.h>
+#include <unistd.h>
+
 #include <random>
 #include <vector>
 
@@ -149,10 +152,52 @@ TEST(RotatedBriefTest, BitIdenticalToOpenCvOrbAtRandomAngles) {
   const RotatedBrief brief;
   for (size_t k = 0; k < keypoints.size(); ++k) {
     const cv::KeyPoint& kp = keypoints[k];
-    ASSERT_EQ(brief.compute(blurred, kp.pt.x, kp.pt.y, kp.angle),
-              OrbDescriptor::fromBytes(descriptors.ptr<uint8_t>(static_cast<int>(k))))
+    const OrbDescriptor expected =
+        OrbDescriptor::fromBytes(descriptors.ptr<uint8_t>(static_cast<int>(k)));
+    // compute() takes the AVX2 path on CPUs that have it; computePortable() never does.
+    ASSERT_EQ(brief.compute(blurred, kp.pt.x, kp.pt.y, kp.angle), expected)
+        << "keypoint " << k << " at " << kp.pt << " angle " << kp.angle;
+    ASSERT_EQ(brief.computePortable(blurred, kp.pt.x, kp.pt.y, kp.angle), expected)
         << "keypoint " << k << " at " << kp.pt << " angle " << kp.angle;
   }
+}
+
+TEST(RotatedBriefTest, KeypointsOnTheAllowedBorderReadNothingPastTheImage) {
+  // The AVX2 path reads a 32-bit word at every sample point. Put the image's last byte just
+  // before an unreadable page: keypoints kRotatedBriefRadius pixels from the border, at every
+  // angle, must neither fault nor differ from the portable path.
+  constexpr int kWidth = 61, kHeight = 40;  // an odd width: rows are not word-aligned
+  const size_t page = static_cast<size_t>(sysconf(_SC_PAGESIZE));
+  const size_t bytes = static_cast<size_t>(kWidth) * kHeight;
+  const size_t span = (bytes + page - 1) / page * page;
+  void* region =
+      mmap(nullptr, span + page, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  ASSERT_NE(region, MAP_FAILED);
+  ASSERT_EQ(mprotect(static_cast<uint8_t*>(region) + span, page, PROT_NONE), 0);
+  uint8_t* data = static_cast<uint8_t*>(region) + span - bytes;
+  std::mt19937 rng(3);
+  for (size_t i = 0; i < bytes; ++i) data[i] = static_cast<uint8_t>(rng() & 0xFF);
+  const cv::Mat image(kHeight, kWidth, CV_8UC1, data);
+  const RotatedBrief brief;
+  constexpr int r = kRotatedBriefRadius;
+  size_t distinct = 0;
+  OrbDescriptor previous;
+  for (const int y : {r, kHeight - 1 - r}) {
+    for (const int x : {r, kWidth - 1 - r}) {
+      for (int degrees = 0; degrees < 360; ++degrees) {
+        const float angle = static_cast<float>(degrees);
+        const OrbDescriptor d =
+            brief.compute(image, static_cast<float>(x), static_cast<float>(y), angle);
+        ASSERT_EQ(d,
+                  brief.computePortable(image, static_cast<float>(x), static_cast<float>(y), angle))
+            << "keypoint (" << x << ", " << y << ") angle " << degrees;
+        if (!(d == previous)) ++distinct;
+        previous = d;
+      }
+    }
+  }
+  EXPECT_GT(distinct, 1000u);  // the descriptors change with angle and place: real tests
+  munmap(region, span + page);
 }
 
 }  // namespace

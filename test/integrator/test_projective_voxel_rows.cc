@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "core/integrator/cpu_features.h"
+#include "core/geometry/cpu_features.h"
 #include "core/integrator/projective_tsdf_integrator.h"
 #include "test/integrator/sphere_views.h"
 

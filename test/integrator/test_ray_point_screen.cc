@@ -9,7 +9,7 @@
 
 #include <Eigen/Geometry>
 
-#include "core/integrator/cpu_features.h"
+#include "core/geometry/cpu_features.h"
 #include "core/tsdf/block_index.h"
 
 namespace cblox {

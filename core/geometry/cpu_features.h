@@ -7,8 +7,9 @@
 
 namespace cblox {
 
-/// True when this CPU has AVX2 (asked once, then cached). The integrators' AVX2 paths are
-/// compiled with target attributes and chosen at run time with this. Thread-safe.
+/// True when this CPU has AVX2 (asked once, then cached). The AVX2 paths (integrators, FAST,
+/// rotated BRIEF) are compiled with target attributes and chosen at run time with this.
+/// Thread-safe.
 inline bool cpuHasAvx2() {
 #if CBLOX_HAVE_X86
   static const bool has = __builtin_cpu_supports("avx2");

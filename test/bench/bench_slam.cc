@@ -1,7 +1,7 @@
 // Sparse SLAM benchmark and evaluation on the simulator: runs the whole system (tracking on
 // this thread, local mapping and loop closing on theirs) over a built-in scene's trajectory
 // and reports what issue 4 asks for: tracking time per frame (features + tracking, median
-// and p95), local BA and loop-correction times, CPU use of the process, loops detected /
+// and p95; of the tracking, the time spent waiting for the map's lock), local BA and loop-correction times, CPU use of the process, loops detected /
 // false loops, and ATE (Umeyama SE(3)) of the frame poses as published and of the final
 // keyframe poses, before the first loop closure and at the end.
 //

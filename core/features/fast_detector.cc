@@ -9,9 +9,6 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#endif
 
 namespace cblox {
 namespace {
@@ -124,8 +121,7 @@ void scoreRowSse2(const uint8_t* row, int w, const std::array<int, 16>& offset, 
 }
 #endif
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#define CBLOX_FAST_AVX2 1
+#if CBLOX_HAVE_X86
 // The same as scoreRowSse2 with 32 pixels at a time, for CPUs with AVX2 (chosen at run time;
 // needs w - 6 >= 32).
 __attribute__((target("avx2"))) __m256i arcStrengthAvx2(const __m256i (&e)[16]) {
@@ -198,7 +194,7 @@ void FastDetector::detect(const cv::Mat& image, int threshold, std::vector<FastC
   for (int y = 3; y < h - 3; ++y) {
     const uint8_t* row = image.ptr<uint8_t>(y);
     uint8_t* score_row = &scoreAt(0, y);
-#if defined(CBLOX_FAST_AVX2)
+#if CBLOX_HAVE_X86
     if (w - 6 >= 32 && cpuHasAvx2()) {
       scoreRowAvx2(row, w, offset, threshold, score_row);
       continue;

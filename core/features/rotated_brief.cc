@@ -86,24 +86,28 @@ __attribute__((target("avx2"))) OrbDescriptor briefAvx2(const uint8_t* center, i
 
 OrbDescriptor RotatedBrief::compute(const cv::Mat& blurred_level, float x, float y,
                                     float angle_deg) const {
-#if CBLOX_HAVE_X86
-  if (cpuHasAvx2()) {
-    const float angle = angle_deg * static_cast<float>(CV_PI / 180.f);
-    return briefAvx2(blurred_level.ptr<uint8_t>(cvRound(y)) + cvRound(x),
-                     static_cast<int>(blurred_level.step), std::cos(angle), std::sin(angle),
-                     a_x_.data(), a_y_.data(), b_x_.data(), b_y_.data());
-  }
-#endif
-  return computePortable(blurred_level, x, y, angle_deg);
+  return describe(blurred_level, x, y, angle_deg, cpuHasAvx2());
 }
 
 OrbDescriptor RotatedBrief::computePortable(const cv::Mat& blurred_level, float x, float y,
                                             float angle_deg) const {
+  return describe(blurred_level, x, y, angle_deg, false);
+}
+
+OrbDescriptor RotatedBrief::describe(const cv::Mat& blurred_level, float x, float y,
+                                     float angle_deg, bool avx2) const {
   // The same float operations as OpenCV's computeOrbDescriptors.
   const float angle = angle_deg * static_cast<float>(CV_PI / 180.f);
   const float a = std::cos(angle), b = std::sin(angle);
   const uint8_t* center = blurred_level.ptr<uint8_t>(cvRound(y)) + cvRound(x);
   const int step = static_cast<int>(blurred_level.step);
+#if CBLOX_HAVE_X86
+  if (avx2) {
+    return briefAvx2(center, step, a, b, a_x_.data(), a_y_.data(), b_x_.data(), b_y_.data());
+  }
+#else
+  (void)avx2;
+#endif
 
   // Offsets of the rotated, rounded points a and b of the 256 pairs.
   alignas(16) std::array<int, kOrbPatternPairs> offset_a, offset_b;

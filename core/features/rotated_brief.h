@@ -44,6 +44,10 @@ class RotatedBrief {
                                 float angle_deg) const;
 
  private:
+  // compute() and computePortable(): the AVX2 path when `avx2`, else the portable one.
+  OrbDescriptor describe(const cv::Mat& blurred_level, float x, float y, float angle_deg,
+                         bool avx2) const;
+
   // Pattern coordinates as floats, by pair: a_x_[i], a_y_[i] is point a of pair i.
   alignas(32) std::array<float, kOrbPatternPairs> a_x_{};
   alignas(32) std::array<float, kOrbPatternPairs> a_y_{};

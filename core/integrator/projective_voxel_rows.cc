@@ -200,8 +200,7 @@ __attribute__((target("avx2"))) size_t ProjectiveVoxelRows::updateAvx2(
     for (int i0 = 0; i0 < count; i0 += 8) {
       // Projection: RowProjector's arithmetic in eight lanes.
       // i0 + lane, exact in float (i0 < kMaxRow).
-      const __m256 fi =
-          i0 == 0 ? lanes : _mm256_add_ps(lanes, _mm256_set1_ps(static_cast<float>(i0)));
+      const __m256 fi = _mm256_add_ps(lanes, _mm256_set1_ps(static_cast<float>(i0)));
       const __m256 x = _mm256_add_ps(_mm256_set1_ps(p0.x()), _mm256_mul_ps(fi, step_x));
       const __m256 y = _mm256_add_ps(_mm256_set1_ps(p0.y()), _mm256_mul_ps(fi, step_y));
       const __m256 z = _mm256_add_ps(_mm256_set1_ps(p0.z()), _mm256_mul_ps(fi, step_z));

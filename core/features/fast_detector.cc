@@ -95,6 +95,26 @@ __m128i strength16(const uint8_t* p, const std::array<int, 16>& offset) {
   return _mm_max_epu8(arcStrength(darker), arcStrength(brighter));
 }
 
+// The quick test (as OpenCV's, exact): every arc of 9 contains two neighbouring compass points
+// of the circle (positions 0, 4, 8, 12), so a pixel whose arc strength exceeds t has such a
+// pair both beyond t on one side. Returns the mask of the 16 pixels at `p` that have one; the
+// others are not corners and need no full test.
+int quickCandidates16(const uint8_t* p, const std::array<int, 16>& offset, __m128i t) {
+  const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+  __m128i dark[4], bright[4];
+  for (size_t c = 0; c < 4; ++c) {
+    const __m128i q = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + offset[4 * c]));
+    dark[c] = _mm_subs_epu8(v, q);
+    bright[c] = _mm_subs_epu8(q, v);
+  }
+  __m128i best = _mm_setzero_si128();
+  for (size_t c = 0; c < 4; ++c) {
+    best = _mm_max_epu8(best, _mm_min_epu8(dark[c], dark[(c + 1) & 3]));
+    best = _mm_max_epu8(best, _mm_min_epu8(bright[c], bright[(c + 1) & 3]));
+  }
+  return ~_mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(best, t), _mm_setzero_si128())) & 0xFFFF;
+}
+
 // Scores of the corners of row `row` (pixels 3 .. w - 4; needs w - 6 >= 16) into `scores`
 // (same x indexing; non-corners untouched).
 void scoreRowSse2(const uint8_t* row, int w, const std::array<int, 16>& offset, int threshold,
@@ -105,10 +125,15 @@ void scoreRowSse2(const uint8_t* row, int w, const std::array<int, 16>& offset, 
   for (int next = 3; next < w - 3;) {
     // The last block overlaps the previous one; its first lanes are done already.
     const int start = std::min(next, w - 3 - 16);
+    const unsigned lanes = (0xFFFFu << (next - start)) & 0xFFFFu;
+    if ((quickCandidates16(row + start, offset, t) & lanes) == 0) {
+      next = start + 16;
+      continue;
+    }
     const __m128i a = strength16(row + start, offset);
     // Lanes with a > t are corners; their score is a - 1 (> threshold - 1).
     const int not_corner = _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(a, t), zero));
-    unsigned corner = ~static_cast<unsigned>(not_corner) & (0xFFFFu << (next - start)) & 0xFFFFu;
+    unsigned corner = ~static_cast<unsigned>(not_corner) & lanes;
     if (corner != 0) {
       _mm_store_si128(reinterpret_cast<__m128i*>(strength), a);
       for (; corner != 0; corner &= corner - 1) {
@@ -145,7 +170,27 @@ __attribute__((target("avx2"))) void scoreRowAvx2(const uint8_t* row, int w,
   for (int next = 3; next < w - 3;) {
     const int start = std::min(next, w - 3 - 32);
     const uint8_t* p = row + start;
+    const unsigned lanes = 0xFFFFFFFFu << (next - start);
     const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
+    {  // the quick test of quickCandidates16, 32 pixels at a time
+      __m256i dark[4], bright[4];
+      for (size_t c = 0; c < 4; ++c) {
+        const __m256i q = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + offset[4 * c]));
+        dark[c] = _mm256_subs_epu8(v, q);
+        bright[c] = _mm256_subs_epu8(q, v);
+      }
+      __m256i best = zero;
+      for (size_t c = 0; c < 4; ++c) {
+        best = _mm256_max_epu8(best, _mm256_min_epu8(dark[c], dark[(c + 1) & 3]));
+        best = _mm256_max_epu8(best, _mm256_min_epu8(bright[c], bright[(c + 1) & 3]));
+      }
+      const unsigned none = static_cast<unsigned>(
+          _mm256_movemask_epi8(_mm256_cmpeq_epi8(_mm256_subs_epu8(best, t), zero)));
+      if ((~none & lanes) == 0) {
+        next = start + 32;
+        continue;
+      }
+    }
     __m256i darker[16], brighter[16];
     for (size_t k = 0; k < 16; ++k) {
       const __m256i q = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + offset[k]));
@@ -155,7 +200,7 @@ __attribute__((target("avx2"))) void scoreRowAvx2(const uint8_t* row, int w,
     const __m256i a = _mm256_max_epu8(arcStrengthAvx2(darker), arcStrengthAvx2(brighter));
     const unsigned not_corner = static_cast<unsigned>(
         _mm256_movemask_epi8(_mm256_cmpeq_epi8(_mm256_subs_epu8(a, t), zero)));
-    unsigned corner = ~not_corner & (0xFFFFFFFFu << (next - start));
+    unsigned corner = ~not_corner & lanes;
     if (corner != 0) {
       _mm256_store_si256(reinterpret_cast<__m256i*>(strength), a);
       for (; corner != 0; corner &= corner - 1) {

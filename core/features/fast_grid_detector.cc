@@ -13,8 +13,6 @@ std::vector<LevelCorner> FastGridDetector::detect(const cv::Mat& level,
   // Corners lie in [e, W - e) x [e, H - e); FAST needs a 3-pixel ring around a candidate, so
   // it runs on the area grown by 3 pixels (ORB-SLAM2's [e - 3, W - e + 3)).
   const cv::Rect area(e - 3, e - 3, level.cols - 2 * e + 6, level.rows - 2 * e + 6);
-  fast_.detect(level(area), params.min_threshold, &fast_corners_);
-  if (fast_corners_.empty()) return corners;
 
   // Cells as ORB-SLAM2 lays them out: cell (i, j) owns corners with
   // x in [e + j * cell_w, e + (j + 1) * cell_w) (the last one up to W - e), likewise y.
@@ -30,14 +28,53 @@ std::vector<LevelCorner> FastGridDetector::detect(const cv::Mat& level,
     return static_cast<size_t>(cy * n_cols + cx);
   };
 
-  // Counting sort by cell; a cell is "strong" when it has a corner at the initial threshold.
-  start_.assign(n_cells + 1, 0);
+  // 1. The strong corners: one pass over the whole area at the initial threshold (FAST's
+  // quick test rejects most pixels there). A corner of score >= t is suppressed only by a
+  // neighbour of higher score, itself a corner at t, so these are exactly the corners of
+  // score >= t of a pass at the minimum threshold.
+  const int strong_threshold = std::max(params.initial_threshold, params.min_threshold);
+  fast_.detect(level(area), strong_threshold, &fast_corners_);
   strong_.assign(n_cells, 0);
-  for (const FastCorner& c : fast_corners_) {
-    const size_t cell = cellOf(c);
-    ++start_[cell + 1];
-    if (c.score >= params.initial_threshold) strong_[cell] = 1;
+  for (const FastCorner& c : fast_corners_) strong_[cellOf(c)] = 1;
+
+  // 2. The weak cells (no strong corner) at the minimum threshold: each run of weak cells of
+  // a cell row in one window, grown by 4 pixels (clipped to the area) so that the scores of
+  // the 8 neighbours of each of its pixels, which non-maximum suppression compares, are those
+  // of a whole-area pass.
+  if (params.min_threshold < params.initial_threshold) {
+    constexpr int kRing = 4;
+    for (int i = 0; i < n_rows; ++i) {
+      const int y0 = 3 + i * cell_h;
+      const int y1 = i == n_rows - 1 ? area.height - 3 : std::min(area.height - 3, y0 + cell_h);
+      for (int j = 0; j < n_cols;) {
+        if (strong_[static_cast<size_t>(i * n_cols + j)]) {
+          ++j;
+          continue;
+        }
+        int j_end = j + 1;
+        while (j_end < n_cols && !strong_[static_cast<size_t>(i * n_cols + j_end)]) ++j_end;
+        const int x0 = 3 + j * cell_w;
+        const int x1 =
+            j_end == n_cols ? area.width - 3 : std::min(area.width - 3, 3 + j_end * cell_w);
+        j = j_end;
+        if (x0 >= x1 || y0 >= y1) continue;
+        const cv::Rect window =
+            cv::Rect(x0 - kRing, y0 - kRing, x1 - x0 + 2 * kRing, y1 - y0 + 2 * kRing) &
+            cv::Rect(0, 0, area.width, area.height);
+        fast_.detect(level(area)(window), params.min_threshold, &weak_corners_);
+        for (FastCorner c : weak_corners_) {
+          c.x += window.x;
+          c.y += window.y;
+          if (c.x >= x0 && c.x < x1 && c.y >= y0 && c.y < y1) fast_corners_.push_back(c);
+        }
+      }
+    }
   }
+  if (fast_corners_.empty()) return corners;
+
+  // Counting sort by cell, stable: a cell's corners stay in row-major order.
+  start_.assign(n_cells + 1, 0);
+  for (const FastCorner& c : fast_corners_) ++start_[cellOf(c) + 1];
   for (size_t c = 0; c < n_cells; ++c) start_[c + 1] += start_[c];
   order_.resize(fast_corners_.size());
   fill_.assign(start_.begin(), start_.end() - 1);
@@ -45,12 +82,9 @@ std::vector<LevelCorner> FastGridDetector::detect(const cv::Mat& level,
     order_[static_cast<size_t>(fill_[cellOf(fast_corners_[i])]++)] = static_cast<int>(i);
   }
   corners.reserve(fast_corners_.size());
-  for (size_t c = 0; c < n_cells; ++c) {
-    for (int k = start_[c]; k < start_[c + 1]; ++k) {
-      const FastCorner& fc = fast_corners_[static_cast<size_t>(order_[static_cast<size_t>(k)])];
-      if (strong_[c] && fc.score < params.initial_threshold) continue;
-      corners.push_back({fc.x + area.x, fc.y + area.y, static_cast<float>(fc.score)});
-    }
+  for (const int k : order_) {
+    const FastCorner& fc = fast_corners_[static_cast<size_t>(k)];
+    corners.push_back({fc.x + area.x, fc.y + area.y, static_cast<float>(fc.score)});
   }
   return corners;
 }

@@ -34,13 +34,16 @@ struct FastGridConfig {
 /// least one); a cell keeps its FAST corners (9-16, non-maximum suppression) of score >=
 /// initial_threshold, or, when it has none, its corners of score >= min_threshold.
 ///
-/// Implementation: one FAST pass (FastDetector, identical to cv::FAST) at min_threshold over
-/// the whole detection area, then a per-cell score filter. This gives the same corners and
-/// scores as ORB-SLAM2's per-cell cv::FAST calls at the two thresholds (a FAST score is the
-/// largest threshold at which the point is still a corner, so "corner at t" == "score >= t",
-/// and a corner of score >= t can only be suppressed by a neighbour of higher score, itself a
-/// corner at t), except that non-maximum suppression also works across cell borders, so the
-/// duplicate corners ORB-SLAM2 finds in the 6-pixel cell overlaps do not occur.
+/// Implementation: the result is that of one FAST pass (FastDetector, identical to cv::FAST) at
+/// min_threshold over the whole detection area followed by a per-cell score filter. This gives
+/// the same corners and scores as ORB-SLAM2's per-cell cv::FAST calls at the two thresholds (a
+/// FAST score is the largest threshold at which the point is still a corner, so "corner at t"
+/// == "score >= t", and a corner of score >= t can only be suppressed by a neighbour of higher
+/// score, itself a corner at t), except that non-maximum suppression also works across cell
+/// borders, so the duplicate corners ORB-SLAM2 finds in the 6-pixel cell overlaps do not occur.
+/// It is computed as one pass at initial_threshold over the whole area (where FAST's quick test
+/// rejects most pixels) and a pass at min_threshold over the cells without a strong corner only
+/// (each with a 4-pixel ring, so that suppression across their borders is the whole pass's).
 ///
 /// Returns corners ordered by cell (row-major) and, within a cell, by row then column. A level
 /// smaller than 2e + 1 in either direction gives no corners.
@@ -51,7 +54,7 @@ class FastGridDetector {
 
  private:
   FastDetector fast_;
-  std::vector<FastCorner> fast_corners_;
+  std::vector<FastCorner> fast_corners_, weak_corners_;
   std::vector<int> start_, fill_, order_;
   std::vector<char> strong_;
 };

@@ -103,7 +103,7 @@ ExtractedFeatures OrbExtractor::extract(const cv::Mat& image) {
     if (corners.empty()) continue;
     const std::vector<int> kept = distributeQuadtree(corners, kMargin, img.cols - kMargin, kMargin,
                                                      img.rows - kMargin, wanted);
-    RotatedBrief::blurLevel(img, &padded_, &blurred_);
+    blur_.apply(img, &blurred_);
     const float scale = scales_.scale(level);
     for (const int i : kept) {
       const LevelCorner& c = corners[static_cast<size_t>(i)];

@@ -5,6 +5,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "core/features/brief_blur.h"
 #include "core/features/fast_grid_detector.h"
 #include "core/features/keypoint.h"
 #include "core/features/orb_descriptor.h"
@@ -107,7 +108,8 @@ class OrbExtractor {
   RotatedBrief brief_;
   // Reused buffers.
   FastGridDetector fast_grid_;
-  cv::Mat padded_, blurred_;
+  BriefBlur blur_;
+  cv::Mat blurred_;
 };
 
 }  // namespace cblox

@@ -2,8 +2,6 @@
 
 #include <cmath>
 
-#include <opencv2/imgproc.hpp>
-
 #include "core/geometry/cpu_features.h"
 
 #if defined(__SSE2__)
@@ -24,19 +22,6 @@ RotatedBrief::RotatedBrief() {
     b_x_[i] = pattern[i].b.x;
     b_y_[i] = pattern[i].b.y;
   }
-}
-
-void RotatedBrief::blurLevel(const cv::Mat& level, cv::Mat* padded, cv::Mat* dst) {
-  // OpenCV's ORB blurs each level in place as a window of a bigger buffer whose border holds
-  // the level's BORDER_REFLECT_101 extension. For a window (not an isolated image) OpenCV's
-  // GaussianBlur takes its generic separable-filter path, which rounds differently from the
-  // bit-exact path it uses for whole images; doing the same here keeps the descriptors
-  // bit-identical to OpenCV's ORB.
-  constexpr int kPad = 3;  // the 7x7 kernel's radius
-  padded->create(level.rows + 2 * kPad, level.cols + 2 * kPad, CV_8UC1);
-  cv::copyMakeBorder(level, *padded, kPad, kPad, kPad, kPad, cv::BORDER_REFLECT_101);
-  *dst = (*padded)(cv::Rect(kPad, kPad, level.cols, level.rows));
-  cv::GaussianBlur(*dst, *dst, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
 }
 
 namespace {

@@ -26,17 +26,10 @@ class RotatedBrief {
   RotatedBrief();
 
   /// Descriptor of the keypoint at pixel (round(x), round(y)) of `blurred_level` (CV_8UC1,
-  /// the pyramid level blurred with blurLevel()) with orientation `angle_deg` (degrees). The
+  /// the pyramid level blurred with BriefBlur) with orientation `angle_deg` (degrees). The
   /// caller guarantees that the keypoint is at least kRotatedBriefRadius pixels from every
   /// border (unchecked).
   OrbDescriptor compute(const cv::Mat& blurred_level, float x, float y, float angle_deg) const;
-
-  /// The smoothing ORB applies before the intensity tests: 7x7 Gaussian, sigma 2,
-  /// BORDER_REFLECT_101, computed the way OpenCV's ORB computes it (in place, on the level
-  /// inside a buffer padded with its reflection; OpenCV then rounds slightly differently from
-  /// cv::GaussianBlur on a whole image, which ORB-SLAM2 uses). *dst becomes a view into
-  /// *padded (a buffer reused when its size matches). Thread-safe apart from the outputs.
-  static void blurLevel(const cv::Mat& level, cv::Mat* padded, cv::Mat* dst);
 
   /// The descriptor without the AVX2 path (SSE2 offsets, scalar tests): the reference the
   /// AVX2 path is tested against. Same contract as compute().

@@ -19,4 +19,14 @@ inline bool cpuHasAvx2() {
 #endif
 }
 
+/// True when this CPU has AVX2 and FMA (asked once, then cached). Thread-safe.
+inline bool cpuHasAvx2Fma() {
+#if CBLOX_HAVE_X86
+  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return has;
+#else
+  return false;
+#endif
+}
+
 }  // namespace cblox

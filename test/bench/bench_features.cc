@@ -22,9 +22,14 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "core/features/brief_blur.h"
 #include "core/features/fast_detector.h"
+#include "core/features/fast_grid_detector.h"
 #include "core/features/orb_extractor.h"
+#include "core/features/orb_orientation.h"
+#include "core/features/quadtree_distribution.h"
 #include "core/features/rgbd_depth.h"
+#include "core/features/rotated_brief.h"
 #include "core/features/stereo_matcher.h"
 #include "drivers/open_frame_source.h"
 
@@ -151,7 +156,138 @@ void BM_CvFast(benchmark::State& state) {
   }
 }
 
+// The stages of one extraction, each over all levels of the same images (the split of
+// extract/cblox::OrbExtractor): the pyramid (cv::resize), FAST on the detection grid, the
+// quadtree distribution, the blur before BRIEF, and orientation + rotated BRIEF of the kept
+// corners.
+struct StageInputs {
+  std::vector<std::vector<cv::Mat>> pyramids;
+  std::vector<std::vector<std::vector<LevelCorner>>> corners;
+  std::vector<std::vector<std::vector<int>>> kept;
+};
+
+FastGridConfig stageGrid() {
+  FastGridConfig grid;
+  grid.edge_threshold = OrbExtractorConfig::kEdgeThreshold;
+  grid.cell_size = OrbExtractorConfig::kCellSize;
+  return grid;
+}
+
+const StageInputs& stageInputs() {
+  static const StageInputs s = [] {
+    StageInputs out;
+    const OrbExtractor extractor{OrbExtractorConfig{}};
+    FastGridDetector grid;
+    constexpr int kMargin = OrbExtractorConfig::kEdgeThreshold - 3;
+    for (const CaptureFrame& frame : frames().frames) {
+      out.pyramids.push_back(extractor.scales().build(view(frame.left)));
+      out.corners.emplace_back();
+      out.kept.emplace_back();
+      for (size_t l = 0; l < out.pyramids.back().size(); ++l) {
+        const cv::Mat& img = out.pyramids.back()[l];
+        out.corners.back().push_back(grid.detect(img, stageGrid()));
+        out.kept.back().push_back(
+            distributeQuadtree(out.corners.back().back(), kMargin, img.cols - kMargin, kMargin,
+                               img.rows - kMargin, extractor.featuresPerLevel()[l]));
+      }
+    }
+    return out;
+  }();
+  return s;
+}
+
+void BM_StagePyramid(benchmark::State& state) {
+  const Frames& f = frames();
+  const ScalePyramid scales(OrbExtractorConfig{}.num_levels, OrbExtractorConfig{}.scale_factor);
+  size_t i = 0;
+  for (auto _ : state) {
+    std::vector<cv::Mat> pyramid = scales.build(view(f.frames[i++ % f.frames.size()].left));
+    benchmark::DoNotOptimize(pyramid.data());
+  }
+}
+
+void BM_StageFastGrid(benchmark::State& state) {
+  const StageInputs& s = stageInputs();
+  FastGridDetector grid;
+  size_t i = 0;
+  for (auto _ : state) {
+    for (const cv::Mat& img : s.pyramids[i++ % s.pyramids.size()]) {
+      std::vector<LevelCorner> corners = grid.detect(img, stageGrid());
+      benchmark::DoNotOptimize(corners.data());
+    }
+  }
+}
+
+void BM_StageQuadtree(benchmark::State& state) {
+  const StageInputs& s = stageInputs();
+  const OrbExtractor extractor{OrbExtractorConfig{}};
+  constexpr int kMargin = OrbExtractorConfig::kEdgeThreshold - 3;
+  size_t i = 0;
+  for (auto _ : state) {
+    const size_t k = i++ % s.pyramids.size();
+    for (size_t l = 0; l < s.pyramids[k].size(); ++l) {
+      const cv::Mat& img = s.pyramids[k][l];
+      std::vector<int> kept =
+          distributeQuadtree(s.corners[k][l], kMargin, img.cols - kMargin, kMargin,
+                             img.rows - kMargin, extractor.featuresPerLevel()[l]);
+      benchmark::DoNotOptimize(kept.data());
+    }
+  }
+}
+
+// arg 0: BriefBlur::apply (AVX2 + FMA where the CPU has them), 1: applyOpenCv (cv::GaussianBlur
+// as OpenCV's ORB calls it); the same bytes.
+void BM_StageBlur(benchmark::State& state) {
+  const StageInputs& s = stageInputs();
+  BriefBlur blur;
+  cv::Mat blurred;
+  size_t i = 0;
+  for (auto _ : state) {
+    for (const cv::Mat& img : s.pyramids[i++ % s.pyramids.size()]) {
+      if (state.range(0) == 0) {
+        blur.apply(img, &blurred);
+      } else {
+        blur.applyOpenCv(img, &blurred);
+      }
+      benchmark::DoNotOptimize(blurred.data);
+    }
+  }
+}
+
+void BM_StageDescribe(benchmark::State& state) {
+  const StageInputs& s = stageInputs();
+  std::vector<std::vector<cv::Mat>> blurred(s.pyramids.size());
+  for (size_t k = 0; k < s.pyramids.size(); ++k) {
+    for (const cv::Mat& img : s.pyramids[k]) {
+      BriefBlur blur;
+      cv::Mat out;
+      blur.apply(img, &out);
+      blurred[k].push_back(out);
+    }
+  }
+  const OrbOrientation orientation;
+  const RotatedBrief brief;
+  size_t i = 0;
+  for (auto _ : state) {
+    const size_t k = i++ % s.pyramids.size();
+    for (size_t l = 0; l < s.pyramids[k].size(); ++l) {
+      for (const int c : s.kept[k][l]) {
+        const LevelCorner& corner = s.corners[k][l][static_cast<size_t>(c)];
+        const float angle = orientation.angleDeg(s.pyramids[k][l], corner.x, corner.y);
+        const OrbDescriptor d = brief.compute(blurred[k][l], static_cast<float>(corner.x),
+                                              static_cast<float>(corner.y), angle);
+        benchmark::DoNotOptimize(d);
+      }
+    }
+  }
+}
+
 BENCHMARK(BM_OrbExtractor)->Name("extract/cblox::OrbExtractor")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_StagePyramid)->Name("stage/pyramid")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_StageFastGrid)->Name("stage/fast_grid")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_StageQuadtree)->Name("stage/quadtree")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_StageBlur)->Name("stage/blur")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_StageDescribe)->Name("stage/orientation+brief")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CvOrb)->Name("extract/cv::ORB")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_MatchStereo)->Name("stereo/matchStereo")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DepthFromRgbd)->Name("rgbd/depthFromRgbd")->Unit(benchmark::kMicrosecond);

@@ -147,8 +147,9 @@ TEST(RotatedBriefTest, BitIdenticalToOpenCvOrbAtRandomAngles) {
   }
   const cv::Mat descriptors = openCvDescriptors(image, keypoints);
   ASSERT_EQ(descriptors.rows, static_cast<int>(keypoints.size()));
-  cv::Mat padded, blurred;
-  RotatedBrief::blurLevel(image, &padded, &blurred);
+  BriefBlur blur;
+  cv::Mat blurred;
+  blur.apply(image, &blurred);
   const RotatedBrief brief;
   for (size_t k = 0; k < keypoints.size(); ++k) {
     const cv::KeyPoint& kp = keypoints[k];

@@ -1,6 +1,7 @@
 #include "core/vocabulary/binary_vocabulary.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -244,6 +245,58 @@ NodeId BinaryVocabulary::descend(const OrbDescriptor& descriptor, int depth,
   return node;
 }
 
+void BinaryVocabulary::descendBatch(const OrbDescriptor* descriptors, size_t n, int depth,
+                                    NodeId* leaf, NodeId* at_depth) const {
+  // The descents of the batch advance one level at a time, each step touching memory that the
+  // previous level's pass asked the cache for: the next node's child range, then the children's
+  // descriptors. A 22 MB vocabulary is mostly out of cache, so overlapping the misses of the
+  // batch is what makes this faster than descending one descriptor after the other.
+  constexpr int kLine = 64;
+  const auto prefetchChildren = [&](NodeId node) {
+    const Children& c = children_[node];
+    const char* begin = reinterpret_cast<const char*>(&node_descriptor_[c.first]);
+    const char* end = begin + static_cast<size_t>(c.count) * sizeof(OrbDescriptor);
+    for (const char* p = begin; p < end; p += kLine) __builtin_prefetch(p);
+  };
+  std::array<NodeId, kDescentBatch> node{};
+  std::array<bool, kDescentBatch> done{};
+  for (size_t b = 0; b < n; ++b) at_depth[b] = 0;
+  for (int level = 1;; ++level) {
+    bool any = false;
+    for (size_t b = 0; b < n; ++b) {
+      if (done[b]) continue;
+      if (children_[node[b]].count == 0) {
+        done[b] = true;
+        continue;
+      }
+      any = true;
+      prefetchChildren(node[b]);
+    }
+    if (!any) break;
+    for (size_t b = 0; b < n; ++b) {
+      if (done[b]) continue;
+      const Children& c = children_[node[b]];
+      const uint32_t end = c.first + c.count;
+      NodeId best = c.first;
+      int best_distance = hammingDistance(descriptors[b], node_descriptor_[c.first]);
+      for (uint32_t k = c.first + 1; k < end; ++k) {
+        const int d = hammingDistance(descriptors[b], node_descriptor_[k]);
+        if (d < best_distance) {
+          best_distance = d;
+          best = k;
+        }
+      }
+      node[b] = best;
+      if (level <= depth) at_depth[b] = best;
+      __builtin_prefetch(&children_[best]);
+    }
+  }
+  for (size_t b = 0; b < n; ++b) {
+    leaf[b] = node[b];
+    __builtin_prefetch(&node_word_[node[b]]);
+  }
+}
+
 WordId BinaryVocabulary::wordOf(const OrbDescriptor& descriptor) const {
   return node_word_[descend(descriptor, 0, nullptr)];
 }
@@ -265,11 +318,15 @@ void BinaryVocabulary::transform(const std::vector<OrbDescriptor>& features, Bow
   std::vector<std::pair<NodeId, uint32_t>> nodes;
   words.reserve(features.size());
   if (feature_vector != nullptr) nodes.reserve(features.size());
-  for (size_t i = 0; i < features.size(); ++i) {
-    NodeId node = 0;
-    const WordId w = node_word_[descend(features[i], depth, &node)];
-    if (feature_vector != nullptr) nodes.emplace_back(node, static_cast<uint32_t>(i));
-    if (word_weight_[w] > 0.0) words.emplace_back(w, word_weight_[w]);
+  std::array<NodeId, kDescentBatch> leaf, at_depth;
+  for (size_t i0 = 0; i0 < features.size(); i0 += kDescentBatch) {
+    const size_t n = std::min(kDescentBatch, features.size() - i0);
+    descendBatch(&features[i0], n, depth, leaf.data(), at_depth.data());
+    for (size_t b = 0; b < n; ++b) {
+      const WordId w = node_word_[leaf[b]];
+      if (feature_vector != nullptr) nodes.emplace_back(at_depth[b], static_cast<uint32_t>(i0 + b));
+      if (word_weight_[w] > 0.0) words.emplace_back(w, word_weight_[w]);
+    }
   }
   if (bow != nullptr) {
     bow->clear();

@@ -132,6 +132,11 @@ class BinaryVocabulary {
   /// Descends to the leaf of `descriptor`; *at_depth = the node on the path at depth
   /// `depth` (the leaf if shallower) when not null.
   NodeId descend(const OrbDescriptor& descriptor, int depth, NodeId* at_depth) const;
+  /// descend() for n <= kDescentBatch descriptors at once, their memory accesses interleaved
+  /// (the same nodes as n calls of descend()).
+  static constexpr size_t kDescentBatch = 16;
+  void descendBatch(const OrbDescriptor* descriptors, size_t n, int depth, NodeId* leaf,
+                    NodeId* at_depth) const;
   /// Children, depths and word numbering from node_parent_ (children must be contiguous
   /// ranges after their parent); empty when consistent, else what is wrong.
   std::string buildTopology();

@@ -16,6 +16,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,7 @@
 #include "core/features/rgbd_depth.h"
 #include "core/features/rotated_brief.h"
 #include "core/features/stereo_matcher.h"
+#include "core/vocabulary/binary_vocabulary.h"
 #include "drivers/open_frame_source.h"
 
 namespace cblox {
@@ -282,12 +284,74 @@ void BM_StageDescribe(benchmark::State& state) {
   }
 }
 
+// BoW vectors of the extracted left images with the build-time vocabulary (DBoW2-style tree,
+// k = 10, L = 6, 22 MB): arg 0 = BinaryVocabulary::transform (BoW and feature vector, 16
+// descents interleaved), arg 1 = wordOf() for each descriptor in turn (one descent after the
+// other: the words alone, without the vectors). Second arg: MB of memory written before each
+// iteration (untimed), so that the vocabulary comes from memory rather than from the cache, as
+// in the tracker, which touches other data between keyframes (this host's L3 is 260 MB; a NUC's
+// is 6-12 MB).
+const BinaryVocabulary* vocabulary() {
+  static const std::optional<BinaryVocabulary> v = [] {
+    std::string error;
+    std::optional<BinaryVocabulary> loaded =
+        BinaryVocabulary::load(CBLOX_DEFAULT_VOCABULARY, &error);
+    if (!loaded) std::fprintf(stderr, "no vocabulary: %s\n", error.c_str());
+    return loaded;
+  }();
+  return v ? &*v : nullptr;
+}
+
+void BM_BowTransform(benchmark::State& state) {
+  const BinaryVocabulary* v = vocabulary();
+  if (v == nullptr) {
+    state.SkipWithError("the build-time vocabulary is missing");
+    return;
+  }
+  const Frames& f = frames();
+  OrbExtractor extractor{OrbExtractorConfig{}};
+  std::vector<std::vector<OrbDescriptor>> descriptors;
+  for (const CaptureFrame& frame : f.frames) {
+    descriptors.push_back(extractor.extract(frame.left).descriptors);
+  }
+  BowVector bow;
+  FeatureVector feature_vector;
+  size_t i = 0;
+  std::vector<char> junk(static_cast<size_t>(state.range(1)) << 20);
+  for (auto _ : state) {
+    if (!junk.empty()) {
+      state.PauseTiming();
+      for (size_t k = 0; k < junk.size(); k += 64) junk[k] += 1;
+      benchmark::DoNotOptimize(junk.data());
+      state.ResumeTiming();
+    }
+    const std::vector<OrbDescriptor>& d = descriptors[i++ % descriptors.size()];
+    if (state.range(0) == 0) {
+      v->transform(d, &bow, &feature_vector);
+      benchmark::DoNotOptimize(bow.data());
+    } else {
+      for (const OrbDescriptor& one : d) benchmark::DoNotOptimize(v->wordOf(one));
+    }
+  }
+}
+
 BENCHMARK(BM_OrbExtractor)->Name("extract/cblox::OrbExtractor")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_StagePyramid)->Name("stage/pyramid")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_StageFastGrid)->Name("stage/fast_grid")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_StageQuadtree)->Name("stage/quadtree")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_StageBlur)->Name("stage/blur")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_StageDescribe)->Name("stage/orientation+brief")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BowTransform)
+    ->Name("bow/transform")
+    ->Args({0, 0})
+    ->Args({1, 0})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BowTransform)
+    ->Name("bow/transform_cold")
+    ->Args({0, 300})
+    ->Args({1, 300})
+    ->Iterations(100)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CvOrb)->Name("extract/cv::ORB")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_MatchStereo)->Name("stereo/matchStereo")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DepthFromRgbd)->Name("rgbd/depthFromRgbd")->Unit(benchmark::kMicrosecond);

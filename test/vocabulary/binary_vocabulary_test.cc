@@ -1,6 +1,7 @@
 #include "core/vocabulary/binary_vocabulary.h"
 
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <set>
 
@@ -169,6 +170,32 @@ TEST_F(TransformTest, BowVectorIsSortedNormalisedAndScoresOneAgainstItself) {
   EXPECT_GT(partial, 0.3);
   EXPECT_LT(partial, 0.9);
   EXPECT_TRUE(v_.transform(std::vector<OrbDescriptor>{}).empty());
+}
+
+TEST_F(TransformTest, AnyNumberOfFeaturesGivesEachItsOwnWord) {
+  // transform() descends 16 descriptors at a time: counts around that batch size give the
+  // idf-weighted histogram of the words wordOf() finds one by one, normalised.
+  std::vector<OrbDescriptor> all;
+  for (const auto& image : images_) all.insert(all.end(), image.begin(), image.end());
+  ASSERT_GT(all.size(), 100u);
+  for (const size_t n : {size_t{1}, size_t{15}, size_t{16}, size_t{17}, size_t{33}, all.size()}) {
+    const std::vector<OrbDescriptor> features(all.begin(), all.begin() + static_cast<long>(n));
+    std::map<WordId, double> expected;
+    double total = 0.0;
+    for (const OrbDescriptor& d : features) {
+      const WordId w = v_.wordOf(d);
+      expected[w] += v_.wordWeight(w);
+      total += v_.wordWeight(w);
+    }
+    const BowVector bow = v_.transform(features);
+    ASSERT_EQ(bow.size(), expected.size()) << n << " features";
+    size_t i = 0;
+    for (const auto& [word, weight] : expected) {
+      EXPECT_EQ(bow[i].first, word) << n << " features";
+      EXPECT_NEAR(bow[i].second, weight / total, 1e-12) << n << " features";
+      ++i;
+    }
+  }
 }
 
 TEST_F(TransformTest, ScoreIsDbow2sL1Formula) {

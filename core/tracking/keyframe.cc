@@ -1,6 +1,7 @@
 #include "core/tracking/keyframe.h"
 
 #include <algorithm>
+#include <atomic>
 #include <utility>
 
 #include "core/tracking/landmark.h"
@@ -38,37 +39,50 @@ int Keyframe::numTrackedLandmarks(int min_observations) const {
 }
 
 void Keyframe::updateConnections() {
-  std::map<Keyframe*, int, KeyframeIdLess> counts;
+  // Shared landmarks per other keyframe, counted in the other keyframes themselves (a fresh
+  // stamp per call; callers hold the map's exclusive lock), then visited in id order.
+  static std::atomic<uint64_t> last_stamp{0};
+  const uint64_t stamp = ++last_stamp;
+  std::vector<Keyframe*> others;
   for (const Landmark* l : landmarks_) {
     if (l == nullptr || l->bad()) continue;
     for (const auto& [other, index] : l->observations()) {
-      if (other != this && !other->bad()) ++counts[other];
+      if (other == this || other->bad()) continue;
+      if (other->connection_count_stamp_ != stamp) {
+        other->connection_count_stamp_ = stamp;
+        other->connection_count_ = 0;
+        others.push_back(other);
+      }
+      ++other->connection_count_;
     }
   }
-  if (counts.empty()) return;
+  if (others.empty()) return;
+  std::sort(others.begin(), others.end(), KeyframeIdLess{});
   Keyframe* best = nullptr;
   int best_weight = 0;
-  for (const auto& [other, w] : counts) {
-    if (w > best_weight) {
-      best_weight = w;
+  for (Keyframe* other : others) {
+    if (other->connection_count_ > best_weight) {
+      best_weight = other->connection_count_;
       best = other;
     }
   }
+  const auto keep = [&](Keyframe* other) {
+    return other->connection_count_stamp_ == stamp &&
+           (other->connection_count_ >= kConnectionMinWeight || other == best);
+  };
   // Forget edges that no longer exist (both ends).
   for (auto it = connections_.begin(); it != connections_.end();) {
-    if (counts.count(it->first) == 0 ||
-        (counts.at(it->first) < kConnectionMinWeight && it->first != best)) {
+    if (!keep(it->first)) {
       it->first->eraseConnection(this);
       it = connections_.erase(it);
     } else {
       ++it;
     }
   }
-  for (const auto& [other, w] : counts) {
-    if (w >= kConnectionMinWeight || other == best) {
-      connections_[other] = w;
-      other->addConnection(this, w);
-    }
+  for (Keyframe* other : others) {
+    if (!keep(other)) continue;
+    connections_[other] = other->connection_count_;
+    other->addConnection(this, other->connection_count_);
   }
   rebuildOrder();
   if (first_connection_ && id != 0) {
@@ -78,12 +92,33 @@ void Keyframe::updateConnections() {
 }
 
 void Keyframe::addConnection(Keyframe* other, int w) {
-  connections_[other] = w;
-  rebuildOrder();
+  const auto [it, inserted] = connections_.try_emplace(other, w);
+  if (!inserted) {
+    if (it->second == w) return;  // the order stays as it is
+    it->second = w;
+    removeFromOrder(other);
+  }
+  // The place rebuildOrder() would give it: after the heavier edges and the equal ones of
+  // smaller id.
+  size_t i = 0;
+  while (i < ordered_neighbours_.size() &&
+         (ordered_weights_[i] > w ||
+          (ordered_weights_[i] == w && KeyframeIdLess{}(ordered_neighbours_[i], other)))) {
+    ++i;
+  }
+  ordered_neighbours_.insert(ordered_neighbours_.begin() + static_cast<long>(i), other);
+  ordered_weights_.insert(ordered_weights_.begin() + static_cast<long>(i), w);
 }
 
 void Keyframe::eraseConnection(Keyframe* other) {
-  if (connections_.erase(other) > 0) rebuildOrder();
+  if (connections_.erase(other) > 0) removeFromOrder(other);
+}
+
+void Keyframe::removeFromOrder(Keyframe* other) {
+  const auto it = std::find(ordered_neighbours_.begin(), ordered_neighbours_.end(), other);
+  if (it == ordered_neighbours_.end()) return;
+  ordered_weights_.erase(ordered_weights_.begin() + (it - ordered_neighbours_.begin()));
+  ordered_neighbours_.erase(it);
 }
 
 void Keyframe::rebuildOrder() {

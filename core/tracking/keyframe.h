@@ -55,7 +55,8 @@ class Keyframe {
   /// Covisibility: rebuilds this keyframe's edges from its landmarks' observations (weight =
   /// shared landmarks; edges of weight >= 15 kept, or the single best one if none, like
   /// ORB-SLAM2's UpdateConnections) and updates the other ends. The first call also makes
-  /// the best neighbour the spanning-tree parent (unless this is the first keyframe).
+  /// the best neighbour the spanning-tree parent (unless this is the first keyframe). The
+  /// caller holds the map's exclusive lock (the counts live in the other keyframes).
   void updateConnections();
   /// Neighbours by decreasing weight.
   const std::vector<Keyframe*>& covisibleByWeight() const { return ordered_neighbours_; }
@@ -65,7 +66,8 @@ class Keyframe {
   std::vector<Keyframe*> covisibleWithWeightAtLeast(int w) const;
   int weight(const Keyframe* other) const;
   const std::map<Keyframe*, int, KeyframeIdLess>& connections() const { return connections_; }
-  /// Adds or updates one edge end (used by updateConnections of the other keyframe).
+  /// Adds or updates one edge end (used by updateConnections of the other keyframe); the
+  /// neighbour order is updated in place (an unchanged weight leaves it as it is).
   void addConnection(Keyframe* other, int weight);
   void eraseConnection(Keyframe* other);
 
@@ -110,7 +112,9 @@ class Keyframe {
   uint64_t reloc_query = 0;
 
  private:
+  // ordered_neighbours_ / ordered_weights_ from connections_: decreasing weight, ties by id.
   void rebuildOrder();
+  void removeFromOrder(Keyframe* other);
 
   std::shared_ptr<const FrameFeatures> features_;
   Transformationd T_C_G_, T_G_C_;
@@ -119,6 +123,9 @@ class Keyframe {
   std::vector<Keyframe*> ordered_neighbours_;
   std::vector<int> ordered_weights_;
   bool first_connection_ = true;
+  // updateConnections() of another keyframe counts its landmarks shared with this one here.
+  uint64_t connection_count_stamp_ = 0;
+  int connection_count_ = 0;
   Keyframe* parent_ = nullptr;
   std::set<Keyframe*, KeyframeIdLess> children_;
   std::set<Keyframe*, KeyframeIdLess> loop_edges_;

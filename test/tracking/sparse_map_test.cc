@@ -4,9 +4,11 @@
 
 #include "core/tracking/sparse_map.h"
 
+#include <algorithm>
 #include <map>
 #include <memory>
 #include <optional>
+#include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -147,6 +149,38 @@ TEST(SparseMapTest, CovisibilityWeightsCountSharedLandmarks) {
   EXPECT_EQ(m.keyframes[0]->weight(m.keyframes[3]), 0);
 }
 
+TEST(SparseMapTest, NeighbourOrderFollowsEveryEdgeChangeInPlace) {
+  // addConnection / eraseConnection keep the order in place: after any sequence of edge
+  // changes it is the full order, decreasing weight and ties by increasing id.
+  SmallMap m;
+  buildChain(&m, 12);
+  Keyframe* k = m.keyframes[5];
+  std::mt19937 rng(4);
+  std::uniform_int_distribution<int> pick(0, 11), weight(15, 19), erase(0, 3);
+  for (int step = 0; step < 400; ++step) {
+    Keyframe* other = m.keyframes[static_cast<size_t>(pick(rng))];
+    if (other == k) continue;
+    if (erase(rng) == 0) {
+      k->eraseConnection(other);
+    } else {
+      k->addConnection(other, weight(rng));  // few weights: many ties and unchanged edges
+    }
+    std::vector<std::pair<int, KeyframeId>> expected;
+    for (const auto& [o, w] : k->connections()) expected.emplace_back(-w, o->id);
+    std::sort(expected.begin(), expected.end());
+    const std::vector<Keyframe*>& order = k->covisibleByWeight();
+    ASSERT_EQ(order.size(), expected.size()) << "step " << step;
+    for (size_t i = 0; i < order.size(); ++i) {
+      ASSERT_EQ(order[i]->id, expected[i].second) << "step " << step << " position " << i;
+      ASSERT_EQ(k->weight(order[i]), -expected[i].first);
+    }
+    const std::vector<Keyframe*> heavy = k->covisibleWithWeightAtLeast(18);
+    for (size_t i = 0; i < order.size(); ++i) {
+      ASSERT_EQ(i < heavy.size(), k->weight(order[i]) >= 18);
+    }
+  }
+}
+
 TEST(SparseMapTest, CullingAKeyframeReparentsItsChildrenAndRetiresOrphans) {
   SmallMap m;
   buildChain(&m, 4);
@@ -208,7 +242,8 @@ TEST(SparseMapTest, CulledKeyframesFollowTheirGoodAncestorInPoseBatches) {
   buildChain(&m, 5);
   // Rotated poses so the products are not plain sums of x offsets.
   for (int k = 0; k < 5; ++k) {
-    const Eigen::Quaterniond q(Eigen::AngleAxisd(0.1 * k, Eigen::Vector3d(0.2, 1, 0.3).normalized()));
+    const Eigen::Quaterniond q(
+        Eigen::AngleAxisd(0.1 * k, Eigen::Vector3d(0.2, 1, 0.3).normalized()));
     m.keyframes[k]->setPose(Transformationd(q, Eigen::Vector3d(0.3 * k, -0.1 * k, 0.05 * k)));
   }
   const Transformationd T_G_2 = m.keyframes[2]->T_G_C(), T_G_3 = m.keyframes[3]->T_G_C();

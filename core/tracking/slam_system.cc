@@ -23,7 +23,7 @@ const SlamSystemConfig& validated(const SlamSystemConfig& config) {
 }  // namespace
 
 SlamSystem::SlamSystem(const TrackingCamera& camera, const SlamSystemConfig& config,
-                       const BinaryVocabulary* vocabulary)
+                       const BinaryVocabulary* vocabulary, ThreadStartHook on_thread_start)
     : camera_(camera),
       config_(validated(config)),
       vocabulary_(vocabulary),
@@ -56,8 +56,16 @@ SlamSystem::SlamSystem(const TrackingCamera& camera, const SlamSystemConfig& con
   local_mapper_.setPoseCallback([this](const KeyframePoseBatch& batch) {
     if (on_poses_) on_poses_(batch, PoseUpdateReason::kLocalBundleAdjustment);
   });
-  local_mapping_thread_ = std::thread([this] { local_mapper_.run(); });
-  if (loop_closer_) loop_closing_thread_ = std::thread([this] { loop_closer_->run(); });
+  local_mapping_thread_ = std::thread([this, on_thread_start] {
+    if (on_thread_start) on_thread_start("local mapping");
+    local_mapper_.run();
+  });
+  if (loop_closer_) {
+    loop_closing_thread_ = std::thread([this, on_thread_start] {
+      if (on_thread_start) on_thread_start("loop closing");
+      loop_closer_->run();
+    });
+  }
 }
 
 SlamSystem::~SlamSystem() { stop(); }

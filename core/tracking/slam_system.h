@@ -54,12 +54,17 @@ class SlamSystem {
  public:
   using KeyframeCallback = std::function<void(const KeyframeInfo&)>;
   using PoseCallback = std::function<void(const KeyframePoseBatch&, PoseUpdateReason)>;
+  /// Runs first on each thread the system starts, with its name ("local mapping", "loop
+  /// closing"), e.g. to lower its priority (the daemon's local_mapping / loop_closing
+  /// niceness: the tracking thread keeps the caller's). Threads these start later (global BA)
+  /// inherit what the OS passes on (on Linux, the niceness).
+  using ThreadStartHook = std::function<void(const std::string& thread)>;
 
   /// `vocabulary` may be null (no relocalization, reference keyframe tracking by
   /// projection); it must outlive the system. Throws std::invalid_argument for an invalid
   /// camera or config.
   SlamSystem(const TrackingCamera& camera, const SlamSystemConfig& config,
-             const BinaryVocabulary* vocabulary);
+             const BinaryVocabulary* vocabulary, ThreadStartHook on_thread_start = {});
   ~SlamSystem();
   SlamSystem(const SlamSystem&) = delete;
   SlamSystem& operator=(const SlamSystem&) = delete;

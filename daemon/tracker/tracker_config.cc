@@ -7,9 +7,9 @@
 #include <limits>
 #include <variant>
 
-#include "daemon/tracker/calibration_file.h"
 #include "daemon/common/input_silence.h"
 #include "daemon/common/yaml_config.h"
+#include "daemon/tracker/calibration_file.h"
 
 namespace cblox {
 namespace {
@@ -147,7 +147,7 @@ void loadLocalMapping(const YAML::Node& node, LocalMapperConfig* m) {
                     {"create_new_landmarks", &m->create_new_landmarks},
                     {"triangulation_neighbours", &m->triangulation.neighbours},
                     {"local_ba_max_keyframes", &m->local_ba_max_keyframes}},
-                   {"bundle_adjustment"})) {
+                   {"bundle_adjustment", "niceness"})) {
     return;
   }
   loadBundleAdjustment(node["bundle_adjustment"], path + ".bundle_adjustment",
@@ -170,7 +170,7 @@ void loadLoopClosing(const YAML::Node& node, SlamSystemConfig* slam) {
                     {"max_drift_ratio", &l.max_drift_ratio},
                     {"essential_graph_min_weight", &l.essential_graph_min_weight},
                     {"global_bundle_adjustment", &l.global_bundle_adjustment}},
-                   {"seed", "pose_graph", "global_ba"})) {
+                   {"seed", "pose_graph", "global_ba", "niceness"})) {
     return;
   }
   readInteger(node, path, "seed", 0, std::numeric_limits<uint32_t>::max(), &l.seed);
@@ -277,6 +277,12 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
   loadTracking(root["tracker"], &t.slam.tracker);
   loadLocalMapping(root["local_mapping"], &t.slam.local_mapping);
   loadLoopClosing(root["loop_closing"], &t.slam);
+  if (const YAML::Node n = root["local_mapping"]; n.IsDefined() && n.IsMap()) {
+    readInteger(n, "local_mapping", "niceness", 0, 19, &t.local_mapping_niceness);
+  }
+  if (const YAML::Node n = root["loop_closing"]; n.IsDefined() && n.IsMap()) {
+    readInteger(n, "loop_closing", "niceness", 0, 19, &t.loop_closing_niceness);
+  }
   const YAML::Node covariance = root["covariance"];
   if (readSection(covariance, "covariance",
                   {{"max_linearization_age_s", &t.covariance.max_linearization_age_s}},
@@ -326,14 +332,21 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
   return config;
 }
 
-std::optional<SlamSystemConfig> loadSlamSettings(const std::string& path, std::string* error) {
-  if (path.empty()) return SlamSystemConfig{};
+std::optional<TrackerNodeConfig> loadTrackerNodeSettings(const std::string& path,
+                                                         std::string* error) {
+  if (path.empty()) return TrackerNodeConfig{};
   try {
-    return loadTrackerConfig(YAML::LoadFile(path)).tracker.slam;
+    return loadTrackerConfig(YAML::LoadFile(path)).tracker;
   } catch (const std::exception& e) {
     if (error != nullptr) *error = path + ": " + e.what();
     return std::nullopt;
   }
+}
+
+std::optional<SlamSystemConfig> loadSlamSettings(const std::string& path, std::string* error) {
+  std::optional<TrackerNodeConfig> node = loadTrackerNodeSettings(path, error);
+  if (!node) return std::nullopt;
+  return node->slam;
 }
 
 }  // namespace cblox

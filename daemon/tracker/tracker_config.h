@@ -66,6 +66,10 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root);
 /// (no file). Returns std::nullopt and, when error is non-null, "<path>: <what>" when the
 /// file cannot be read or parsed or a key or value is bad. Thread-safe.
 std::optional<SlamSystemConfig> loadSlamSettings(const std::string& path, std::string* error);
+/// The same for the whole tracking part (TrackerNodeConfig: the SLAM settings and the SLAM
+/// threads' niceness, which cblox-bench-slam applies as the process does).
+std::optional<TrackerNodeConfig> loadTrackerNodeSettings(const std::string& path,
+                                                         std::string* error);
 
 /// Loads the calibration file into config->tracker.calibration when calibration_source is
 /// kFile (cleared otherwise; for the configured mode: cam1 only for stereo) and validates the

@@ -1,5 +1,5 @@
-#include "daemon/common/utime_ns.h"
 #include "daemon/tracker/tracker_node.h"
+#include "daemon/common/utime_ns.h"
 
 #include <algorithm>
 #include <climits>
@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "daemon/common/thread_priority.h"
 #include "daemon/common/time_restart.h"
 
 namespace cblox {
@@ -57,6 +58,12 @@ const char* initialPoseName(InitialPose initial_pose) {
 
 std::string TrackerNodeConfig::validate() const {
   if (std::string e = slam.validate(); !e.empty()) return e;
+  for (const auto& [name, niceness] : {std::pair("local_mapping_niceness", local_mapping_niceness),
+                                       std::pair("loop_closing_niceness", loop_closing_niceness)}) {
+    if (niceness < 0 || niceness > 19) {
+      return std::string(name) + " must be in [0, 19], got " + std::to_string(niceness);
+    }
+  }
   if (calibration) {
     if (std::string e = cblox::validate(calibration->intrinsics); !e.empty()) {
       return "calibration: " + e;
@@ -130,8 +137,8 @@ void TrackerNode::start() {
     }
     id_lease_ = std::make_unique<IdLeaseKeeper>(config_.checkpoint.dir, lease);
     checkpoints_ = std::make_unique<TrackerCheckpointWorker>(
-        std::move(checkpointer), config_.checkpoint.period_s,
-        [this] { return mapForCheckpoint(); }, [this](const std::string& line) { log(line); });
+        std::move(checkpointer), config_.checkpoint.period_s, [this] { return mapForCheckpoint(); },
+        [this](const std::string& line) { log(line); });
     checkpoints_->start();
   }
   tracking_thread_ = std::thread([this] { trackingLoop(); });
@@ -209,8 +216,7 @@ void TrackerNode::restorePending(SlamSystem* system, const TrackingCamera& camer
       resumed_keyframes_ = good;
       map_started_ = true;
       setState("lost: relocalizing in the resumed map");
-      log("resumed map restored: " + std::to_string(good) +
-          " keyframes; relocalizing in it");
+      log("resumed map restored: " + std::to_string(good) + " keyframes; relocalizing in it");
       return;
     } catch (const std::exception& e) {
       why = e.what();
@@ -220,7 +226,6 @@ void TrackerNode::restorePending(SlamSystem* system, const TrackingCamera& camer
   log("the saved map cannot be continued (" + why + "): starting a new map in epoch " +
       std::to_string(map_epoch_.load()));
 }
-
 
 bool TrackerNode::onFrame(TrackerFrame frame) {
   frames_received_.fetch_add(1, std::memory_order_relaxed);
@@ -332,7 +337,14 @@ bool TrackerNode::ensureSystem(const RectifiedStereoCalibration& calibration, st
       config_.close_depth_baselines);
   std::unique_ptr<SlamSystem> system;
   try {
-    system = std::make_unique<SlamSystem>(camera, config_.slam, vocabulary_);
+    system = std::make_unique<SlamSystem>(
+        camera, config_.slam, vocabulary_, [this](const std::string& thread) {
+          const int niceness = thread == "local mapping" ? config_.local_mapping_niceness
+                                                         : config_.loop_closing_niceness;
+          if (const std::string problem = lowerThreadPriority(niceness, false); !problem.empty()) {
+            log(thread + " thread: " + problem);
+          }
+        });
   } catch (const std::exception& e) {
     *error = std::string("cannot start the SLAM system: ") + e.what();
     return false;
@@ -379,8 +391,8 @@ void TrackerNode::onCovarianceRequest(KeyframeCovarianceRequest request, int32_t
   {
     std::lock_guard<std::mutex> lock(system_mutex_);
     if (map_epoch != map_epoch_.load()) {
-      why = "keyframes of map epoch " + std::to_string(map_epoch) + "; the tracker's map is epoch " +
-            std::to_string(map_epoch_.load());
+      why = "keyframes of map epoch " + std::to_string(map_epoch) +
+            "; the tracker's map is epoch " + std::to_string(map_epoch_.load());
     } else if (covariance_ && !stop_) {
       covariance_->submit(std::move(request));
       return;

@@ -26,9 +26,9 @@
 #include "daemon/common/checkpoint_config.h"
 #include "daemon/common/in_tray.h"
 #include "daemon/common/rate_limited_log.h"
+#include "daemon/common/timing_window.h"
 #include "daemon/tracker/ground_truth_buffer.h"
 #include "daemon/tracker/image_check.h"
-#include "daemon/common/timing_window.h"
 #include "daemon/tracker/tracker_checkpoint_worker.h"
 #include "daemon/tracker/tracker_input.h"
 #include "daemon/tracker/tracker_resume.h"
@@ -54,6 +54,12 @@ struct TrackerNodeConfig {
   TrackerMode mode = TrackerMode::kStereo;
   /// The sparse SLAM system (features, tracking, local mapping, loop closing).
   SlamSystemConfig slam;
+  /// Niceness (0-19) of the local mapping and the loop closing threads (and of the global BA
+  /// thread loop closing starts, which inherits it); the tracking thread keeps the process's.
+  /// On two cores local and global BA can run beside tracking at once: at 10 they yield to it
+  /// (the town's p95 frame 26-32 -> 22 ms on one core, BENCHMARKS.md). 0 = the same priority.
+  int local_mapping_niceness = 10;
+  int loop_closing_niceness = 10;
   /// The camera, fixed by configuration (a calibration file); absent: each frame's message
   /// carries it, and the first valid frame fixes it for the run.
   std::optional<RectifiedStereoCalibration> calibration;
@@ -135,11 +141,11 @@ struct TrackerStatus {
   uint64_t frames_not_initialized = 0;
   uint64_t relocalizations = 0;  ///< frames published RELOCALIZED
   uint64_t loop_corrected_frames = 0;
-  uint64_t keyframes = 0;     ///< CBLOX_KEYFRAME messages
-  uint64_t pose_batches = 0;  ///< CBLOX_KEYFRAME_POSES messages
+  uint64_t keyframes = 0;        ///< CBLOX_KEYFRAME messages
+  uint64_t pose_batches = 0;     ///< CBLOX_KEYFRAME_POSES messages
   uint64_t source_restarts = 0;  ///< time or frame ids went back (see restart_after_backwards_s)
   int32_t map_epoch = 0;         ///< the map in use: one more per restart with time going back
-  uint64_t landmarks = 0;     ///< landmarks in the map now
+  uint64_t landmarks = 0;        ///< landmarks in the map now
   uint64_t loops_closed = 0;
   uint64_t local_bundle_adjustments = 0;
   uint64_t global_bundle_adjustments = 0;
@@ -307,8 +313,8 @@ class TrackerNode {
   std::unique_ptr<TrackerCheckpointWorker> checkpoints_;
   std::atomic<uint64_t> id_lease_failures_{0}, resumed_keyframes_{0};
   // Tracking thread only.
-  bool pose_published_ = false;  // the last published frame had a pose
-  bool map_started_ = false;     // the tracker has initialised its map
+  bool pose_published_ = false;     // the last published frame had a pose
+  bool map_started_ = false;        // the tracker has initialised its map
   bool map_reset_pending_ = false;  // the next tracked pose is the new map's first (kMapReset)
   std::atomic<int32_t> map_epoch_{0};
 

@@ -45,6 +45,7 @@
 #include "core/io/tum_trajectory.h"
 #include "core/tracking/slam_system.h"
 #include "daemon/common/cli.h"
+#include "daemon/common/thread_priority.h"
 #include "daemon/tracker/tracker_config.h"
 #include "drivers/open_frame_source.h"
 
@@ -155,13 +156,22 @@ int run(int argc, char** argv) {
 
   const RectifiedStereoCalibration& calibration = *info.stereo;
   const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
-  std::optional<SlamSystemConfig> config = loadSlamSettings(config_path, &error);
-  if (!config) {
+  const std::optional<TrackerNodeConfig> node = loadTrackerNodeSettings(config_path, &error);
+  if (!node) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return 2;
   }
+  std::optional<SlamSystemConfig> config = node->slam;
   if (one_core) config->frames.parallel_stereo_extraction = false;
-  SlamSystem slam(camera, *config, &*vocabulary);
+  // The SLAM threads at the niceness cblox-tracker gives them (tracker.yaml's
+  // local_mapping.niceness and loop_closing.niceness).
+  SlamSystem slam(camera, *config, &*vocabulary, [&node](const std::string& thread) {
+    const int niceness =
+        thread == "local mapping" ? node->local_mapping_niceness : node->loop_closing_niceness;
+    if (const std::string problem = lowerThreadPriority(niceness, false); !problem.empty()) {
+      std::fprintf(stderr, "%s thread: %s\n", thread.c_str(), problem.c_str());
+    }
+  });
   std::mutex mutex;
   std::vector<LoopClosureEvent> loops;
   std::vector<double> ba_ms;

@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "daemon/tracker/calibration_file.h"
 #include "daemon/common/yaml_config.h"
+#include "daemon/tracker/calibration_file.h"
 #include "test/test_support/temp_dir.h"
 
 namespace cblox {
@@ -254,6 +254,31 @@ TEST(TrackerConfigTest, SlamSettingsOfAFile) {
   const std::optional<SlamSystemConfig> defaults = loadSlamSettings("", &error);
   ASSERT_TRUE(defaults.has_value());
   EXPECT_EQ(defaults->tracker.reference_ratio, TrackerConfig{}.reference_ratio);
+}
+
+// The SLAM threads' niceness: local_mapping.niceness and loop_closing.niceness, 10 by default,
+// within [0, 19].
+TEST(TrackerConfigTest, SlamThreadsNiceness) {
+  const test::TempDir dir("slam_niceness");
+  const std::string path = (dir.path() / "tracker.yaml").string();
+  std::string error;
+  const std::optional<TrackerNodeConfig> defaults = loadTrackerNodeSettings("", &error);
+  ASSERT_TRUE(defaults.has_value());
+  EXPECT_EQ(defaults->local_mapping_niceness, 10);
+  EXPECT_EQ(defaults->loop_closing_niceness, 10);
+  std::ofstream(path) << "local_mapping: {niceness: 3, fuse_radius: 2.5}\n"
+                         "loop_closing: {niceness: 0}\n";
+  const std::optional<TrackerNodeConfig> node = loadTrackerNodeSettings(path, &error);
+  ASSERT_TRUE(node.has_value()) << error;
+  EXPECT_EQ(node->local_mapping_niceness, 3);
+  EXPECT_EQ(node->loop_closing_niceness, 0);
+  EXPECT_EQ(node->slam.local_mapping.fuse_radius, 2.5f);
+  std::ofstream(path) << "loop_closing: {niceness: 20}\n";
+  EXPECT_FALSE(loadTrackerNodeSettings(path, &error).has_value());
+  EXPECT_NE(error.find("loop_closing.niceness"), std::string::npos) << error;
+  std::ofstream(path) << "local_mapping: {niceness: -1}\n";
+  EXPECT_FALSE(loadTrackerNodeSettings(path, &error).has_value());
+  EXPECT_NE(error.find("local_mapping.niceness"), std::string::npos) << error;
 }
 
 // The README's street-drive example loads and sets exactly what it says.

@@ -4,10 +4,14 @@
 
 #include "daemon/tracker/tracker_node.h"
 
+#include <sys/resource.h>
+
+#include <cerrno>
 #include <chrono>
 #include <climits>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <mutex>
 #include <string>
@@ -91,6 +95,7 @@ TEST(TrackerNodeTest, TracksRgbdFramesOfTheSimulatedRoom) {
   TrackerNodeConfig config;
   config.mode = TrackerMode::kRgbd;
   config.initial_pose = InitialPose::kGroundTruth;
+  config.local_mapping_niceness = 7;  // no other thread of this process has 7
   Collected out;
   TrackerNode node(config, nullptr, out.outputs());
   node.start();
@@ -119,6 +124,15 @@ TEST(TrackerNodeTest, TracksRgbdFramesOfTheSimulatedRoom) {
     ASSERT_TRUE(node.onFrame(std::move(input)));
     ASSERT_TRUE(node.waitUntilIdle(std::chrono::seconds(20)));  // no frame dropped
   }
+  // The local mapping thread runs at its niceness (no vocabulary: no loop closing thread).
+  int at_seven = 0;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/task")) {
+    errno = 0;
+    const int nice =
+        getpriority(PRIO_PROCESS, static_cast<id_t>(std::stol(entry.path().filename().string())));
+    at_seven += errno == 0 && nice == 7;
+  }
+  EXPECT_EQ(at_seven, 1);
   // With the map: the service thread answers from it.
   ASSERT_GE(out.keyframes.size(), 3u);
   const uint64_t last = out.keyframes.back().id,
@@ -309,7 +323,7 @@ TEST(TrackerNodeTest, TimeStampsAtTheExtremesAreCountedNotOverflowed) {
   EXPECT_TRUE(node.onFrame(smallFrame(1, 4035225266124964416)));
   EXPECT_TRUE(node.onFrame(smallFrame(2, -5548433881925943296)));  // back by 9.6e12 s
   EXPECT_TRUE(node.onFrame(smallFrame(3, INT64_MAX)));
-  EXPECT_TRUE(node.onFrame(smallFrame(4, INT64_MIN + 1)));  // back by 2^64 - 2 us
+  EXPECT_TRUE(node.onFrame(smallFrame(4, INT64_MIN + 1)));   // back by 2^64 - 2 us
   EXPECT_FALSE(node.onFrame(smallFrame(5, INT64_MIN + 1)));  // not after it
   const TrackerStatus s = node.status();
   EXPECT_EQ(s.source_restarts, 2u);
@@ -338,8 +352,8 @@ TEST(TrackerNodeTest, ATimeStepBackStartsANewMapInTheNextEpoch) {
       TrackerFrame input;
       TrackerProblem problem;
       ASSERT_TRUE(decodeRgbdFrame(
-          toDepthFrameMsg(frame, source->info(), utime, DepthEncoding::kUint16Millimetres),
-          &input, &problem, &error))
+          toDepthFrameMsg(frame, source->info(), utime, DepthEncoding::kUint16Millimetres), &input,
+          &problem, &error))
           << error;
       ASSERT_TRUE(node.onFrame(std::move(input)));
       ASSERT_TRUE(node.waitUntilIdle(std::chrono::seconds(20)));
@@ -400,6 +414,10 @@ TEST(TrackerNodeTest, InvalidConfigThrows) {
   EXPECT_THROW(TrackerNode(config, nullptr, {}), std::invalid_argument);
   config = TrackerNodeConfig{};
   config.slam.frames.orb.num_features = 0;
+  EXPECT_THROW(TrackerNode(config, nullptr, {}), std::invalid_argument);
+  config = TrackerNodeConfig{};
+  config.loop_closing_niceness = 20;
+  EXPECT_NE(config.validate().find("loop_closing_niceness"), std::string::npos);
   EXPECT_THROW(TrackerNode(config, nullptr, {}), std::invalid_argument);
 }
 

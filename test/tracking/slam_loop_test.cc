@@ -11,6 +11,7 @@
 #include <map>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -19,6 +20,43 @@
 
 namespace cblox {
 namespace {
+
+TEST(SlamSystemThreadsTest, TheStartHookRunsFirstOnEachOfTheSystemsThreads) {
+  // Local mapping and loop closing each call the hook once, on their own thread, before any
+  // work (the tracker daemon lowers their priority there).
+  std::string error;
+  const auto vocabulary = BinaryVocabulary::load(CBLOX_DEFAULT_VOCABULARY, &error);
+  ASSERT_TRUE(vocabulary.has_value()) << error;
+  const TrackingCamera camera =
+      makeTrackingCamera(PinholeIntrinsics{450.0, 450.0, 376.0, 240.0, 752, 480}, 0.11);
+  std::mutex mutex;
+  std::map<std::string, std::vector<std::thread::id>> calls;
+  {
+    SlamSystem slam(camera, SlamSystemConfig{}, &*vocabulary, [&](const std::string& thread) {
+      std::lock_guard<std::mutex> lock(mutex);
+      calls[thread].push_back(std::this_thread::get_id());
+    });
+  }  // joins the threads
+  ASSERT_EQ(calls.size(), 2u);
+  ASSERT_EQ(calls["local mapping"].size(), 1u);
+  ASSERT_EQ(calls["loop closing"].size(), 1u);
+  EXPECT_NE(calls["local mapping"][0], std::this_thread::get_id());
+  EXPECT_NE(calls["loop closing"][0], std::this_thread::get_id());
+  EXPECT_NE(calls["local mapping"][0], calls["loop closing"][0]);
+  // Without loop closing there is one thread; without a hook nothing is called.
+  calls.clear();
+  SlamSystemConfig no_loops;
+  no_loops.loop_closing_enabled = false;
+  {
+    SlamSystem slam(camera, no_loops, &*vocabulary, [&](const std::string& thread) {
+      std::lock_guard<std::mutex> lock(mutex);
+      calls[thread].push_back(std::this_thread::get_id());
+    });
+  }
+  EXPECT_EQ(calls.size(), 1u);
+  EXPECT_EQ(calls.count("local mapping"), 1u);
+  { SlamSystem slam(camera, SlamSystemConfig{}, &*vocabulary); }
+}
 
 TEST(SlamLoopTest, ClosesTheRoomLoopAndCorrectsTheKeyframes) {
   std::string error;

@@ -83,7 +83,6 @@ __attribute__((target("avx2,fma"))) void columnPassAvx2(const float* const (&row
                                                         const float* g, uint8_t* out) {
   const __m256 k0 = _mm256_set1_ps(g[3]), k1 = _mm256_set1_ps(g[4]), k2 = _mm256_set1_ps(g[5]),
                k3 = _mm256_set1_ps(g[6]);
-
   for (int next = 0; next < w;) {
     const int x = std::min(next, w - 16);
     // packs interleaves by 128-bit lane (pixels 0-3, 8-11 | 4-7, 12-15): the first permutation

@@ -161,6 +161,25 @@ __attribute__((target("avx2"))) __m256i arcStrengthAvx2(const __m256i (&e)[16]) 
   return best;
 }
 
+// quickCandidates16 for the 32 pixels at `p` (values `v`).
+__attribute__((target("avx2"))) unsigned quickCandidates32(const uint8_t* p, __m256i v,
+                                                           const std::array<int, 16>& offset,
+                                                           __m256i t) {
+  __m256i dark[4], bright[4];
+  for (size_t c = 0; c < 4; ++c) {
+    const __m256i q = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + offset[4 * c]));
+    dark[c] = _mm256_subs_epu8(v, q);
+    bright[c] = _mm256_subs_epu8(q, v);
+  }
+  __m256i best = _mm256_setzero_si256();
+  for (size_t c = 0; c < 4; ++c) {
+    best = _mm256_max_epu8(best, _mm256_min_epu8(dark[c], dark[(c + 1) & 3]));
+    best = _mm256_max_epu8(best, _mm256_min_epu8(bright[c], bright[(c + 1) & 3]));
+  }
+  return ~static_cast<unsigned>(
+      _mm256_movemask_epi8(_mm256_cmpeq_epi8(_mm256_subs_epu8(best, t), _mm256_setzero_si256())));
+}
+
 __attribute__((target("avx2"))) void scoreRowAvx2(const uint8_t* row, int w,
                                                   const std::array<int, 16>& offset, int threshold,
                                                   uint8_t* scores) {
@@ -172,24 +191,9 @@ __attribute__((target("avx2"))) void scoreRowAvx2(const uint8_t* row, int w,
     const uint8_t* p = row + start;
     const unsigned lanes = 0xFFFFFFFFu << (next - start);
     const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
-    {  // the quick test of quickCandidates16, 32 pixels at a time
-      __m256i dark[4], bright[4];
-      for (size_t c = 0; c < 4; ++c) {
-        const __m256i q = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + offset[4 * c]));
-        dark[c] = _mm256_subs_epu8(v, q);
-        bright[c] = _mm256_subs_epu8(q, v);
-      }
-      __m256i best = zero;
-      for (size_t c = 0; c < 4; ++c) {
-        best = _mm256_max_epu8(best, _mm256_min_epu8(dark[c], dark[(c + 1) & 3]));
-        best = _mm256_max_epu8(best, _mm256_min_epu8(bright[c], bright[(c + 1) & 3]));
-      }
-      const unsigned none = static_cast<unsigned>(
-          _mm256_movemask_epi8(_mm256_cmpeq_epi8(_mm256_subs_epu8(best, t), zero)));
-      if ((~none & lanes) == 0) {
-        next = start + 32;
-        continue;
-      }
+    if ((quickCandidates32(p, v, offset, t) & lanes) == 0) {
+      next = start + 32;
+      continue;
     }
     __m256i darker[16], brighter[16];
     for (size_t k = 0; k < 16; ++k) {

@@ -225,24 +225,10 @@ std::string BinaryVocabulary::buildTopology() {
 
 NodeId BinaryVocabulary::descend(const OrbDescriptor& descriptor, int depth,
                                  NodeId* at_depth) const {
-  NodeId node = 0;
-  NodeId marked = 0;
-  for (int level = 1; children_[node].count > 0; ++level) {
-    const uint32_t first = children_[node].first, end = first + children_[node].count;
-    NodeId best = first;
-    int best_distance = hammingDistance(descriptor, node_descriptor_[first]);
-    for (uint32_t c = first + 1; c < end; ++c) {
-      const int d = hammingDistance(descriptor, node_descriptor_[c]);
-      if (d < best_distance) {
-        best_distance = d;
-        best = c;
-      }
-    }
-    node = best;
-    if (level <= depth) marked = node;
-  }
+  NodeId leaf = 0, marked = 0;
+  descendBatch(&descriptor, 1, depth, &leaf, &marked);
   if (at_depth != nullptr) *at_depth = marked;
-  return node;
+  return leaf;
 }
 
 void BinaryVocabulary::descendBatch(const OrbDescriptor* descriptors, size_t n, int depth,

@@ -56,6 +56,17 @@ const char* initialPoseName(InitialPose initial_pose) {
   return initial_pose == InitialPose::kIdentity ? "identity" : "ground_truth";
 }
 
+SlamSystem::ThreadStartHook slamThreadPriorities(const TrackerNodeConfig& config,
+                                                 std::function<void(const std::string&)> log) {
+  return [local_mapping = config.local_mapping_niceness,
+          loop_closing = config.loop_closing_niceness, log](const std::string& thread) {
+    const int niceness = thread == "local mapping" ? local_mapping : loop_closing;
+    if (const std::string problem = lowerThreadPriority(niceness, false); !problem.empty()) {
+      log(thread + " thread: " + problem);
+    }
+  };
+}
+
 std::string TrackerNodeConfig::validate() const {
   if (std::string e = slam.validate(); !e.empty()) return e;
   for (const auto& [name, niceness] : {std::pair("local_mapping_niceness", local_mapping_niceness),
@@ -338,13 +349,8 @@ bool TrackerNode::ensureSystem(const RectifiedStereoCalibration& calibration, st
   std::unique_ptr<SlamSystem> system;
   try {
     system = std::make_unique<SlamSystem>(
-        camera, config_.slam, vocabulary_, [this](const std::string& thread) {
-          const int niceness = thread == "local mapping" ? config_.local_mapping_niceness
-                                                         : config_.loop_closing_niceness;
-          if (const std::string problem = lowerThreadPriority(niceness, false); !problem.empty()) {
-            log(thread + " thread: " + problem);
-          }
-        });
+        camera, config_.slam, vocabulary_,
+        slamThreadPriorities(config_, [this](const std::string& line) { log(line); }));
   } catch (const std::exception& e) {
     *error = std::string("cannot start the SLAM system: ") + e.what();
     return false;

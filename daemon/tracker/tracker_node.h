@@ -100,6 +100,12 @@ struct TrackerNodeConfig {
   std::string validate() const;
 };
 
+/// The SlamSystem thread-start hook of cblox-tracker: lowers the local mapping and the loop
+/// closing threads to config.local_mapping_niceness / loop_closing_niceness; what fails goes
+/// to `log` (the thread keeps running). cblox-bench-slam uses it too, to measure what runs.
+SlamSystem::ThreadStartHook slamThreadPriorities(const TrackerNodeConfig& config,
+                                                 std::function<void(const std::string&)> log);
+
 /// The published state of a frame (frame_pose_t's tracking states).
 enum class FramePoseState {
   kNotInitialized,

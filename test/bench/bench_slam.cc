@@ -45,8 +45,8 @@
 #include "core/io/tum_trajectory.h"
 #include "core/tracking/slam_system.h"
 #include "daemon/common/cli.h"
-#include "daemon/common/thread_priority.h"
 #include "daemon/tracker/tracker_config.h"
+#include "daemon/tracker/tracker_node.h"
 #include "drivers/open_frame_source.h"
 
 namespace cblox {
@@ -165,13 +165,10 @@ int run(int argc, char** argv) {
   if (one_core) config->frames.parallel_stereo_extraction = false;
   // The SLAM threads at the niceness cblox-tracker gives them (tracker.yaml's
   // local_mapping.niceness and loop_closing.niceness).
-  SlamSystem slam(camera, *config, &*vocabulary, [&node](const std::string& thread) {
-    const int niceness =
-        thread == "local mapping" ? node->local_mapping_niceness : node->loop_closing_niceness;
-    if (const std::string problem = lowerThreadPriority(niceness, false); !problem.empty()) {
-      std::fprintf(stderr, "%s thread: %s\n", thread.c_str(), problem.c_str());
-    }
-  });
+  SlamSystem slam(camera, *config, &*vocabulary,
+                  slamThreadPriorities(*node, [](const std::string& line) {
+                    std::fprintf(stderr, "%s\n", line.c_str());
+                  }));
   std::mutex mutex;
   std::vector<LoopClosureEvent> loops;
   std::vector<double> ba_ms;

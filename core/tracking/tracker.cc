@@ -132,6 +132,8 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
         result.T_C_G = current_.T_C_G;
         if (last_frame_.T_C_G) velocity_ = *current_.T_C_G * last_frame_.T_C_G->inverse();
         create_keyframe = needNewKeyframe(result.inliers);
+        if (reference_keyframe_ != nullptr)
+          T_current_reference_ = *current_.T_C_G * reference_keyframe_->T_G_C();
       } else {
         velocity_.reset();
       }
@@ -147,10 +149,15 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
       result.T_C_G = current_.T_C_G;
     }
   } else if (create_keyframe != KeyframeReason::kNone) {
+    if (after_tracking_hook_) after_tracking_hook_(true);
     computeBow();
     const UniqueLock lock = waitFor(UniqueLock(map_->mutex(), std::defer_lock));
+    followReferenceKeyframe();
+    result.T_C_G = current_.T_C_G;
     result.new_keyframe = createKeyframe();
     if (result.new_keyframe != nullptr) result.keyframe_reason = create_keyframe;
+  } else if (after_tracking_hook_ && state_ == TrackingState::kOk) {
+    after_tracking_hook_(false);
   }
   if (result.new_keyframe != nullptr && sink_ != nullptr)
     sink_->insertKeyframe(result.new_keyframe);
@@ -163,10 +170,11 @@ TrackingResult Tracker::track(uint64_t frame_id, int64_t timestamp_ns,
   }
   last_frame_ = current_;
   current_features_.reset();  // shared from here on (last frame, maybe a keyframe)
-  if (current_.T_C_G && reference_keyframe_ != nullptr) {
-    const SharedLock lock = waitFor(SharedLock(map_->mutex(), std::defer_lock));
+  if (result.state == TrackingState::kOk && current_.T_C_G && reference_keyframe_ != nullptr) {
+    // As read under the lock the frame was tracked with (or identity to the keyframe it just
+    // made): a pose the map has moved since is not mixed with the reference's new one.
     last_reference_ = reference_keyframe_;
-    T_last_reference_ = *current_.T_C_G * reference_keyframe_->T_G_C();
+    T_last_reference_ = result.new_keyframe != nullptr ? Transformationd() : T_current_reference_;
   } else {
     last_reference_ = nullptr;
   }
@@ -641,6 +649,11 @@ int Tracker::searchKeyframeLandmarks(const Keyframe& keyframe, float th) {
   FeatureMatcherConfig matcher;
   matcher.nn_ratio = 0.9f;
   return searchLocalLandmarks(&current_, projections, th, matcher, pyramid_);
+}
+
+void Tracker::followReferenceKeyframe() {
+  if (reference_keyframe_ == nullptr || !current_.T_C_G) return;
+  current_.T_C_G = T_current_reference_ * reference_keyframe_->T_C_G();
 }
 
 void Tracker::updateLastFramePose() {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -104,6 +105,16 @@ class Tracker {
   /// that map, so the next frames relocalize against its keyframes.
   void resumeLost();
 
+  /// Runs on the tracking thread each time a frame has been tracked and the map's shared lock
+  /// released, before the frame's keyframe (if it makes one) is inserted under the exclusive
+  /// lock: the window in which loop closing or local mapping may move the map's poses. The
+  /// tracker re-expresses the frame's pose on its reference keyframe after this window, so a
+  /// correction there moves the frame with the map. Its argument: whether the frame makes a
+  /// keyframe. Tests move the map from this hook; empty (the default) runs nothing.
+  void setAfterTrackingHook(std::function<void(bool makes_keyframe)> hook) {
+    after_tracking_hook_ = std::move(hook);
+  }
+
   TrackingState state() const { return state_; }
   /// The last tracked frame (its pose is set when the state is kOk).
   const Frame& lastFrame() const { return last_frame_; }
@@ -141,6 +152,11 @@ class Tracker {
   // The last frame's pose follows its reference keyframe's (moved by local BA or loop
   // closure since): ORB-SLAM2's UpdateLastFrame.
   void updateLastFramePose();
+  // The current frame's pose from its reference keyframe's present pose and
+  // T_current_reference_ (the map's lock held): a correction made since the frame was tracked
+  // moves it too. Without this a keyframe made right after a loop correction kept the
+  // uncorrected pose, and its new landmarks were placed there.
+  void followReferenceKeyframe();
 
   SparseMap* map_;
   TrackingCamera camera_;
@@ -166,6 +182,11 @@ class Tracker {
   Frame last_frame_;
   std::optional<Transformationd> velocity_;  // T_Ccur_Clast
   Keyframe* reference_keyframe_ = nullptr;
+  // T_Ccur_Kref of the current frame, read under the lock it was tracked with: after that lock
+  // is released the map may move (a loop correction, a global BA), and the frame follows its
+  // reference keyframe (followReferenceKeyframe).
+  Transformationd T_current_reference_;
+  std::function<void(bool)> after_tracking_hook_;
   Keyframe* last_reference_ = nullptr;  // last frame's reference keyframe
   Transformationd T_last_reference_;    // T_Clast_Kref
   std::vector<Keyframe*> local_keyframes_;

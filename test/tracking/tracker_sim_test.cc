@@ -430,5 +430,89 @@ TEST(TrackerSimTest, CulledKeyframesFollowTheirAncestorInThePublishedPoses) {
               s.keyframes, static_cast<unsigned long>(s.mapping.keyframes_culled), culled_checked);
 }
 
+// A loop correction (or a global BA) that moves the map between the moment a frame is tracked
+// and the moment its keyframe is inserted: the frame follows its reference keyframe, so the
+// keyframe is made at the corrected pose and its new landmarks with it. Without this the
+// keyframe kept the uncorrected pose (1.5 m and 8 degrees off here); in the running process
+// that put the map's newest keyframes beside the corrected ones, and the next loops found them
+// metres apart. The map is moved rigidly (G' = S G) once at a frame that makes a keyframe and
+// once at one that does not; every later frame must be at S times its true pose.
+TEST(TrackerSimTest, AFrameFollowsAMapCorrectedWhileItWasBeingTracked) {
+  std::string error;
+  SourceConfig options;
+  options.trajectory = "loop";
+  options.max_frames = 70;
+  std::unique_ptr<FrameSource> source = openFrameSource("sim:room", options, &error);
+  ASSERT_NE(source, nullptr) << error;
+  const RectifiedStereoCalibration& calibration = *source->info().stereo;
+  const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
+  FrameBuilder builder(camera, FrameBuilderConfig{}, nullptr);
+  SparseMap map;
+  TrackerConfig config;
+  config.min_frames_between_keyframes = 8;  // keyframes without a local mapper
+  config.max_frames_between_keyframes = 8;
+  Tracker tracker(&map, camera, builder.pyramid(), config, nullptr, nullptr);
+  // Each move: 8 degrees about the vertical and 1.5 m sideways.
+  const Transformationd S(
+      Eigen::Quaterniond(Eigen::AngleAxisd(8.0 * M_PI / 180.0, Eigen::Vector3d::UnitY())),
+      Eigen::Vector3d(1.5, 0.0, 0.4));
+  Transformationd T_Gnow_G;  // every move so far
+  int index = 0, moved_at_keyframe = -1, moved_at_frame = -1;
+  tracker.setAfterTrackingHook([&](bool makes_keyframe) {
+    const bool move = (makes_keyframe && moved_at_keyframe < 0 && index >= 20) ||
+                      (!makes_keyframe && moved_at_keyframe >= 0 && moved_at_frame < 0 &&
+                       index >= moved_at_keyframe + 10);
+    if (!move) return;
+    (makes_keyframe ? moved_at_keyframe : moved_at_frame) = index;
+    std::unique_lock<std::shared_mutex> lock(map.mutex());
+    map.bumpChangeIndex();
+    for (Keyframe* k : map.keyframes()) k->setPose(k->T_C_G() * S.inverse());
+    for (Landmark* l : map.landmarks()) {
+      l->setPosition(S * l->position());
+      l->updateNormalAndDepth(builder.pyramid());
+    }
+    T_Gnow_G = S * T_Gnow_G;
+  });
+  CaptureFrame frame;
+  double max_error_after = 0.0;
+  int checked = 0;
+  while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+    const std::shared_ptr<FrameFeatures> features = builder.fromStereo(frame.left, frame.right);
+    const TrackingResult r = tracker.track(static_cast<uint64_t>(frame.frame_id),
+                                           frame.timestamp_ns, features, frame.T_G_C->inverse());
+    ASSERT_EQ(r.state, TrackingState::kOk) << "frame " << index << ": " << r.reason;
+    if (index == moved_at_keyframe) {
+      ASSERT_NE(r.new_keyframe, nullptr);
+      std::shared_lock<std::shared_mutex> lock(map.mutex());
+      const Transformationd expected = T_Gnow_G * *frame.T_G_C;
+      EXPECT_LT((r.new_keyframe->T_G_C().translation() - expected.translation()).norm(), 0.05)
+          << "the keyframe made across the correction";
+      EXPECT_LT(
+          r.new_keyframe->T_G_C().rotation().angularDistance(expected.rotation()) * 180.0 / M_PI,
+          0.5);
+    }
+    if (moved_at_keyframe >= 0 && index > moved_at_keyframe) {
+      // The frame the map moved under (not a keyframe) was published at its tracked pose;
+      // every frame after it is in the moved map.
+      const bool published_before_move = index == moved_at_frame;
+      const Transformationd expected =
+          (published_before_move ? S.inverse() * T_Gnow_G : T_Gnow_G) * *frame.T_G_C;
+      const double e = (r.T_C_G->inverse().translation() - expected.translation()).norm();
+      max_error_after = std::max(max_error_after, e);
+      EXPECT_LT(e, 0.05) << "frame " << index;
+      ++checked;
+    }
+    ++index;
+  }
+  EXPECT_EQ(index, 70);
+  EXPECT_GE(moved_at_keyframe, 20);
+  EXPECT_GT(moved_at_frame, moved_at_keyframe);
+  EXPECT_GT(checked, 30);
+  std::printf(
+      "[ measured ] map moved at frames %d (keyframe) and %d; %d frames after, max error "
+      "%.4f m\n",
+      moved_at_keyframe, moved_at_frame, checked, max_error_after);
+}
+
 }  // namespace
 }  // namespace cblox

@@ -205,6 +205,11 @@ void LocalMapper::localBundleAdjustment(Keyframe* keyframe) {
   {
     std::shared_lock<std::shared_mutex> lock(map_->mutex());
     if (keyframe->bad() || map_->numKeyframes() <= 2) return;
+    if (map_->correctionPending()) {  // half of the map corrected: the next keyframe's BA
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      ++stats_.bundle_adjustments_discarded;
+      return;
+    }
     change_index = map_->changeIndex();
     // Window: the keyframe and its covisible keyframes, by shared landmarks (all of them, or
     // the best local_ba_max_keyframes).

@@ -65,7 +65,8 @@ struct LocalMapperStats {
   uint64_t keyframes_culled = 0;
   uint64_t bundle_adjustments = 0;
   uint64_t bundle_adjustments_aborted = 0;
-  uint64_t bundle_adjustments_discarded = 0;  ///< stale after a loop correction
+  /// Stale after a loop correction, or not started while one was half done.
+  uint64_t bundle_adjustments_discarded = 0;
   double last_ba_ms = 0.0;
   size_t largest_ba_window = 0;  ///< most keyframes optimised (not fixed) by one local BA
   /// The last local BA's size: keyframes optimised (the gauge, keyframe 0, counts as fixed

@@ -5,11 +5,11 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
-#include <thread>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/features/scale_pyramid.h"
@@ -66,6 +66,12 @@ struct LoopClosureEvent {
   int inliers = 0;             ///< matches after verification
   double correction_m = 0.0;   ///< how far the query keyframe moved, metres
   double correction_ms = 0.0;  ///< time of the correction (pose graph included)
+  /// Of correction_ms, the time the map's exclusive lock was held (tracking waits for it).
+  double locked_ms = 0.0;
+  /// Of correction_ms, the essential graph's optimisation (without the lock), and its size.
+  double graph_ms = 0.0;
+  int graph_keyframes = 0;
+  int graph_edges = 0;
 };
 
 struct LoopCloserStats {
@@ -76,6 +82,9 @@ struct LoopCloserStats {
   /// within loops_rejected when no other candidate of the keyframe passed).
   uint64_t loops_rejected_drift = 0;
   uint64_t loops_closed = 0;
+  /// Corrections whose essential graph could not be solved (invalid input): the query's
+  /// group was corrected, the rest of the map left as it was.
+  uint64_t essential_graphs_failed = 0;
   uint64_t global_bundle_adjustments = 0;
   /// Global BAs stopped by a newer loop or by stop(), or whose result was stale (the map
   /// was corrected meanwhile) and not applied.
@@ -92,8 +101,14 @@ struct LoopCloserStats {
 /// landmark follows its reference keyframe, and a global BA refines everything.
 ///
 /// Threads: insertKeyframe from the local mapping thread; run() on the loop closing thread.
-/// The correction holds the map's exclusive lock (tracking waits, as in ORB-SLAM2) and bumps
-/// SparseMap::changeIndex(), which makes an in-flight local BA discard its result. The global
+/// The correction takes the map's exclusive lock twice (tracking waits then): to move the
+/// query's covisible group, fuse the loop's landmarks and read the essential graph, then to
+/// apply the graph's solution, which is computed between the two without the lock (ORB-SLAM2
+/// holds it throughout: 0.7 s of tracking on the town's 680 keyframes). A keyframe made
+/// meanwhile follows its parent, and local mapping starts no local BA meanwhile
+/// (SparseMap::correctionPending: the keyframes it would hold fixed may be uncorrected ones).
+/// Each of the two bumps SparseMap::changeIndex(), which makes an in-flight local BA discard
+/// its result, and the tracker's frame in hand follows its reference keyframe. The global
 /// BA after a correction runs on a thread of its own (ORB-SLAM2's RunGlobalBundleAdjustment),
 /// so the loop closing thread goes on checking keyframes meanwhile (on 1000 keyframes a
 /// global BA takes seconds); a newer loop correction aborts it first, and a result the map
@@ -108,7 +123,9 @@ class LoopCloser {
              const ScalePyramid& pyramid, const LoopCloserConfig& config);
 
   void setLoopCallback(LoopCallback callback) { on_loop_ = std::move(callback); }
-  /// All keyframe poses after a correction (global_ba false) or after global BA (true).
+  /// Poses of keyframes a correction moved (global_ba false: the query's covisible group once
+  /// it is moved, then every keyframe once the essential graph is applied) or after global BA
+  /// (true: every keyframe).
   void setPoseCallback(PoseCallback callback) { on_poses_ = std::move(callback); }
 
   /// Queues a keyframe local mapping has finished. Thread-safe.

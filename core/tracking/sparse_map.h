@@ -121,6 +121,13 @@ class SparseMap {
   /// knows poses jumped. Shared lock to read, exclusive to bump.
   int changeIndex() const { return change_index_; }
   void bumpChangeIndex() { ++change_index_; }
+  /// True while a loop correction is half done: between LoopCloser::correct's two exclusive
+  /// phases the query's covisible group is corrected and the rest of the map is not yet (its
+  /// essential graph is being solved without the lock). Local mapping starts no local BA then:
+  /// the keyframes it would hold fixed may be the uncorrected ones. Shared lock to read,
+  /// exclusive to set.
+  bool correctionPending() const { return correction_pending_; }
+  void setCorrectionPending(bool pending) { correction_pending_ = pending; }
 
  private:
   mutable std::shared_mutex mutex_;
@@ -128,6 +135,7 @@ class SparseMap {
   size_t num_good_keyframes_ = 0;
   absl::flat_hash_map<LandmarkId, std::shared_ptr<Landmark>> landmarks_;
   LandmarkId next_landmark_id_ = 0;
+  bool correction_pending_ = false;
   int change_index_ = 0;
 };
 

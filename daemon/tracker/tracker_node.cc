@@ -366,12 +366,14 @@ bool TrackerNode::ensureSystem(const RectifiedStereoCalibration& calibration, st
     if (outputs_.keyframe_poses) outputs_.keyframe_poses(batch, reason);
   });
   system->setLoopCallback([this](const LoopClosureEvent& event) {
-    char text[192];
+    char text[256];
     std::snprintf(text, sizeof(text),
                   "loop closed: keyframe %lld matches keyframe %lld (%d inliers); corrected by "
-                  "%.3f m in %.1f ms",
+                  "%.3f m in %.1f ms (essential graph of %d keyframes, %d edges: %.1f ms; "
+                  "the map locked %.1f ms)",
                   static_cast<long long>(event.query), static_cast<long long>(event.candidate),
-                  event.inliers, event.correction_m, event.correction_ms);
+                  event.inliers, event.correction_m, event.correction_ms, event.graph_keyframes,
+                  event.graph_edges, event.graph_ms, event.locked_ms);
     log(text);
   });
   log(std::string(trackerModeName(config_.mode)) + " camera " + describeCamera(camera.intrinsics) +

@@ -299,8 +299,12 @@ int run(int argc, char** argv) {
   const Ate ate_online = ate(truth, online), ate_before = ate(truth, before_loop),
             ate_keyframes = ate(truth, keyframes_final);
   const LoopCloserStats lc = slam.loopClosingStats();
-  std::vector<double> correction_ms;
-  for (const auto& e : loops) correction_ms.push_back(e.correction_ms);
+  std::vector<double> correction_ms, graph_ms, locked_ms;
+  for (const auto& e : loops) {
+    correction_ms.push_back(e.correction_ms);
+    graph_ms.push_back(e.graph_ms);
+    locked_ms.push_back(e.locked_ms);
+  }
 
   std::printf("scene %s/%s x%d: %zu frames (%.1f m), %zu lost, %zu keyframes\n", scene.c_str(),
               trajectory.c_str(), laps, frames.size(), path, lost, slam.map().numKeyframes());
@@ -344,10 +348,11 @@ int run(int argc, char** argv) {
       percentile(ba_observations, 0.95));
   std::printf(
       "  loops: %zu closed (%zu false), %lu rejected after verification (%lu candidates by "
-      "the drift gate); correction median %.1f ms; global BA %lu (last %.0f ms, on its own "
-      "thread; %lu abandoned)\n",
+      "the drift gate); correction median %.1f ms (essential graph %.1f ms, the map locked "
+      "%.1f ms); global BA %lu (last %.0f ms, on its own thread; %lu abandoned)\n",
       loops.size(), false_loops, static_cast<unsigned long>(lc.loops_rejected),
       static_cast<unsigned long>(lc.loops_rejected_drift), percentile(correction_ms, 0.5),
+      percentile(graph_ms, 0.5), percentile(locked_ms, 0.5),
       static_cast<unsigned long>(lc.global_bundle_adjustments), lc.last_global_ba_ms,
       static_cast<unsigned long>(lc.global_bundle_adjustments_abandoned));
   std::printf("  CPU: %.2f cores over %.1f s\n", cpu_s / wall_s, wall_s);
@@ -394,6 +399,8 @@ int run(int argc, char** argv) {
         {"false_loops", false_loops},
         {"loops_rejected_drift", lc.loops_rejected_drift},
         {"loop_correction_ms_median", percentile(correction_ms, 0.5)},
+        {"loop_essential_graph_ms_median", percentile(graph_ms, 0.5)},
+        {"loop_locked_ms_median", percentile(locked_ms, 0.5)},
         {"global_ba_ms_last", lc.last_global_ba_ms},
         {"cpu_cores", cpu_s / wall_s},
         {"ate_before_loop_m", ate_before.rmse},

@@ -15,6 +15,7 @@
 
 #include "core/features/scale_pyramid.h"
 #include "core/tracking/feature_grid.h"
+#include "core/tracking/solved_poses.h"
 
 namespace cblox {
 namespace {
@@ -299,6 +300,75 @@ TEST(SparseMapTest, CulledKeyframesFollowTheirGoodAncestorInPoseBatches) {
   KeyframePoseBatch other{{4, m.keyframes[4]->T_G_C()}};
   m.map.moveCulledKeyframes(&other);
   EXPECT_EQ(other.size(), 1u);
+}
+
+// A solution read from the map, solved without its lock and applied after (the loop
+// closer's essential graph): keyframes get the solved poses, a keyframe a local BA moved
+// meanwhile keeps that change on top, keyframes made meanwhile follow their parent (a chain
+// of two), and landmarks keep their place in the frame of the keyframe that placed them, or
+// of the one they were moved with.
+TEST(SparseMapTest, SolvedPosesApplyToTheMapAsItIsNow) {
+  SmallMap m;
+  buildChain(&m, 4);
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Quaterniond q(
+        Eigen::AngleAxisd(0.1 * k, Eigen::Vector3d(0.2, 1, 0.3).normalized()));
+    m.keyframes[k]->setPose(Transformationd(q, Eigen::Vector3d(0.3 * k, -0.1 * k, 0.05 * k)));
+  }
+  std::vector<Transformationd> read;
+  for (const Keyframe* k : m.keyframes) read.push_back(k->T_C_G());
+  const auto exp6 = [](double a, double b, double c, double d, double e, double f) {
+    return Transformationd::exp((Transformationd::Vec6() << a, b, c, d, e, f).finished());
+  };
+  // The solution moves the world rigidly (G' = W G), and keyframe 2 by E besides.
+  const Transformationd W = exp6(1.0, 2.0, -0.5, 0.1, -0.2, 0.3);
+  const Transformationd E = exp6(0.3, 0.0, 0.1, 0.0, 0.05, 0.0);
+  std::vector<Transformationd> solved;
+  for (int k = 0; k < 4; ++k)
+    solved.push_back((k == 2 ? E : Transformationd()) * read[k] * W.inverse());
+
+  // Meanwhile: a local BA moves keyframe 2 by D; keyframe 4 is made next to 3 (parent 3) with
+  // landmarks 100-119 of its own, keyframe 5 sees only those (parent 4).
+  const Transformationd D = exp6(0.05, -0.02, 0.01, 0.02, 0.0, -0.01);
+  m.keyframes[2]->setPose(D * read[2]);
+  Keyframe* k4 = m.map.addKeyframe(40, 4000, makeFeatures(200), exp6(0.4, 0, 0.1, 0, 0.2, 0));
+  Keyframe* k5 = m.map.addKeyframe(50, 5000, makeFeatures(200), exp6(0.5, 0, 0.2, 0, 0.3, 0));
+  for (int l = 80; l < 100; ++l) {
+    SparseMap::addObservation(k4, static_cast<uint32_t>(l - 80 + 100), m.landmarks[l]);
+  }
+  for (int l = 100; l < 120; ++l) {
+    m.landmarks.push_back(m.map.addLandmark(Eigen::Vector3d(0.02 * l, 0.5, 4), k4).get());
+    SparseMap::addObservation(k4, static_cast<uint32_t>(l - 100 + 120), m.landmarks[l]);
+    SparseMap::addObservation(k5, static_cast<uint32_t>(l - 100 + 100), m.landmarks[l]);
+  }
+  k4->updateConnections();
+  k5->updateConnections();
+  ASSERT_EQ(k4->parent(), m.keyframes[3]);
+  ASSERT_EQ(k5->parent(), k4);
+  const Transformationd T_C4 = k4->T_C_G(), T_C5 = k5->T_C_G();
+  std::vector<Eigen::Vector3d> p_before;
+  for (const Landmark* l : m.landmarks) p_before.push_back(l->position());
+  // Landmark 5 (placed by keyframe 0) was moved with keyframe 2 when the problem was read.
+  const std::map<LandmarkId, const Keyframe*> anchor_of{{m.landmarks[5]->id, m.keyframes[2]}};
+
+  const ScalePyramid pyramid(8, 1.2);
+  applySolvedPoses(&m.map, m.keyframes, read, solved, anchor_of, pyramid);
+
+  for (int k : {0, 1, 3}) EXPECT_TRUE(m.keyframes[k]->T_C_G().isApprox(solved[k], 1e-12)) << k;
+  EXPECT_TRUE(m.keyframes[2]->T_C_G().isApprox(D * solved[2], 1e-12));
+  EXPECT_TRUE(k4->T_C_G().isApprox(T_C4 * W.inverse(), 1e-12));  // its parent moved by W
+  EXPECT_TRUE(k5->T_C_G().isApprox(T_C5 * W.inverse(), 1e-12));  // so did its parent's
+  // Keyframe 2 went from D read[2] to D E read[2] W^-1: its landmarks (40-59, and 5) by
+  // T_G_C2_new T_C2_G_before = W read[2]^-1 E^-1 read[2]; all others by W.
+  const Transformationd by2 = W * read[2].inverse() * E.inverse() * read[2];
+  for (size_t l = 0; l < m.landmarks.size(); ++l) {
+    const bool with2 = (l >= 40 && l < 60) || l == 5;
+    const Eigen::Vector3d expected = (with2 ? by2 : W) * p_before[l];
+    EXPECT_LT((m.landmarks[l]->position() - expected).norm(), 1e-9) << "landmark " << l;
+  }
+  EXPECT_THROW(
+      applySolvedPoses(&m.map, m.keyframes, read, std::span(solved).first(3), anchor_of, pyramid),
+      std::invalid_argument);
 }
 
 TEST(SparseMapTest, ReplacingALandmarkMovesItsObservations) {

@@ -47,7 +47,8 @@ using MapCheck = std::function<void(const SparseMap&, const RunStats&)>;
 RunStats runTracker(const std::string& spec, const std::string& trajectory, size_t frames,
                     bool local_mapping, const TrackerConfig& config = TrackerConfig{},
                     const LocalMapperConfig& mapping_config = LocalMapperConfig{},
-                    const MapCheck& check = nullptr, bool fail_on_lost = true) {
+                    const MapCheck& check = nullptr, bool fail_on_lost = true,
+                    const std::function<void(SparseMap*)>& prepare = nullptr) {
   SourceConfig options;
   options.trajectory = trajectory;
   options.max_frames = frames;
@@ -60,6 +61,7 @@ RunStats runTracker(const std::string& spec, const std::string& trajectory, size
   const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
   FrameBuilder builder(camera, FrameBuilderConfig{}, nullptr);
   SparseMap map;
+  if (prepare) prepare(&map);
   LocalMapper mapper(&map, camera, builder.pyramid(), mapping_config);
   mapper.setPoseCallback([&stats](const KeyframePoseBatch& batch) {
     for (const auto& [id, T_G_C] : batch) stats.published.insert_or_assign(id, T_G_C);
@@ -390,6 +392,25 @@ TEST(TrackerSimTest, LocalBundleAdjustmentWindowIsBounded) {
   LocalMapperConfig negative;
   negative.local_ba_max_keyframes = -1;
   EXPECT_NE(negative.validate().find("local_ba_max_keyframes"), std::string::npos);
+}
+
+// While a loop correction is half done (its essential graph solved without the map's lock,
+// part of the map corrected and part not), local mapping starts no local BA: the keyframes
+// it would hold fixed may be uncorrected. The same run without it runs local BAs.
+TEST(TrackerSimTest, NoLocalBundleAdjustmentStartsWhileACorrectionIsHalfDone) {
+  TrackerConfig tracking;
+  tracking.max_frames_between_keyframes = 5;
+  const RunStats normal = runTracker("sim:room", "loop", 90, true, tracking);
+  const RunStats pending =
+      runTracker("sim:room", "loop", 90, true, tracking, {}, nullptr, true, [](SparseMap* map) {
+        std::unique_lock<std::shared_mutex> lock(map->mutex());
+        map->setCorrectionPending(true);
+      });
+  EXPECT_GT(normal.mapping.bundle_adjustments, 0u);
+  EXPECT_EQ(pending.ok, 90);
+  EXPECT_GT(pending.mapping.keyframes_processed, 3u);
+  EXPECT_EQ(pending.mapping.bundle_adjustments, 0u);
+  EXPECT_GT(pending.mapping.bundle_adjustments_discarded, 0u);
 }
 
 // Keyframe culling with the dense mapper's anchors: a culled keyframe stays tied to its first

@@ -106,6 +106,16 @@ CBLOX_BIN="$bin" LOG="$log" WORK="$work" TRACKER_CONFIG="$tracker_config" \
   sample >> samples.txt
   sleep 3
   sample >> samples.txt
+  threads() {  # one line per live thread: name, CPU ticks since it started; then the process
+    for t in /proc/$1/task/*; do
+      local f=($(sed "s/^.*) //" $t/stat))
+      echo "$(tr " " "_" < $t/comm) $(( f[11] + f[12] ))"
+    done
+    local f=($(sed "s/^.*) //" /proc/$1/stat))
+    echo "(process) $(( f[11] + f[12] ))"
+  }
+  threads $tracker > threads_tracker.txt
+  threads $mapper > threads_mapper.txt
   for p in $tracker $mapper; do awk "/^VmHWM/ {print \$2}" /proc/$p/status; done > hwm.txt
   kill -TERM $tracker $mapper
   wait $tracker; echo $? > tracker.status
@@ -167,6 +177,25 @@ if mp:
                  f"{mp[0]} integrated, {mp[1]} dropped, {mp[2]} rejected; {mp[3]} subvolumes; "
                  f"integration median {mp[4]} ms, p99 {mp[5]} ms |")
 lines.append(f"| tracker + mapper | **{share(both):.2f}** | {window_max(both)} | {sum(hwm):.0f} MiB | |")
+lines.append("")
+# Per thread (cblox names its threads cblox-<job>; others keep the process's name): CPU
+# seconds since each started (the 2 s before the replay included), over the replay's wall
+# time; "ended" is what threads that ended before the end took (the global BA's).
+for proc in ("tracker", "mapper"):
+    try:
+        rows_t = [l.split() for l in open(f"{work}/threads_{proc}.txt") if l.strip()]
+    except OSError:
+        continue
+    total = next(float(v) for n, v in rows_t if n == "(process)") / clk
+    by_name = {}
+    for n, v in rows_t:
+        if n != "(process)":
+            by_name[n] = by_name.get(n, 0.0) + float(v) / clk
+    ended = total - sum(by_name.values())
+    parts = [f"{n} {c / wall:.2f}" for n, c in sorted(by_name.items(), key=lambda x: -x[1]) if c / wall >= 0.005]
+    if ended / wall >= 0.005:
+        parts.append(f"ended {ended / wall:.2f}")
+    lines.append(f"cblox-{proc} by thread (cores): " + ", ".join(parts) + ".")
 lines.append("")
 lines.append(f"Exit status: tracker {status['tracker']}, mapper {status['mapper']}, "
              f"lcm-logplayer {status['logplayer']}.")

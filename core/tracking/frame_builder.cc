@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/common/thread_name.h"
 #include "core/features/rgbd_depth.h"
 
 namespace cblox {
@@ -32,7 +33,11 @@ FrameBuilder::FrameBuilder(const TrackingCamera& camera, const FrameBuilderConfi
   if (std::string e = config.validate(); !e.empty()) {
     throw std::invalid_argument("FrameBuilder: " + e);
   }
-  if (config_.parallel_stereo_extraction) worker_ = std::thread([this] { rightWorker(); });
+  if (config_.parallel_stereo_extraction)
+    worker_ = std::thread([this] {
+      nameThisThread("cblox-extract");
+      rightWorker();
+    });
 }
 
 FrameBuilder::~FrameBuilder() {

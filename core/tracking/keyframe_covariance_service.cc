@@ -15,6 +15,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "core/common/thread_name.h"
 #include "core/covariance/batch_covariance_solver.h"
 #include "core/covariance/constrained_ordering_solver.h"
 #include "core/covariance/kaess_recovery_solver.h"
@@ -92,12 +93,12 @@ struct ResolvedKeyframe {
 
 // `id` as a linearization with gauge `gauge` and reduced camera matrix S sees it. Map's
 // shared lock.
-ResolvedKeyframe resolveKeyframe(const SparseMap& map, uint64_t gauge,
-                                 const ReducedCameraMatrix& S, uint64_t id) {
+ResolvedKeyframe resolveKeyframe(const SparseMap& map, uint64_t gauge, const ReducedCameraMatrix& S,
+                                 uint64_t id) {
   ResolvedKeyframe r;
   r.block = id;
-  const std::optional<KeyframeAncestor> a = SparseMap::goodAncestor(
-      map.keyframe(static_cast<KeyframeId>(id)), [&](const Keyframe& k) {
+  const std::optional<KeyframeAncestor> a =
+      SparseMap::goodAncestor(map.keyframe(static_cast<KeyframeId>(id)), [&](const Keyframe& k) {
         return k.id == static_cast<KeyframeId>(gauge) || S.blockOf(k.id) >= 0;
       });
   if (!a || a->ancestor->id == static_cast<KeyframeId>(id)) return r;  // unknown, or itself
@@ -156,7 +157,10 @@ void KeyframeCovarianceService::start() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (started_) return;
   started_ = true;
-  thread_ = std::thread([this] { loop(); });
+  thread_ = std::thread([this] {
+    nameThisThread("cblox-covar");
+    loop();
+  });
 }
 
 void KeyframeCovarianceService::stop() {

@@ -10,6 +10,7 @@
 
 #include <Eigen/Geometry>
 
+#include "core/common/thread_name.h"
 #include "core/optimization/pose_optimizer.h"
 #include "core/tracking/feature_matcher.h"
 #include "core/tracking/feature_measurement.h"
@@ -93,6 +94,7 @@ void LoopCloser::startGlobalBundleAdjustment(Keyframe* loop_keyframe) {
   std::lock_guard<std::mutex> lock(gba_mutex_);
   gba_running_ = true;
   gba_thread_ = std::thread([this, loop_keyframe] {
+    nameThisThread("cblox-globalba");
     globalBundleAdjustment(loop_keyframe);
     std::lock_guard<std::mutex> done(gba_mutex_);
     gba_running_ = false;

@@ -1,4 +1,5 @@
 #include "core/tracking/slam_system.h"
+#include "core/common/thread_name.h"
 
 #include <algorithm>
 #include <stdexcept>
@@ -57,11 +58,13 @@ SlamSystem::SlamSystem(const TrackingCamera& camera, const SlamSystemConfig& con
     if (on_poses_) on_poses_(batch, PoseUpdateReason::kLocalBundleAdjustment);
   });
   local_mapping_thread_ = std::thread([this, on_thread_start] {
+    nameThisThread("cblox-localmap");
     if (on_thread_start) on_thread_start("local mapping");
     local_mapper_.run();
   });
   if (loop_closer_) {
     loop_closing_thread_ = std::thread([this, on_thread_start] {
+      nameThisThread("cblox-loop");
       if (on_thread_start) on_thread_start("loop closing");
       loop_closer_->run();
     });

@@ -1,5 +1,6 @@
-#include "daemon/common/utime_ns.h"
 #include "daemon/mapper/frame_integration.h"
+#include "core/common/thread_name.h"
+#include "daemon/common/utime_ns.h"
 
 #include <exception>
 #include <optional>
@@ -59,6 +60,7 @@ void FrameIntegration::start() {
   if (started_) return;
   started_ = true;
   thread_ = std::thread([this] {
+    nameThisThread("cblox-integrate");
     // Lowering one's own priority needs no privilege: setpriority cannot refuse it.
     if (config_.niceness > 0) lowerThreadPriority(config_.niceness, false);
     loop();
@@ -121,7 +123,7 @@ void FrameIntegration::loop() {
             case PoseBuffer::Lookup::kNotYet:
               if (now - p.received <= max_wait) return FrameReadiness::kWait;
               problems_(InputProblem::kNoPose,
-                    what() + "no pose within " + fixed(config_.max_pose_wait_s, 2) + " s", 1);
+                        what() + "no pose within " + fixed(config_.max_pose_wait_s, 2) + " s", 1);
               return FrameReadiness::kReject;
             case PoseBuffer::Lookup::kTooOld:
               problems_(InputProblem::kPoseTooOld, what() + PoseBuffer::name(result), 1);
@@ -216,8 +218,9 @@ void FrameIntegration::processFrame(PendingFrame pending, const Transformationd&
     }
     if (action == SubmapCreationPolicy::FrameAction::kWaitForAnchor) {
       problems_(InputProblem::kWaitingForAnchor,
-            what + (jump ? "tracking jump: waiting for the next keyframe to anchor a subvolume"
-                         : "no subvolume yet: waiting for the first keyframe"), 1);
+                what + (jump ? "tracking jump: waiting for the next keyframe to anchor a subvolume"
+                             : "no subvolume yet: waiting for the first keyframe"),
+                1);
       return;
     }
     const Clock::time_point start = Clock::now();

@@ -6,6 +6,7 @@
 #include <memory>
 #include <utility>
 
+#include "core/common/thread_name.h"
 #include "core/submap/submap_fusion.h"
 #include "daemon/common/thread_priority.h"
 
@@ -26,7 +27,10 @@ void FusionExportWorker::start() {
   if (started_) return;
   started_ = true;
   periodic_due_ = std::chrono::steady_clock::now() + periodic_period_;
-  thread_ = std::thread([this] { loop(); });
+  thread_ = std::thread([this] {
+    nameThisThread("cblox-export");
+    loop();
+  });
 }
 
 void FusionExportWorker::stop() {
@@ -123,8 +127,7 @@ void FusionExportWorker::loop() {
       cv_.wait(lock, has_work);
     }
     if (stop_) break;
-    const bool periodic_due =
-        periodic_task_ && std::chrono::steady_clock::now() >= periodic_due_;
+    const bool periodic_due = periodic_task_ && std::chrono::steady_clock::now() >= periodic_due_;
     if (commands_.empty() && fusions_.empty() && !periodic_due) continue;
     busy_ = true;
     if (commands_.empty() && periodic_due) {  // after the commands, before the fusions
@@ -205,8 +208,8 @@ void FusionExportWorker::fuse(const FusionPair& pair) {
     }
   }
   if (on_fusion_) on_fusion_(pair, false);
-  log_("fusion of subvolume " + std::to_string(pair.newer) + " into " +
-       std::to_string(pair.older) + " not done: " + failure);
+  log_("fusion of subvolume " + std::to_string(pair.newer) + " into " + std::to_string(pair.older) +
+       " not done: " + failure);
 }
 
 }  // namespace cblox

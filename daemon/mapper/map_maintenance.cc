@@ -1,5 +1,6 @@
-#include "daemon/common/utime_ns.h"
 #include "daemon/mapper/map_maintenance.h"
+#include "core/common/thread_name.h"
+#include "daemon/common/utime_ns.h"
 
 #include <algorithm>
 #include <exception>
@@ -32,7 +33,10 @@ void MapMaintenance::start() {
   std::lock_guard<std::mutex> lock(queue_mutex_);
   if (started_) return;
   started_ = true;
-  thread_ = std::thread([this] { loop(); });
+  thread_ = std::thread([this] {
+    nameThisThread("cblox-maintain");
+    loop();
+  });
 }
 
 void MapMaintenance::stop() {
@@ -218,8 +222,7 @@ void MapMaintenance::applyKeyframe(KeyframeId id, int64_t utime, const Transform
       // Finishes the previous submap (waits for the frame being integrated into it).
       // Clamped: a keyframe time stamp from the bus beyond +-292 years overflows in ns.
       reason = policy_->lastReason();
-      created = collection_->createSubmap(
-          T_G_K, id, utimeToNs(utime));
+      created = collection_->createSubmap(T_G_K, id, utimeToNs(utime));
       joined = created->id();
     } else {
       active->addKeyframe(id);

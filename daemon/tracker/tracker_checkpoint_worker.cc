@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <utility>
 
+#include "core/common/thread_name.h"
 #include "daemon/common/thread_priority.h"
 
 namespace cblox {
@@ -24,7 +25,12 @@ TrackerCheckpointWorker::~TrackerCheckpointWorker() {
 }
 
 void TrackerCheckpointWorker::start() {
-  if (period_.count() > 0.0) thread_ = std::thread([this] { loop(); });
+  if (period_.count() > 0.0) {
+    thread_ = std::thread([this] {
+      nameThisThread("cblox-checkpt");
+      loop();
+    });
+  }
 }
 
 void TrackerCheckpointWorker::stop() {

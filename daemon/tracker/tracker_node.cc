@@ -1,4 +1,5 @@
 #include "daemon/tracker/tracker_node.h"
+#include "core/common/thread_name.h"
 #include "daemon/common/utime_ns.h"
 
 #include <algorithm>
@@ -152,7 +153,10 @@ void TrackerNode::start() {
         [this](const std::string& line) { log(line); });
     checkpoints_->start();
   }
-  tracking_thread_ = std::thread([this] { trackingLoop(); });
+  tracking_thread_ = std::thread([this] {
+    nameThisThread("cblox-tracking");
+    trackingLoop();
+  });
 }
 
 void TrackerNode::stop() {

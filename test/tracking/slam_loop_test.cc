@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <string>
@@ -31,13 +32,20 @@ TEST(SlamSystemThreadsTest, TheStartHookRunsFirstOnEachOfTheSystemsThreads) {
       makeTrackingCamera(PinholeIntrinsics{450.0, 450.0, 376.0, 240.0, 752, 480}, 0.11);
   std::mutex mutex;
   std::map<std::string, std::vector<std::thread::id>> calls;
+  std::map<std::string, std::string> os_names;  // /proc's name of each thread (top -H shows it)
   {
     SlamSystem slam(camera, SlamSystemConfig{}, &*vocabulary, [&](const std::string& thread) {
+      std::ifstream comm("/proc/thread-self/comm");
+      std::string os_name;
+      std::getline(comm, os_name);
       std::lock_guard<std::mutex> lock(mutex);
       calls[thread].push_back(std::this_thread::get_id());
+      os_names[thread] = os_name;
     });
   }  // joins the threads
   ASSERT_EQ(calls.size(), 2u);
+  EXPECT_EQ(os_names["local mapping"], "cblox-localmap");
+  EXPECT_EQ(os_names["loop closing"], "cblox-loop");
   ASSERT_EQ(calls["local mapping"].size(), 1u);
   ASSERT_EQ(calls["loop closing"].size(), 1u);
   EXPECT_NE(calls["local mapping"][0], std::this_thread::get_id());

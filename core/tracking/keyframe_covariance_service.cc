@@ -44,6 +44,9 @@ std::string KeyframeCovarianceServiceConfig::validate() const {
   if (!(max_linearization_age_s >= 0.0) || !std::isfinite(max_linearization_age_s)) {
     return "max_linearization_age_s must be finite and >= 0";
   }
+  if (!(min_linearization_interval_s >= 0.0) || !std::isfinite(min_linearization_interval_s)) {
+    return "min_linearization_interval_s must be finite and >= 0";
+  }
   if (niceness < 0 || niceness > 19) {
     return "niceness must be in [0, 19], got " + std::to_string(niceness);
   }
@@ -342,17 +345,25 @@ void KeyframeCovarianceService::loop() {
     lock.unlock();
     KeyframeCovarianceReply reply;
     bool fresh = false;
+    bool stopping = false;
     if (!kept_ || !reusable(*kept_, request)) {
       kept_.reset();
-      try {
-        kept_ = linearize();
-        fresh = true;
-      } catch (const std::exception& e) {
+      if (!waitForLinearizationSlot()) {
+        stopping = true;
         reply.request_id = request.request_id;
-        reply.results = failAll(request.pairs, std::string("linearization failed: ") + e.what());
+        reply.results = failAll(request.pairs, "covariance service stopping");
+      } else {
+        try {
+          last_linearization_ = std::chrono::steady_clock::now();
+          kept_ = linearize();
+          fresh = true;
+        } catch (const std::exception& e) {
+          reply.request_id = request.request_id;
+          reply.results = failAll(request.pairs, std::string("linearization failed: ") + e.what());
+        }
       }
     }
-    if (kept_) {
+    if (kept_ && !stopping) {
       reply = answer(request, *kept_);
       reply.reused = !fresh;
       if (fresh) reply.build_ms = kept_->build_ms;
@@ -371,6 +382,20 @@ void KeyframeCovarianceService::loop() {
     idle_cv_.notify_all();
   }
   idle_cv_.notify_all();
+}
+
+bool KeyframeCovarianceService::waitForLinearizationSlot() {
+  if (config_.min_linearization_interval_s <= 0.0 || !last_linearization_) return true;
+  const auto due = *last_linearization_ +
+                   std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                       std::chrono::duration<double>(config_.min_linearization_interval_s));
+  const auto start = std::chrono::steady_clock::now();
+  if (start >= due) return true;
+  std::unique_lock<std::mutex> lock(mutex_);
+  const bool stopped = cv_.wait_until(lock, due, [this] { return stop_; });
+  ++stats_.linearizations_delayed;
+  stats_.delayed_ms += msSince(start);
+  return !stopped;
 }
 
 void KeyframeCovarianceService::waitUntilIdle() const {

@@ -44,6 +44,12 @@ struct KeyframeCovarianceServiceConfig {
   /// errors on ids are always those of the current map). 0 = a fresh linearization per request.
   /// Local BA moves poses in the meantime: this bounds how stale an answer can be.
   double max_linearization_age_s = 5.0;
+  /// A fresh linearization is started no sooner than this after the previous one started; a
+  /// request that needs one waits meanwhile (in the queue; the mapper uses late replies).
+  /// The map's linearization and factorisation cost about 1 s of a core at the town's 1000
+  /// keyframes, and a new subvolume anchor asks about a keyframe no linearization has, so
+  /// without a bound the service re-linearised every 2 s there (0.35 of a core). 0 = no bound.
+  double min_linearization_interval_s = 5.0;
   /// The linearization: Huber reweighting on (observations that BA would call outliers
   /// count less instead of inflating the certainty).
   BaLinearizationConfig linearization{true};
@@ -82,6 +88,9 @@ struct KeyframeCovarianceServiceStats {
   uint64_t pairs_failed = 0;
   uint64_t linearizations = 0;  ///< map read, linearised and reduced
   uint64_t reused = 0;          ///< requests answered from an earlier linearization
+  /// Linearizations that waited for min_linearization_interval_s, and how long in all.
+  uint64_t linearizations_delayed = 0;
+  double delayed_ms = 0.0;
   double last_build_ms = 0.0;
   double last_solve_ms = 0.0;
 };
@@ -171,6 +180,11 @@ class KeyframeCovarianceService {
   bool stop_ = false, started_ = false, busy_ = false;
   std::thread thread_;
   std::unique_ptr<Linearization> kept_;  // the service thread's only
+  // When the last linearization started (the service thread's only).
+  std::optional<std::chrono::steady_clock::time_point> last_linearization_;
+  // Waits until min_linearization_interval_s after the last linearization started; false if
+  // stop() came first.
+  bool waitForLinearizationSlot();
 };
 
 }  // namespace cblox

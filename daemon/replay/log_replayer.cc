@@ -3,8 +3,8 @@
 #include <sys/types.h>
 
 #include <chrono>
-#include <cstring>
 #include <cstdio>
+#include <cstring>
 #include <deque>
 #include <future>
 #include <limits>
@@ -69,7 +69,8 @@ uint32_t bigEndian32(const uint8_t* b) {
 // in (0, 1000) and payloads that end within the file. Leaves the file at `at`.
 bool logEventFits(FILE* file, off_t at, off_t file_size) {
   uint8_t h[kLogHeaderBytes];
-  const bool read = ::fseeko(file, at, SEEK_SET) == 0 && std::fread(h, 1, sizeof(h), file) == sizeof(h);
+  const bool read =
+      ::fseeko(file, at, SEEK_SET) == 0 && std::fread(h, 1, sizeof(h), file) == sizeof(h);
   ::fseeko(file, at, SEEK_SET);
   if (!read || std::memcmp(h, kLogSync, 4) != 0) return false;
   const auto channel_len = static_cast<int32_t>(bigEndian32(h + 20));
@@ -103,6 +104,7 @@ ReplayConfig deterministicReplayConfig(ReplayConfig config) {
   // one, so it is refused at once instead of after a wall-clock wait.
   config.mapper.mapper.max_pose_wait_s = 0.0;
   config.tracker.tracker.covariance.max_linearization_age_s = 0.0;
+  config.tracker.tracker.covariance.min_linearization_interval_s = 0.0;  // no wall-clock wait
   // The mapper reads depth on a channel of its own, so that in RGB-D mode (one channel for
   // both) it gets each frame after the tracker's pose of it.
   config.mapper.depth_channel = "CBLOX_REPLAY/" + config.mapper.depth_channel;
@@ -172,10 +174,9 @@ struct LogReplayer::Impl {
     if (trackerMode() && channel == tracker_frame_channel) {
       used = true;
       releaseTrackerFrame();
-      const std::optional<int64_t> utime =
-          config.tracker.tracker.mode == TrackerMode::kStereo
-              ? checkedUtime<stereo_pair_t>(data, size)
-              : checkedUtime<depth_frame_t>(data, size);
+      const std::optional<int64_t> utime = config.tracker.tracker.mode == TrackerMode::kStereo
+                                               ? checkedUtime<stereo_pair_t>(data, size)
+                                               : checkedUtime<depth_frame_t>(data, size);
       if (utime) {
         const auto* bytes = static_cast<const uint8_t*>(data);
         held_frame = HeldEvent{channel, std::vector<uint8_t>(bytes, bytes + size), *utime};
@@ -275,7 +276,7 @@ struct LogReplayer::Impl {
 
   std::optional<HeldEvent> held_frame;
   std::deque<HeldEvent> deferred_depth;
-  int64_t horizon = std::numeric_limits<int64_t>::min();  // the mapper has poses up to here
+  int64_t horizon = std::numeric_limits<int64_t>::min();        // the mapper has poses up to here
   std::map<std::pair<int32_t, int64_t>, ReplayPose> keyframes;  // by (map epoch, id)
   ReplaySummary summary;
   bool ran = false;

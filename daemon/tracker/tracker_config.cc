@@ -285,7 +285,8 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
   }
   const YAML::Node covariance = root["covariance"];
   if (readSection(covariance, "covariance",
-                  {{"max_linearization_age_s", &t.covariance.max_linearization_age_s}},
+                  {{"max_linearization_age_s", &t.covariance.max_linearization_age_s},
+                   {"min_linearization_interval_s", &t.covariance.min_linearization_interval_s}},
                   {"method", "max_queued_requests", "niceness"})) {
     readOptionalEnum(covariance, "covariance", "method",
                      {{"constrained_ordering", CovarianceMethod::kConstrainedOrdering},

@@ -18,8 +18,8 @@
 #include <mutex>
 #include <shared_mutex>
 #include <string>
-#include <utility>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -253,6 +253,7 @@ void AKeptLinearizationAnswersLaterRequests() {
   KeyframeCovarianceServiceConfig config;
   config.method = CovarianceMethod::kSparseSolve;  // factorises once: reused too
   config.max_linearization_age_s = 600.0;
+  config.min_linearization_interval_s = 0.0;  // every rebuild at once
   KeyframeCovarianceService service(T::slam_->map(), *T::camera_, T::slam_->pyramid(), config,
                                     [&](const KeyframeCovarianceReply& r) {
                                       std::lock_guard<std::mutex> lock(mutex);
@@ -350,6 +351,70 @@ void AKeptLinearizationAnswersLaterRequests() {
   EXPECT_EQ(strict.stats().reused, 0u);
 }
 
+// A fresh linearization starts no sooner than min_linearization_interval_s after the last
+// one started: with a fresh one per request (age 0) three requests take at least two
+// intervals, the two later ones counted as delayed. stop() during such a wait answers the
+// waiting request with an error at once.
+void FreshLinearizationsAreSpacedByTheInterval() {
+  using T = KeyframeCovarianceServiceTest;
+  const std::vector<uint64_t> ids = T::keyframeIds();
+  std::mutex mutex;
+  std::condition_variable cv;
+  std::vector<KeyframeCovarianceReply> replies;
+  const auto collect = [&](const KeyframeCovarianceReply& r) {
+    std::lock_guard<std::mutex> lock(mutex);
+    replies.push_back(r);
+    cv.notify_all();
+  };
+  const auto waitFor = [&](size_t n, std::chrono::seconds limit) {
+    std::unique_lock<std::mutex> lock(mutex);
+    return cv.wait_for(lock, limit, [&] { return replies.size() >= n; });
+  };
+  KeyframeCovarianceServiceConfig config;
+  config.max_linearization_age_s = 0.0;
+  config.min_linearization_interval_s = 1.0;
+  {
+    KeyframeCovarianceService service(T::slam_->map(), *T::camera_, T::slam_->pyramid(), config,
+                                      collect);
+    service.start();
+    const auto start = std::chrono::steady_clock::now();
+    for (int64_t id = 1; id <= 3; ++id) service.submit({id, {{ids[3], ids[2]}}});
+    ASSERT_TRUE(waitFor(3, std::chrono::seconds(60)));
+    const double elapsed_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    service.stop();
+    EXPECT_GE(elapsed_s, 2.0);
+    const KeyframeCovarianceServiceStats stats = service.stats();
+    EXPECT_EQ(stats.linearizations, 3u);
+    EXPECT_EQ(stats.linearizations_delayed, 2u);
+    EXPECT_GT(stats.delayed_ms, 1000.0);
+    for (const KeyframeCovarianceReply& r : replies) {
+      ASSERT_EQ(r.results.size(), 1u);
+      EXPECT_TRUE(r.results[0].ok) << r.results[0].error;
+    }
+  }
+  replies.clear();
+  config.min_linearization_interval_s = 600.0;
+  KeyframeCovarianceService waiting(T::slam_->map(), *T::camera_, T::slam_->pyramid(), config,
+                                    collect);
+  waiting.start();
+  waiting.submit({1, {{ids[3], ids[2]}}});
+  ASSERT_TRUE(waitFor(1, std::chrono::seconds(60)));
+  waiting.submit({2, {{ids[3], ids[2]}}});
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // now waiting for its slot
+  const auto stop_start = std::chrono::steady_clock::now();
+  waiting.stop();
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - stop_start).count(),
+            5.0);
+  std::lock_guard<std::mutex> lock(mutex);
+  ASSERT_EQ(replies.size(), 2u);
+  EXPECT_EQ(replies[1].request_id, 2);
+  ASSERT_EQ(replies[1].results.size(), 1u);
+  EXPECT_FALSE(replies[1].results[0].ok);
+  EXPECT_NE(replies[1].results[0].error.find("stopping"), std::string::npos);
+  EXPECT_EQ(waiting.stats().answered, 2u);
+}
+
 // A culled keyframe K is answered through its parent P (to which it is tied by
 // T_parent_this): Sigma_{K|J} = J_KP Sigma_{P|J} J_KP^T, with the Jacobian J_KP of K's
 // left-perturbation tangent with respect to P's taken here by central differences of exp and
@@ -378,7 +443,7 @@ void CulledKeyframesAreAnsweredThroughTheirParent() {
   const uint64_t j_id = ids.back() == p_id ? ids[ids.size() - 2] : ids.back();
   const uint64_t gauge = ids[0];
   KeyframeCovarianceRequest request;
-  request.pairs = {{k_id, j_id}, {p_id, j_id}, {j_id, k_id}, {j_id, p_id},
+  request.pairs = {{k_id, j_id}, {p_id, j_id}, {j_id, k_id},  {j_id, p_id},
                    {k_id, p_id}, {p_id, k_id}, {k_id, gauge}, {p_id, gauge}};
 
   // d(delta_K)/d(delta_P) for T_K_G = T_K_P * T_P_G, left perturbations of T_C_G.
@@ -445,6 +510,10 @@ TEST_F(KeyframeCovarianceServiceTest, AnswersFromTheLiveRoomMap) {
     AKeptLinearizationAnswersLaterRequests();
   }
   {
+    SCOPED_TRACE("the interval between linearizations");
+    FreshLinearizationsAreSpacedByTheInterval();
+  }
+  {
     SCOPED_TRACE("culled keyframes");
     CulledKeyframesAreAnsweredThroughTheirParent();
   }
@@ -461,6 +530,9 @@ TEST(KeyframeCovarianceServiceConfigTest, BadValuesAreNamed) {
   config = KeyframeCovarianceServiceConfig{};
   config.max_linearization_age_s = -1.0;
   EXPECT_NE(config.validate().find("max_linearization_age_s"), std::string::npos);
+  config = KeyframeCovarianceServiceConfig{};
+  config.min_linearization_interval_s = std::numeric_limits<double>::infinity();
+  EXPECT_NE(config.validate().find("min_linearization_interval_s"), std::string::npos);
   config = KeyframeCovarianceServiceConfig{};
   config.reduction.landmark_min_relative_eigenvalue = 1.0;
   EXPECT_NE(config.validate().find("reduction."), std::string::npos);

@@ -49,6 +49,7 @@ TEST(TrackerConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.covariance.max_queued_requests, b.covariance.max_queued_requests);
   EXPECT_EQ(a.covariance.niceness, b.covariance.niceness);
   EXPECT_EQ(a.covariance.max_linearization_age_s, b.covariance.max_linearization_age_s);
+  EXPECT_EQ(a.covariance.min_linearization_interval_s, b.covariance.min_linearization_interval_s);
   EXPECT_EQ(a.checkpoint.dir, b.checkpoint.dir);
   EXPECT_EQ(a.checkpoint.period_s, b.checkpoint.period_s);
   EXPECT_EQ(a.checkpoint.resume, b.checkpoint.resume);
@@ -159,7 +160,7 @@ TEST(TrackerConfigTest, ReadsOverrides) {
       "           keyframe_poses: P, heartbeat: H, covariance_request: CQ,\n"
       "           covariance_reply: CR}\n"
       "covariance: {method: kaess_recovery, max_queued_requests: 2, niceness: 0,\n"
-      "             max_linearization_age_s: 1.5}\n"
+      "             max_linearization_age_s: 1.5, min_linearization_interval_s: 2.5}\n"
       "camera: {close_depth_baselines: 35, rgbd_baseline_m: 0.07}\n"
       "frames: {orb: {num_features: 1500, num_levels: 6}, stereo: {min_depth_m: 0.5},\n"
       "         parallel_stereo_extraction: false}\n"
@@ -192,6 +193,7 @@ TEST(TrackerConfigTest, ReadsOverrides) {
   EXPECT_EQ(t.covariance.max_queued_requests, 2u);
   EXPECT_EQ(t.covariance.niceness, 0);
   EXPECT_EQ(t.covariance.max_linearization_age_s, 1.5);
+  EXPECT_EQ(t.covariance.min_linearization_interval_s, 2.5);
   EXPECT_EQ(t.checkpoint.dir, "/var/lib/cblox/tracker");
   EXPECT_EQ(t.checkpoint.period_s, 30.0);
   EXPECT_FALSE(t.checkpoint.resume);

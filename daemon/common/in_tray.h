@@ -26,10 +26,11 @@ struct InTrayCounters {
   uint64_t rejected = 0;  ///< judged kReject
 };
 
-/// The integrator's bounded in-tray: "newest frame wins", never an unbounded queue.
-/// The receiving thread pushes frames (the oldest is dropped when `capacity` are waiting);
-/// the integrator takes the newest frame that is ready, and every older waiting frame is
-/// dropped (counted) because the newer one supersedes it. Frames that are not ready yet
+/// A bounded in-tray of frames, never an unbounded queue. The receiving thread pushes frames
+/// (the oldest is dropped when `capacity` are waiting). The integrator takes the newest frame
+/// that is ready, and every older waiting frame is dropped (counted) because the newer one
+/// supersedes it ("newest frame wins", takeNewestReady); the tracker may instead take them in
+/// order and catch up after a stall (takeOldestReady). Frames that are not ready yet
 /// (their pose has not arrived) wait; frames that can never be served are rejected.
 ///
 /// Thread-safety: all member functions are thread-safe (one mutex and a condition variable);
@@ -74,7 +75,8 @@ class InTray {
   /// Scans from the newest frame back: frames judged kReject are removed (counted rejected);
   /// the first kReady frame is returned and every older frame is dropped (counted); kWait
   /// frames stay. Returns std::nullopt when no frame is ready.
-  std::optional<Frame> takeNewestReady(const std::function<FrameReadiness(const Frame&)>& readiness) {
+  std::optional<Frame> takeNewestReady(
+      const std::function<FrameReadiness(const Frame&)>& readiness) {
     std::lock_guard<std::mutex> lock(mutex_);
     for (size_t i = frames_.size(); i-- > 0;) {
       const FrameReadiness r = readiness(frames_[i]);
@@ -90,6 +92,29 @@ class InTray {
         ++counters_.taken;
         return frame;
       }
+    }
+    return std::nullopt;
+  }
+
+  /// In order: scans from the oldest frame: frames judged kReject are removed (counted
+  /// rejected); the first other frame is returned if kReady, and nothing is returned if it is
+  /// kWait (a later frame is not served before it). Nothing is dropped here: frames are
+  /// dropped only when pushed out of a full tray. Returns std::nullopt when no frame is ready.
+  std::optional<Frame> takeOldestReady(
+      const std::function<FrameReadiness(const Frame&)>& readiness) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    while (!frames_.empty()) {
+      const FrameReadiness r = readiness(frames_.front());
+      if (r == FrameReadiness::kReject) {
+        frames_.pop_front();
+        ++counters_.rejected;
+        continue;
+      }
+      if (r == FrameReadiness::kWait) return std::nullopt;
+      Frame frame = std::move(frames_.front());
+      frames_.pop_front();
+      ++counters_.taken;
+      return frame;
     }
     return std::nullopt;
   }

@@ -307,7 +307,8 @@ TrackerProcessConfig loadTrackerConfig(const YAML::Node& root) {
   const YAML::Node input = root["input"];
   if (readSection(input, "input",
                   {{"ground_truth_wait_s", &t.ground_truth_wait_s},
-                   {"restart_after_backwards_s", &t.restart_after_backwards_s}},
+                   {"restart_after_backwards_s", &t.restart_after_backwards_s},
+                   {"catch_up", &t.catch_up}},
                   {"queue_capacity"})) {
     readInteger(input, "input", "queue_capacity", 1, 16, &t.queue_capacity);
   }

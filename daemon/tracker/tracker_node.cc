@@ -328,12 +328,14 @@ void TrackerNode::trackingLoop() {
   while (!stop_) {
     queue_.waitForWork(std::chrono::milliseconds(100));
     if (stop_) break;
-    std::optional<TrackerFrame> frame = queue_.takeNewestReady([this](const TrackerFrame&) {
+    const auto ready = [this](const TrackerFrame&) {
       // Set under the queue's lock: waitUntilIdle never sees an empty queue and an idle
       // thread while a frame is being handed over.
       busy_ = true;
       return FrameReadiness::kReady;
-    });
+    };
+    std::optional<TrackerFrame> frame =
+        config_.catch_up ? queue_.takeOldestReady(ready) : queue_.takeNewestReady(ready);
     if (!frame) continue;
     processFrame(*frame);
     {

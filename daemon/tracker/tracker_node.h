@@ -79,9 +79,14 @@ struct TrackerNodeConfig {
   /// Smaller steps back are rejected as out of order. Frame ids going back while time goes
   /// on (a capture process restarted on a live clock) continue the same map. 0 = never.
   double restart_after_backwards_s = 2.0;
-  /// Frames waiting for the tracking thread, [1, 16]: the newest wins, older ones are
-  /// dropped (counted) when the tracker falls behind.
-  size_t queue_capacity = 1;
+  /// Frames waiting for the tracking thread, [1, 16]; when more arrive the oldest is dropped
+  /// (counted).
+  size_t queue_capacity = 4;
+  /// True: the waiting frames are tracked in order, so after a stall (a loop correction or a
+  /// global BA applied under the map's lock, another process on the core) the tracker
+  /// catches up on every frame, at most queue_capacity frames late. False: the newest wins
+  /// and the older waiting frames are dropped (the lowest latency; frames are lost in a stall).
+  bool catch_up = true;
   /// Frames that cannot be tracked at all are published LOST without tracking them.
   ImageCheckConfig image_check;
   /// Tracking times kept for the median / p95 in status, >= 1.

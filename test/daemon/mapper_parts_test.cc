@@ -9,9 +9,9 @@
 
 #include <gtest/gtest.h>
 
+#include "daemon/common/in_tray.h"
 #include "daemon/mapper/map_epoch_key.h"
 #include "daemon/mapper/output_path.h"
-#include "daemon/common/in_tray.h"
 #include "daemon/mapper/pose_buffer.h"
 
 namespace cblox {
@@ -36,9 +36,8 @@ TEST(PoseBufferTest, InterpolatesBetweenNeighboursAndReturnsExactMatches) {
   bool jump = true;
   ASSERT_EQ(buffer.lookup(1'025'000, &T, &jump), PoseBuffer::Lookup::kFound);
   // A quarter of the way along the geodesic (screw motion) between the two poses.
-  EXPECT_TRUE(T.isApprox(Transformationd::interpolate(poseAt(0, 0.0).T_G_C, poseAt(0, 1.0).T_G_C,
-                                                      0.25),
-                         1e-12));
+  EXPECT_TRUE(T.isApprox(
+      Transformationd::interpolate(poseAt(0, 0.0).T_G_C, poseAt(0, 1.0).T_G_C, 0.25), 1e-12));
   EXPECT_NEAR(Eigen::AngleAxisd(T.rotation()).angle(), 0.25, 1e-12);
   EXPECT_FALSE(jump);
   ASSERT_EQ(buffer.lookup(1'100'000, &T, &jump), PoseBuffer::Lookup::kFound);
@@ -79,7 +78,7 @@ TEST(PoseBufferTest, RefusesGapsJumpsLostPosesAndEpochChanges) {
   config.max_gap_s = 0.2;
   PoseBuffer buffer(config);
   buffer.add(poseAt(0, 0.0));
-  buffer.add(poseAt(300'000, 1.0));                      // 0.3 s gap
+  buffer.add(poseAt(300'000, 1.0));                       // 0.3 s gap
   buffer.add(poseAt(400'000, 2.0, true, /*jump=*/true));  // relocalised
   buffer.add(poseAt(500'000, 2.1, /*ok=*/false));         // lost
   buffer.add(poseAt(600'000, 2.2));
@@ -103,8 +102,8 @@ TEST(PoseBufferTest, RejectsDuplicateOutOfOrderAndInvalidPosesAndForgetsOldOnes)
   EXPECT_EQ(buffer.add(poseAt(10, 0.0)), PoseBuffer::AddResult::kDuplicate);
   EXPECT_EQ(buffer.add(poseAt(5, 0.0)), PoseBuffer::AddResult::kOutOfOrder);
   TimedPose nan = poseAt(20, 0.0);
-  nan.T_G_C = Transformationd(Eigen::Quaterniond::Identity(),
-                              Eigen::Vector3d(std::nan(""), 0.0, 0.0));
+  nan.T_G_C =
+      Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d(std::nan(""), 0.0, 0.0));
   EXPECT_EQ(buffer.add(nan), PoseBuffer::AddResult::kInvalid);
   for (int64_t t : {20, 30, 40}) buffer.add(poseAt(t, 0.0));
   EXPECT_EQ(buffer.size(), 3u);
@@ -157,6 +156,40 @@ TEST(InTrayTest, RejectsUnservableFramesAndBoundsTheQueue) {
   EXPECT_EQ(frames.size(), 0u);
 }
 
+TEST(InTrayTest, InOrderTheOldestReadyFrameComesFirstAndNothingIsSuperseded) {
+  InTray<Frame> frames(4);
+  for (int64_t t = 1; t <= 6; ++t) frames.push(Frame{t});
+  EXPECT_EQ(frames.counters().dropped, 2u);  // 1 and 2 pushed out of the full tray
+  const auto ready = [](const Frame&) { return FrameReadiness::kReady; };
+  for (int64_t t = 3; t <= 4; ++t) {
+    const auto taken = frames.takeOldestReady(ready);
+    ASSERT_TRUE(taken.has_value());
+    EXPECT_EQ(taken->utime, t);
+  }
+  EXPECT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames.counters().dropped, 2u);  // none superseded
+  // The oldest waits: nothing is served past it. Rejected frames before it are removed.
+  frames.push(Frame{7});
+  const auto wait5 = [](const Frame& f) {
+    return f.utime == 5 ? FrameReadiness::kWait : FrameReadiness::kReady;
+  };
+  EXPECT_FALSE(frames.takeOldestReady(wait5).has_value());
+  EXPECT_EQ(frames.size(), 3u);
+  const auto reject5 = [](const Frame& f) {
+    return f.utime == 5 ? FrameReadiness::kReject : FrameReadiness::kReady;
+  };
+  const auto six = frames.takeOldestReady(reject5);
+  ASSERT_TRUE(six.has_value());
+  EXPECT_EQ(six->utime, 6);
+  const InTrayCounters c = frames.counters();
+  EXPECT_EQ(c.received, 7u);
+  EXPECT_EQ(c.taken, 3u);
+  EXPECT_EQ(c.rejected, 1u);
+  EXPECT_EQ(c.dropped, 2u);
+  EXPECT_EQ(frames.takeOldestReady(ready)->utime, 7);
+  EXPECT_FALSE(frames.takeOldestReady(ready).has_value());
+}
+
 TEST(InTrayTest, WaitForWorkWakesOnPushAndTimesOut) {
   InTray<Frame> frames(4);
   const auto start = std::chrono::steady_clock::now();
@@ -175,7 +208,8 @@ TEST(InTrayTest, WaitForWorkWakesOnPushAndTimesOut) {
 TEST(OutputPathTest, ConfinesPathsToTheOutputDirectory) {
   std::string error;
   EXPECT_EQ(*resolveOutputPath("/data/out", "map.ply", &error), "/data/out/map.ply");
-  EXPECT_EQ(*resolveOutputPath("/data/out", "runs/./a/map.ply", &error), "/data/out/runs/a/map.ply");
+  EXPECT_EQ(*resolveOutputPath("/data/out", "runs/./a/map.ply", &error),
+            "/data/out/runs/a/map.ply");
   EXPECT_EQ(*resolveOutputPath("/data/out/", "/data/out/sub/m.ply", &error), "/data/out/sub/m.ply");
   EXPECT_EQ(*resolveOutputPath("out", "m.ply", &error), "out/m.ply");
   struct Case {

@@ -72,6 +72,7 @@ TEST(TrackerConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.slam.loop_closing.global_bundle_adjustment,
             b.slam.loop_closing.global_bundle_adjustment);
   EXPECT_EQ(a.queue_capacity, b.queue_capacity);
+  EXPECT_EQ(a.catch_up, b.catch_up);
   EXPECT_EQ(a.ground_truth_wait_s, b.ground_truth_wait_s);
   EXPECT_EQ(a.image_check.enabled, b.image_check.enabled);
   EXPECT_EQ(a.image_check.dark_level, b.image_check.dark_level);
@@ -170,7 +171,7 @@ TEST(TrackerConfigTest, ReadsOverrides) {
       "                max_time_s: 0.2}}\n"
       "loop_closing: {enabled: false, seed: 7, pose_graph: {max_iterations: 30},\n"
       "               global_ba: {first_pass_iterations: 4}}\n"
-      "input: {queue_capacity: 2, ground_truth_wait_s: 0.5}\n"
+      "input: {queue_capacity: 2, ground_truth_wait_s: 0.5, catch_up: false}\n"
       "image_check: {enabled: false, dark_level: 5, bright_level: 250, max_fraction: 0.9,\n"
       "              min_mean_gradient: 0.5}\n"
       "status: {period_s: 0.5, progress_period_s: 2, timing_window: 10, log_interval_s: 1}\n"
@@ -216,6 +217,7 @@ TEST(TrackerConfigTest, ReadsOverrides) {
   EXPECT_EQ(t.slam.loop_closing.global_ba.first_pass_iterations, 4);
   EXPECT_EQ(t.slam.loop_closing.global_ba.second_pass_iterations, 0);  // the global preset
   EXPECT_EQ(t.queue_capacity, 2u);
+  EXPECT_FALSE(t.catch_up);
   EXPECT_EQ(t.ground_truth_wait_s, 0.5);
   EXPECT_FALSE(t.image_check.enabled);
   EXPECT_EQ(t.image_check.dark_level, 5);

@@ -226,7 +226,9 @@ TEST(TrackerNodeTest, GroundTruthStartWaitsForThePoseOfItsFrame) {
 TEST(TrackerNodeTest, NewestFrameWinsWhenTheTrackerIsBehind) {
   auto source = simRoom(3, kHalfRig);
   ASSERT_NE(source, nullptr);
-  TrackerNodeConfig config;  // queue_capacity 1
+  TrackerNodeConfig config;
+  config.catch_up = false;
+  config.queue_capacity = 1;
   config.slam.tracker.min_features_to_initialize = 200;
   Collected out;
   TrackerNode node(config, nullptr, out.outputs());
@@ -247,6 +249,36 @@ TEST(TrackerNodeTest, NewestFrameWinsWhenTheTrackerIsBehind) {
   EXPECT_EQ(s.frames_dropped, 2u);
   EXPECT_EQ(s.frames_processed, 1u);
   EXPECT_EQ(s.frames_rejected, 0u);
+}
+
+// The default: frames that wait while the tracker is behind are all tracked, in order; only
+// those pushed out of the full queue (4) are dropped.
+TEST(TrackerNodeTest, TheTrackerCatchesUpOnTheWaitingFramesInOrder) {
+  auto source = simRoom(6, kHalfRig);
+  ASSERT_NE(source, nullptr);
+  TrackerNodeConfig config;
+  ASSERT_TRUE(config.catch_up);
+  ASSERT_EQ(config.queue_capacity, 4u);
+  config.slam.tracker.min_features_to_initialize = 200;
+  Collected out;
+  TrackerNode node(config, nullptr, out.outputs());
+  CaptureFrame frame;
+  std::string error;
+  while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+    ASSERT_TRUE(node.onFrame(toTrackerFrame(frame, source->info())));
+  }
+  node.start();
+  ASSERT_TRUE(node.waitUntilIdle(std::chrono::seconds(10)));
+  node.stop();
+  ASSERT_EQ(out.poses.size(), 4u);
+  for (size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(out.poses[i].frame_id, static_cast<int64_t>(i + 2));
+    EXPECT_EQ(out.poses[i].state, FramePoseState::kOk) << out.poses[i].reason;
+  }
+  const TrackerStatus s = node.status();
+  EXPECT_EQ(s.frames_received, 6u);
+  EXPECT_EQ(s.frames_dropped, 2u);
+  EXPECT_EQ(s.frames_processed, 4u);
 }
 
 /// A small frame with a valid message calibration (not tracked in these tests).

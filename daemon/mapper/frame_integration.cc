@@ -105,7 +105,7 @@ void FrameIntegration::loop() {
       std::optional<PendingFrame> frame;
       {
         const PoseBuffer::Reader poses(poses_);
-        frame = pending_.takeNewestReady([&](const PendingFrame& p) -> FrameReadiness {
+        const auto readiness = [&](const PendingFrame& p) -> FrameReadiness {
           Transformationd T;
           bool j = false;
           int64_t r = -1;
@@ -139,7 +139,9 @@ void FrameIntegration::loop() {
               return FrameReadiness::kReject;
           }
           return FrameReadiness::kReject;
-        });
+        };
+        frame = config_.in_order ? pending_.takeOldestReady(readiness)
+                                 : pending_.takeNewestReady(readiness);
       }
       if (!frame) {
         busy_ = false;

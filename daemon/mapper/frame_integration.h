@@ -43,6 +43,8 @@ struct FrameIntegrationConfig {
   MemoryCapConfig memory_cap;
   /// Niceness of the integrator thread, [0, 19] (MapperConfig::integrator_niceness).
   int niceness = 0;
+  /// MapperConfig::pending_in_order: frames in order, else the newest ready one wins.
+  bool in_order = true;
 };
 
 /// What the memory cap did so far (FrameIntegration::memoryCapCounters). Plain value type.

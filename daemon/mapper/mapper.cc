@@ -85,7 +85,8 @@ Mapper::Mapper(const MapperConfig& config, LogSink log)
                                  config_.integrator_type, config_.integrator,
                                  config_.max_pose_wait_s, config_.pending_capacity,
                                  config_.pose_buffer, config_.timing_window,
-                                 config_.memory_cap, config_.integrator_niceness},
+                                 config_.memory_cap, config_.integrator_niceness,
+                                 config_.pending_in_order},
           &collection_, &policy_, &policy_mutex_, &maintenance_,
           [this](InputProblem problem, const std::string& message, uint64_t n) {
             count(problem, message, n);

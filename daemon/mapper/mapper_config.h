@@ -4,8 +4,8 @@
 // (MapperProcessConfig): plain value types with validate(); YAML loading is in
 // mapper_config_loader.h.
 
-#include <cstddef>
 #include <climits>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -78,8 +78,13 @@ struct MapperConfig {
 
   /// Ground-truth mode: a keyframe every this many integrated frames (>= 1).
   int keyframe_every_n_frames = 10;
-  /// Depth frames waiting for their pose (newest wins; older ones are dropped), >= 1.
+  /// Depth frames waiting for their pose, >= 1; when more arrive the oldest is dropped.
   size_t pending_capacity = 4;
+  /// True: the waiting frames are integrated in order as their poses come (the tracker
+  /// catches up after a stall and its poses then come in a burst), at most pending_capacity
+  /// frames late. False: the newest frame with a pose wins and the older waiting ones are
+  /// dropped (the lowest latency).
+  bool pending_in_order = true;
   /// A frame newer than every pose waits at most this long for its pose, then is rejected.
   double max_pose_wait_s = 0.5;
   /// A depth frame or pose whose time stamp is this much older than the newest one means the

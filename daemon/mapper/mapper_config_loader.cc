@@ -174,9 +174,10 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   }
 
   const YAML::Node queues = root["queues"];
-  requireKnownKeys(queues, "queues", {"pending_frames", "maintenance", "commands"});
+  requireKnownKeys(queues, "queues", {"pending_frames", "in_order", "maintenance", "commands"});
   if (!isAbsent(queues)) {
     readOptional(queues, "queues", "pending_frames", &m.pending_capacity);
+    readOptional(queues, "queues", "in_order", &m.pending_in_order);
     readOptional(queues, "queues", "maintenance", &m.maintenance_queue_capacity);
     readOptional(queues, "queues", "commands", &m.command_queue_capacity);
   }

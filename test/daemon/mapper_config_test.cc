@@ -70,6 +70,7 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.max_pose_wait_s, b.max_pose_wait_s);
   EXPECT_EQ(a.restart_after_backwards_s, b.restart_after_backwards_s);
   EXPECT_EQ(a.pending_capacity, b.pending_capacity);
+  EXPECT_EQ(a.pending_in_order, b.pending_in_order);
   EXPECT_EQ(a.maintenance_queue_capacity, b.maintenance_queue_capacity);
   EXPECT_EQ(a.command_queue_capacity, b.command_queue_capacity);
   EXPECT_EQ(a.worker_niceness, b.worker_niceness);
@@ -127,7 +128,7 @@ TEST(MapperConfigTest, ReadsOverrides) {
       "keyframe_every_n_frames: 3}\n"
       "poses: {max_gap_s: 0.1, max_wait_s: 0.2, buffer_capacity: 64, restart_after_backwards_s: "
       "0}\n"
-      "queues: {pending_frames: 2, maintenance: 8, commands: 1}\n"
+      "queues: {pending_frames: 2, in_order: false, maintenance: 8, commands: 1}\n"
       "worker: {niceness: 19, sched_idle: false}\n"
       "status: {period_s: 0.5, progress_period_s: 2, timing_window: 10, log_interval_s: 1}\n"
       "checkpoint: {dir: /data/ckpt, period_s: 45, resume: false}\n"
@@ -157,6 +158,7 @@ TEST(MapperConfigTest, ReadsOverrides) {
   EXPECT_EQ(m.pose_buffer.capacity, 64u);
   EXPECT_EQ(m.restart_after_backwards_s, 0.0);
   EXPECT_EQ(m.pending_capacity, 2u);
+  EXPECT_FALSE(m.pending_in_order);
   EXPECT_EQ(m.maintenance_queue_capacity, 8u);
   EXPECT_EQ(m.command_queue_capacity, 1u);
   EXPECT_EQ(m.worker_niceness, 19);

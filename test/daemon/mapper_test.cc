@@ -388,6 +388,7 @@ TEST(MapperTest, NewestFrameWinsAndTheOthersAreCountedAsDropped) {
   test::TempDir dir("mapper");
   MapperConfig config = testConfig(dir.path());
   config.pending_capacity = 4;
+  config.pending_in_order = false;
   config.max_pose_wait_s = 30.0;  // nothing expires during the test
   Mapper mapper(config);
   std::string error;
@@ -404,6 +405,32 @@ TEST(MapperTest, NewestFrameWinsAndTheOthersAreCountedAsDropped) {
   EXPECT_EQ(s.frames_dropped, 5u);
   EXPECT_EQ(s.frames_rejected, 0u);
   EXPECT_EQ(mapper.collection().getSubmap(0)->anchorKeyframe(), 5);
+}
+
+// The default: waiting frames are integrated in order as their poses come (a tracker that
+// caught up after a stall sends them in a burst); only frames pushed out of the full in-tray
+// are dropped.
+TEST(MapperTest, InOrderEveryWaitingFrameWithAPoseIsIntegrated) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  ASSERT_TRUE(config.pending_in_order);
+  config.pending_capacity = 4;
+  config.max_pose_wait_s = 30.0;  // nothing expires during the test
+  Mapper mapper(config);
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  for (int i = 0; i < 6; ++i) ASSERT_TRUE(mapper.onDepthFrame(depthFrame(roomFrames()[i], i)));
+  EXPECT_EQ(mapper.status().frames_dropped, 2u);  // 0 and 1 pushed out
+  for (int i = 2; i < 6; ++i) {
+    ASSERT_TRUE(
+        mapper.onFramePose(groundTruthPose(utimeOf(roomFrames()[i]), roomFrames()[i].T_G_C)));
+  }
+  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  const MapperStatus s = mapper.status();
+  EXPECT_EQ(s.frames_received, 6u);
+  EXPECT_EQ(s.frames_integrated, 4u);
+  EXPECT_EQ(s.frames_dropped, 2u);
+  EXPECT_EQ(s.frames_rejected, 0u);
 }
 
 TEST(MapperTest, BadInputIsRejectedCountedAndLoggedOncePerKind) {
@@ -673,9 +700,9 @@ TEST(MapperTest, TrackerModeAnchorsFramesTrackedInAnOlderSubvolumeToIt) {
   EXPECT_EQ(mapper.status().frames_integrated, 8u);  // 0, 1, 3, ..., 8
 
   // A correction of keyframe 100 moves both subvolumes anchored there.
-  const Transformationd moved = Transformationd(Eigen::Quaterniond::Identity(),
-                                                Eigen::Vector3d(0.5, 0.0, 0.0)) *
-                                frames[0].T_G_C;
+  const Transformationd moved =
+      Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.5, 0.0, 0.0)) *
+      frames[0].T_G_C;
   mapper.onKeyframePoses({{100, moved}});
   ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
   EXPECT_TRUE(mapper.collection().getSubmap(0)->T_G_M().isApprox(moved, 1e-12));
@@ -719,7 +746,7 @@ TEST(MapperTest, RevisitAnchoringIgnoresUnknownAndOtherEpochReferences) {
   const auto& frames = roomFrames();
   const std::optional<int64_t> epoch1 = epochKey(1, 0);
   ASSERT_TRUE(epoch1.has_value());
-  ASSERT_TRUE(mapper.onKeyframe(0, utimeOf(frames[0]), frames[0].T_G_C));       // subvolume 0
+  ASSERT_TRUE(mapper.onKeyframe(0, utimeOf(frames[0]), frames[0].T_G_C));        // subvolume 0
   ASSERT_TRUE(mapper.onKeyframe(*epoch1, utimeOf(frames[1]), frames[1].T_G_C));  // 1: new map
   ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
   for (size_t i = 1; i < 5; ++i) {

@@ -223,28 +223,36 @@ TEST(TrackerNodeTest, GroundTruthStartWaitsForThePoseOfItsFrame) {
   node.stop();
 }
 
-TEST(TrackerNodeTest, NewestFrameWinsWhenTheTrackerIsBehind) {
-  auto source = simRoom(3, kHalfRig);
-  ASSERT_NE(source, nullptr);
-  TrackerNodeConfig config;
-  config.catch_up = false;
-  config.queue_capacity = 1;
+// `frames` frames of the room arrive before the tracking thread runs; then it runs until
+// idle. The poses it published and its status.
+std::pair<std::vector<FramePoseReport>, TrackerStatus> trackQueuedFrames(size_t frames,
+                                                                         TrackerNodeConfig config) {
+  auto source = simRoom(frames, kHalfRig);
+  EXPECT_NE(source, nullptr);
+  if (!source) return {};
   config.slam.tracker.min_features_to_initialize = 200;
   Collected out;
   TrackerNode node(config, nullptr, out.outputs());
   CaptureFrame frame;
   std::string error;
-  // Three frames arrive before the tracking thread runs: only the newest is tracked.
   while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
-    ASSERT_TRUE(node.onFrame(toTrackerFrame(frame, source->info())));
+    EXPECT_TRUE(node.onFrame(toTrackerFrame(frame, source->info())));
   }
   node.start();
-  ASSERT_TRUE(node.waitUntilIdle(std::chrono::seconds(5)));
+  EXPECT_TRUE(node.waitUntilIdle(std::chrono::seconds(10)));
   node.stop();
-  ASSERT_EQ(out.poses.size(), 1u);
-  EXPECT_EQ(out.poses[0].frame_id, 2);
-  EXPECT_EQ(out.poses[0].state, FramePoseState::kOk) << out.poses[0].reason;
-  const TrackerStatus s = node.status();
+  return {out.poses, node.status()};
+}
+
+// With catch_up false and room for one frame, only the newest of three is tracked.
+TEST(TrackerNodeTest, NewestFrameWinsWhenTheTrackerIsBehind) {
+  TrackerNodeConfig config;
+  config.catch_up = false;
+  config.queue_capacity = 1;
+  const auto [poses, s] = trackQueuedFrames(3, config);
+  ASSERT_EQ(poses.size(), 1u);
+  EXPECT_EQ(poses[0].frame_id, 2);
+  EXPECT_EQ(poses[0].state, FramePoseState::kOk) << poses[0].reason;
   EXPECT_EQ(s.frames_received, 3u);
   EXPECT_EQ(s.frames_dropped, 2u);
   EXPECT_EQ(s.frames_processed, 1u);
@@ -254,28 +262,15 @@ TEST(TrackerNodeTest, NewestFrameWinsWhenTheTrackerIsBehind) {
 // The default: frames that wait while the tracker is behind are all tracked, in order; only
 // those pushed out of the full queue (4) are dropped.
 TEST(TrackerNodeTest, TheTrackerCatchesUpOnTheWaitingFramesInOrder) {
-  auto source = simRoom(6, kHalfRig);
-  ASSERT_NE(source, nullptr);
-  TrackerNodeConfig config;
+  const TrackerNodeConfig config;
   ASSERT_TRUE(config.catch_up);
   ASSERT_EQ(config.queue_capacity, 4u);
-  config.slam.tracker.min_features_to_initialize = 200;
-  Collected out;
-  TrackerNode node(config, nullptr, out.outputs());
-  CaptureFrame frame;
-  std::string error;
-  while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
-    ASSERT_TRUE(node.onFrame(toTrackerFrame(frame, source->info())));
-  }
-  node.start();
-  ASSERT_TRUE(node.waitUntilIdle(std::chrono::seconds(10)));
-  node.stop();
-  ASSERT_EQ(out.poses.size(), 4u);
+  const auto [poses, s] = trackQueuedFrames(6, config);
+  ASSERT_EQ(poses.size(), 4u);
   for (size_t i = 0; i < 4; ++i) {
-    EXPECT_EQ(out.poses[i].frame_id, static_cast<int64_t>(i + 2));
-    EXPECT_EQ(out.poses[i].state, FramePoseState::kOk) << out.poses[i].reason;
+    EXPECT_EQ(poses[i].frame_id, static_cast<int64_t>(i + 2));
+    EXPECT_EQ(poses[i].state, FramePoseState::kOk) << poses[i].reason;
   }
-  const TrackerStatus s = node.status();
   EXPECT_EQ(s.frames_received, 6u);
   EXPECT_EQ(s.frames_dropped, 2u);
   EXPECT_EQ(s.frames_processed, 4u);

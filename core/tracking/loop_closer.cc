@@ -586,13 +586,7 @@ void LoopCloser::globalBundleAdjustment(Keyframe* loop_keyframe) {
       l->updateNormalAndDepth(pyramid_);
       optimised.insert(l);
     }
-    for (Landmark* l : map_->landmarks()) {
-      if (optimised.count(l)) continue;
-      Keyframe* ref = l->referenceKeyframe();
-      if (ref == nullptr || !old_T_C_G.count(ref)) continue;
-      l->setPosition(ref->T_G_C() * (old_T_C_G.at(ref) * l->position()));
-      l->updateNormalAndDepth(pyramid_);
-    }
+    landmarksFollowTheirKeyframe(map_, old_T_C_G, {}, optimised, pyramid_);
     map_->bumpChangeIndex();
     for (Keyframe* k : map_->keyframes()) batch.emplace_back(k->id, k->T_G_C());
     map_->moveCulledKeyframes(&batch);

@@ -1,8 +1,9 @@
 #include "core/tracking/slam_system.h"
-#include "core/common/thread_name.h"
 
 #include <algorithm>
 #include <stdexcept>
+
+#include "core/common/thread_name.h"
 
 namespace cblox {
 

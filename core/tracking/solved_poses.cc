@@ -30,11 +30,21 @@ void applySolvedPoses(SparseMap* map, std::span<Keyframe* const> keyframes,
     k->setPose(since_read * solved_T_C_G[v]);
   }
   newKeyframesFollowTheirParent(*map, &before);
+  landmarksFollowTheirKeyframe(map, before, anchor_of, {}, pyramid);
+}
+
+void landmarksFollowTheirKeyframe(SparseMap* map, const KeyframePoses& before,
+                                  const std::map<LandmarkId, const Keyframe*>& anchor_of,
+                                  const std::set<const Landmark*>& skip,
+                                  const ScalePyramid& pyramid) {
   for (Landmark* l : map->landmarks()) {
+    if (skip.count(l)) continue;
     const auto anchor = anchor_of.find(l->id);
     const Keyframe* ref = anchor != anchor_of.end() ? anchor->second : l->referenceKeyframe();
-    if (ref == nullptr || ref->bad() || before.count(ref) == 0) continue;
-    l->setPosition(ref->T_G_C() * (before.at(ref) * l->position()));
+    if (ref == nullptr || ref->bad()) continue;
+    const auto was = before.find(ref);
+    if (was == before.end()) continue;
+    l->setPosition(ref->T_G_C() * (was->second * l->position()));
     l->updateNormalAndDepth(pyramid);
   }
 }

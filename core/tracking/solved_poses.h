@@ -1,6 +1,7 @@
 #pragma once
 
 #include <map>
+#include <set>
 #include <span>
 
 #include "core/features/scale_pyramid.h"
@@ -33,6 +34,15 @@ void applySolvedPoses(SparseMap* map, std::span<Keyframe* const> keyframes,
                       std::span<const Transformationd> solved_T_C_G,
                       const std::map<LandmarkId, const Keyframe*>& anchor_of,
                       const ScalePyramid& pyramid);
+
+/// Every good landmark not in `skip` keeps its position in the frame of the keyframe that
+/// placed it, or of the one `anchor_of` names for it, and moves with that keyframe: `before`
+/// holds the keyframes' poses before they moved; a landmark whose keyframe is bad or absent
+/// from `before` stays. The caller holds the map's exclusive lock.
+void landmarksFollowTheirKeyframe(SparseMap* map, const KeyframePoses& before,
+                                  const std::map<LandmarkId, const Keyframe*>& anchor_of,
+                                  const std::set<const Landmark*>& skip,
+                                  const ScalePyramid& pyramid);
 
 /// Keyframes absent from `before` (made while the map's lock was released for an
 /// optimisation) whose parent is in it follow their parent: `before` holds the poses the

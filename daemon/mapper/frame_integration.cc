@@ -1,14 +1,14 @@
 #include "daemon/mapper/frame_integration.h"
-#include "core/common/thread_name.h"
-#include "daemon/common/utime_ns.h"
 
 #include <exception>
 #include <optional>
 #include <utility>
 
+#include "core/common/thread_name.h"
 #include "core/geometry/pinhole_camera.h"
 #include "daemon/common/text_format.h"
 #include "daemon/common/thread_priority.h"
+#include "daemon/common/utime_ns.h"
 #include "daemon/mapper/map_epoch_key.h"
 
 namespace cblox {

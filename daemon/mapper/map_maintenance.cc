@@ -1,12 +1,12 @@
 #include "daemon/mapper/map_maintenance.h"
-#include "core/common/thread_name.h"
-#include "daemon/common/utime_ns.h"
 
 #include <algorithm>
 #include <exception>
 #include <optional>
 
+#include "core/common/thread_name.h"
 #include "daemon/common/text_format.h"
+#include "daemon/common/utime_ns.h"
 #include "daemon/mapper/map_epoch_key.h"
 
 namespace cblox {

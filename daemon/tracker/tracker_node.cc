@@ -1,6 +1,4 @@
 #include "daemon/tracker/tracker_node.h"
-#include "core/common/thread_name.h"
-#include "daemon/common/utime_ns.h"
 
 #include <algorithm>
 #include <climits>
@@ -12,8 +10,10 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/common/thread_name.h"
 #include "daemon/common/thread_priority.h"
 #include "daemon/common/time_restart.h"
+#include "daemon/common/utime_ns.h"
 
 namespace cblox {
 namespace {

@@ -161,11 +161,11 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return 2;
   }
-  std::optional<SlamSystemConfig> config = node->slam;
-  if (one_core) config->frames.parallel_stereo_extraction = false;
+  SlamSystemConfig config = node->slam;
+  if (one_core) config.frames.parallel_stereo_extraction = false;
   // The SLAM threads at the niceness cblox-tracker gives them (tracker.yaml's
   // local_mapping.niceness and loop_closing.niceness).
-  SlamSystem slam(camera, *config, &*vocabulary,
+  SlamSystem slam(camera, config, &*vocabulary,
                   slamThreadPriorities(*node, [](const std::string& line) {
                     std::fprintf(stderr, "%s\n", line.c_str());
                   }));

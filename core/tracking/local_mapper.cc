@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/common/thread_cpu_clock.h"
 #include "core/tracking/feature_measurement.h"
 #include "core/tracking/landmark_fusion.h"
 
@@ -78,18 +79,38 @@ LocalMapperStats LocalMapper::stats() const {
 bool LocalMapper::processOne() {
   Keyframe* keyframe = queue_.tryPop();
   if (keyframe == nullptr) return false;
+  LocalMapperStats::StepSeconds cpu;
+  double clock = threadCpuSeconds();
+  const auto lap = [&clock](double* step) {
+    const double now = threadCpuSeconds();
+    *step += now - clock;
+    clock = now;
+  };
   processNewKeyframe(keyframe);
+  lap(&cpu.refresh);
   cullRecentLandmarks(keyframe);
+  lap(&cpu.cull_landmarks);
   if (config_.create_new_landmarks) triangulateNewLandmarks(keyframe);
+  lap(&cpu.triangulate);
   if (!queue_.moreWorkOrStopping()) fuseWithNeighbours(keyframe);
+  lap(&cpu.fuse);
   abort_ba_ = false;
   if (!queue_.moreWorkOrStopping()) {
     localBundleAdjustment(keyframe);
+    lap(&cpu.bundle_adjustment);
     if (config_.cull_keyframes) cullKeyframes(keyframe);
+    lap(&cpu.cull_keyframes);
   }
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.keyframes_processed;
+    LocalMapperStats::StepSeconds& sum = stats_.cpu_s;
+    sum.refresh += cpu.refresh;
+    sum.cull_landmarks += cpu.cull_landmarks;
+    sum.triangulate += cpu.triangulate;
+    sum.fuse += cpu.fuse;
+    sum.bundle_adjustment += cpu.bundle_adjustment;
+    sum.cull_keyframes += cpu.cull_keyframes;
   }
   if (on_keyframe_) on_keyframe_(keyframe);
   queue_.done();

@@ -75,6 +75,20 @@ struct LocalMapperStats {
   size_t last_ba_fixed_keyframes = 0;
   size_t last_ba_landmarks = 0;
   size_t last_ba_observations = 0;
+  /// CPU seconds of the local mapping thread per step, summed over every keyframe (the
+  /// thread's own clock: time spent waiting for the map's lock is not counted).
+  struct StepSeconds {
+    double refresh = 0.0;            ///< the keyframe's landmarks and connections refreshed
+    double cull_landmarks = 0.0;     ///< recent landmarks on probation checked
+    double triangulate = 0.0;        ///< new landmarks with the covisible keyframes
+    double fuse = 0.0;               ///< duplicate landmarks fused with the neighbours
+    double bundle_adjustment = 0.0;  ///< local BA: the window read, solved, written back
+    double cull_keyframes = 0.0;     ///< redundant keyframes (when culling is on)
+    double total() const {
+      return refresh + cull_landmarks + triangulate + fuse + bundle_adjustment + cull_keyframes;
+    }
+  };
+  StepSeconds cpu_s;
 };
 
 /// ORB-SLAM2's local mapping for stereo / RGB-D: for every keyframe the tracker inserted,

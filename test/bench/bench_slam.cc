@@ -346,6 +346,12 @@ int run(int argc, char** argv) {
       percentile(ba_ms, 0.95), percentile(ba_free, 0.5), percentile(ba_fixed, 0.5),
       percentile(ba_landmarks, 0.5), percentile(ba_observations, 0.5),
       percentile(ba_observations, 0.95));
+  const LocalMapperStats::StepSeconds& steps = lm.cpu_s;
+  std::printf(
+      "  local mapping CPU: %.1f s in all: refresh %.1f, landmark culling %.1f, triangulation "
+      "%.1f, fusion %.1f, local BA %.1f, keyframe culling %.1f s\n",
+      steps.total(), steps.refresh, steps.cull_landmarks, steps.triangulate, steps.fuse,
+      steps.bundle_adjustment, steps.cull_keyframes);
   std::printf(
       "  loops: %zu closed (%zu false), %lu rejected after verification (%lu candidates by "
       "the drift gate); correction median %.1f ms (essential graph %.1f ms, the map locked "
@@ -395,6 +401,13 @@ int run(int argc, char** argv) {
         {"local_ba_fixed_keyframes_median", percentile(ba_fixed, 0.5)},
         {"local_ba_landmarks_median", percentile(ba_landmarks, 0.5)},
         {"local_ba_observations_median", percentile(ba_observations, 0.5)},
+        {"local_mapping_cpu_s",
+         {{"refresh", steps.refresh},
+          {"cull_landmarks", steps.cull_landmarks},
+          {"triangulate", steps.triangulate},
+          {"fuse", steps.fuse},
+          {"bundle_adjustment", steps.bundle_adjustment},
+          {"cull_keyframes", steps.cull_keyframes}}},
         {"loops", loops.size()},
         {"false_loops", false_loops},
         {"loops_rejected_drift", lc.loops_rejected_drift},

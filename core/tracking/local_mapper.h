@@ -38,8 +38,11 @@ struct LocalMapperConfig {
   /// Local BA over the new keyframe and its covisible keyframes; the keyframes outside that
   /// see the window's landmarks are held fixed. At most this many covisible keyframes, the
   /// ones sharing the most landmarks with the new keyframe, are optimised (0 = all of them,
-  /// as ORB-SLAM2); the others that see the window's landmarks are held fixed.
-  int local_ba_max_keyframes = 0;
+  /// as ORB-SLAM2); the others that see the window's landmarks are held fixed. 20 bounds
+  /// the town's windows (40 covisible keyframes at the median with ORB-SLAM2's keyframe
+  /// rule) and halves local mapping's CPU there at the same accuracy; indoors the windows
+  /// are smaller than that (BENCHMARKS.md, "A bounded local BA window").
+  int local_ba_max_keyframes = 20;
   BundleAdjustmentConfig bundle_adjustment;
   /// Keyframe culling: a keyframe whose close landmarks are >= this fraction seen by at
   /// least 3 other keyframes at the same or a finer scale is culled (ORB-SLAM2: 0.9).

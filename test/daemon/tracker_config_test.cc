@@ -138,6 +138,7 @@ TEST(TrackerConfigTest, CommentedKeysOfTheShippedYamlAreTheDefaults) {
   EXPECT_EQ(m.fuse_second_neighbours, m0.fuse_second_neighbours);
   EXPECT_EQ(m.fuse_radius, m0.fuse_radius);
   EXPECT_EQ(m.redundant_ratio, m0.redundant_ratio);
+  EXPECT_EQ(m.local_ba_max_keyframes, m0.local_ba_max_keyframes);
   expectSameBundleAdjustment(m.bundle_adjustment, m0.bundle_adjustment);
   const LoopCloserConfig &l = a.loop_closing, &l0 = b.loop_closing;
   EXPECT_EQ(l.min_keyframes_between_loops, l0.min_keyframes_between_loops);
@@ -167,8 +168,8 @@ TEST(TrackerConfigTest, ReadsOverrides) {
       "         parallel_stereo_extraction: false}\n"
       "tracker: {min_features_to_initialize: 300, max_frames_between_keyframes: 10,\n"
       "          pnp_reprojection_error_px: 3.0, close_points_gap_min_inliers: 90}\n"
-      "local_mapping: {cull_keyframes: true, bundle_adjustment: {num_threads: 2,\n"
-      "                max_time_s: 0.2}}\n"
+      "local_mapping: {cull_keyframes: true, local_ba_max_keyframes: 7,\n"
+      "                bundle_adjustment: {num_threads: 2, max_time_s: 0.2}}\n"
       "loop_closing: {enabled: false, seed: 7, pose_graph: {max_iterations: 30},\n"
       "               global_ba: {first_pass_iterations: 4}}\n"
       "input: {queue_capacity: 2, ground_truth_wait_s: 0.5, catch_up: false}\n"
@@ -209,6 +210,7 @@ TEST(TrackerConfigTest, ReadsOverrides) {
   EXPECT_EQ(t.slam.tracker.max_frames_between_keyframes, 10);
   EXPECT_EQ(t.slam.tracker.pnp_reprojection_error_px, 3.0);
   EXPECT_TRUE(t.slam.local_mapping.cull_keyframes);
+  EXPECT_EQ(t.slam.local_mapping.local_ba_max_keyframes, 7);
   EXPECT_EQ(t.slam.local_mapping.bundle_adjustment.solver.num_threads, 2);
   EXPECT_EQ(t.slam.local_mapping.bundle_adjustment.solver.max_time_s, 0.2);
   EXPECT_FALSE(t.slam.loop_closing_enabled);

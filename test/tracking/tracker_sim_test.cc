@@ -374,9 +374,11 @@ TEST(TrackerSimTest, LostFrameReasonGivesTheSearchesCounts) {
 TEST(TrackerSimTest, LocalBundleAdjustmentWindowIsBounded) {
   TrackerConfig tracking;
   tracking.max_frames_between_keyframes = 5;  // keyframes often: a window to bound
+  LocalMapperConfig unbounded;
+  unbounded.local_ba_max_keyframes = 0;
   LocalMapperConfig bounded;
   bounded.local_ba_max_keyframes = 3;
-  const RunStats all = runTracker("sim:room", "loop", 90, true, tracking);
+  const RunStats all = runTracker("sim:room", "loop", 90, true, tracking, unbounded);
   const RunStats few = runTracker("sim:room", "loop", 90, true, tracking, bounded);
   ASSERT_GT(all.mapping.bundle_adjustments, 0u);
   ASSERT_GT(few.mapping.bundle_adjustments, 0u);

@@ -150,8 +150,13 @@ void TrackerLcmNode::publishHeartbeat(const TrackerStatus& s, const std::string&
   hb.add("landmarks", s.landmarks);
   hb.add("pose_batches", s.pose_batches);
   hb.add("loops_closed", s.loops_closed);
+  hb.add("loops_rejected_drift", s.loops_rejected_drift);
+  hb.add("essential_graphs_failed", s.essential_graphs_failed);
   hb.add("local_bundle_adjustments", s.local_bundle_adjustments);
+  hb.add("local_bundle_adjustments_interrupted", s.local_bundle_adjustments_interrupted);
+  hb.add("local_mapping_cpu_ms", static_cast<uint64_t>(std::llround(s.local_mapping_cpu_ms)));
   hb.add("global_bundle_adjustments", s.global_bundle_adjustments);
+  hb.add("global_bundle_adjustments_abandoned", s.global_bundle_adjustments_abandoned);
   hb.add("covariance_requests", s.covariance_requests);
   hb.add("covariance_pairs_ok", s.covariance_pairs_ok);
   hb.add("covariance_pairs_failed", s.covariance_pairs_failed);

@@ -585,8 +585,14 @@ TrackerStatus TrackerNode::status() const {
       }
       const LoopCloserStats loops = system_->loopClosingStats();
       s.loops_closed = loops.loops_closed;
+      s.loops_rejected_drift = loops.loops_rejected_drift;
+      s.essential_graphs_failed = loops.essential_graphs_failed;
       s.global_bundle_adjustments = loops.global_bundle_adjustments;
-      s.local_bundle_adjustments = system_->localMappingStats().bundle_adjustments;
+      s.global_bundle_adjustments_abandoned = loops.global_bundle_adjustments_abandoned;
+      const LocalMapperStats mapping = system_->localMappingStats();
+      s.local_bundle_adjustments = mapping.bundle_adjustments;
+      s.local_bundle_adjustments_interrupted = mapping.bundle_adjustments_aborted;
+      s.local_mapping_cpu_ms = 1e3 * mapping.cpu_s.total();
     }
     if (covariance_) {
       const KeyframeCovarianceServiceStats c = covariance_->stats();

@@ -158,8 +158,17 @@ struct TrackerStatus {
   int32_t map_epoch = 0;         ///< the map in use: one more per restart with time going back
   uint64_t landmarks = 0;        ///< landmarks in the map now
   uint64_t loops_closed = 0;
+  /// Loop candidates refused by the drift gate (a correction larger than it allows), and
+  /// corrections whose essential graph failed to solve (the map keeps its group's move).
+  uint64_t loops_rejected_drift = 0, essential_graphs_failed = 0;
   uint64_t local_bundle_adjustments = 0;
+  /// Local BAs stopped early by a new keyframe (their progress is kept).
+  uint64_t local_bundle_adjustments_interrupted = 0;
+  /// CPU of the local mapping thread so far, milliseconds (all its steps; LocalMapperStats).
+  double local_mapping_cpu_ms = 0.0;
   uint64_t global_bundle_adjustments = 0;
+  /// Global BAs dropped because a newer loop or a move of the map made them stale.
+  uint64_t global_bundle_adjustments_abandoned = 0;
   /// Covariance service: requests, pairs answered with a covariance / with an error, and
   /// the last linearization's build (map -> S) and last request's solve times, milliseconds.
   uint64_t covariance_requests = 0;

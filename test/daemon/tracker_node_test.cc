@@ -184,6 +184,12 @@ TEST(TrackerNodeTest, TracksRgbdFramesOfTheSimulatedRoom) {
   EXPECT_EQ(s.pose_batches, out.batches.size());
   EXPECT_GT(s.landmarks, 0u);
   EXPECT_EQ(s.state, "tracking");
+  // Local mapping's counters reach the status (and so the heartbeat): its BAs moved the
+  // keyframes (the pose batches), and its thread's CPU was counted.
+  EXPECT_GT(s.local_bundle_adjustments, 0u);
+  EXPECT_LE(s.local_bundle_adjustments_interrupted, s.local_bundle_adjustments);
+  EXPECT_GT(s.local_mapping_cpu_ms, 0.0);
+  EXPECT_EQ(s.essential_graphs_failed, 0u);
 }
 
 TEST(TrackerNodeTest, GroundTruthStartWaitsForThePoseOfItsFrame) {

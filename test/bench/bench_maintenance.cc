@@ -365,8 +365,13 @@ int run(int argc, char** argv) {
     if (kind == Kind::kOn) {
       Mapper* mapper = v->mapper.get();
       Variant* variant = v.get();
+      // Waited for per frame, the drive runs slower or faster than its clock: as in
+      // cblox-replay, linearizations are not spaced by wall-clock time then. In real time the
+      // live tracker's spacing applies.
+      KeyframeCovarianceServiceConfig covariance_config;
+      if (sync_slam) covariance_config.min_linearization_interval_s = 0.0;
       v->covariance = std::make_unique<KeyframeCovarianceService>(
-          slam.map(), camera, slam.pyramid(), KeyframeCovarianceServiceConfig{},
+          slam.map(), camera, slam.pyramid(), covariance_config,
           [mapper, variant, &errors_mutex, &errors, &build_ms, &reused, &positions_mutex,
            &keyframe_positions](const KeyframeCovarianceReply& reply) {
             {

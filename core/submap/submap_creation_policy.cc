@@ -118,6 +118,24 @@ bool SubmapCreationPolicy::onFrameReference(const Submap& active,
   return true;
 }
 
+bool SubmapCreationPolicy::onJumpReference(const Submap* active,
+                                           const std::optional<ReferenceHome>& home) {
+  if (config_.revisit_after_frames <= 0 || pending_ != Pending::kTrackingJump || !home) {
+    return false;
+  }
+  if (active != nullptr &&
+      (home->submap == active->id() || home->anchor == active->anchorKeyframe())) {
+    return false;
+  }
+  pending_ = Pending::kNone;
+  revisit_home_ = -1;
+  revisit_votes_ = 0;
+  revisit_anchor_ = home->anchor;
+  revisit_frames_ = 0;
+  last_reason_ = Reason::kRevisitAfterJump;
+  return true;
+}
+
 const char* SubmapCreationPolicy::reasonName(Reason reason) {
   switch (reason) {
     case Reason::kNone:
@@ -138,6 +156,8 @@ const char* SubmapCreationPolicy::reasonName(Reason reason) {
       return "tracked in an older subvolume";
     case Reason::kRevisitEnded:
       return "new keyframe after a revisit";
+    case Reason::kRevisitAfterJump:
+      return "tracked in an older subvolume after a jump";
   }
   return "none";
 }

@@ -149,19 +149,31 @@ class SubmapCreationPolicy {
   /// frames tracked against its home. Always false when revisit_after_frames is 0. Not
   /// thread-safe.
   bool onFrameReference(const Submap& active, const std::optional<ReferenceHome>& home);
+  /// The revisit rule for a frame that waits for an anchor after a tracking jump
+  /// (onFramePose returned kWaitForAnchor with the jump pending): when its reference
+  /// keyframe's `home` is an older submap (not `active`, not sharing its anchor), the frame
+  /// starts a revisit submap there at once instead of waiting for the tracker's next keyframe
+  /// (a loop closure or a relocalization in a known place: the tracker tracks against the old
+  /// map and makes no keyframe, and every frame until one would be lost). True: the caller
+  /// creates the submap as for onFrameReference and integrates the frame; the jump is no
+  /// longer pending, the submap is the revisit submap of onFrameReference's rules, and
+  /// lastReason() is kRevisitAfterJump. False when revisit_after_frames is 0, no jump is
+  /// pending or the home does not qualify. Not thread-safe.
+  bool onJumpReference(const Submap* active, const std::optional<ReferenceHome>& home);
 
   /// Why the last onKeyframe() or onFrameReference() that returned true created a submap
   /// (logs, benchmarks).
   enum class Reason {
-    kNone,            ///< no submap created yet
-    kNoActiveSubmap,  ///< there was no active submap (or it was finished)
-    kNewMap,          ///< starts_new_map
-    kTrackingJump,    ///< a frame pose was flagged as a tracking jump
-    kKeyframeLimit,   ///< the active submap was full
-    kRevisit,         ///< near an older anchor (revisit_anchor_distance_m)
-    kAnchorDistance,  ///< far from the active anchor (max_anchor_distance_m)
-    kRevisitFrames,   ///< frames tracked in an older subvolume (revisit_after_frames)
-    kRevisitEnded,    ///< a keyframe while the active submap is a revisit submap
+    kNone,              ///< no submap created yet
+    kNoActiveSubmap,    ///< there was no active submap (or it was finished)
+    kNewMap,            ///< starts_new_map
+    kTrackingJump,      ///< a frame pose was flagged as a tracking jump
+    kKeyframeLimit,     ///< the active submap was full
+    kRevisit,           ///< near an older anchor (revisit_anchor_distance_m)
+    kAnchorDistance,    ///< far from the active anchor (max_anchor_distance_m)
+    kRevisitFrames,     ///< frames tracked in an older subvolume (revisit_after_frames)
+    kRevisitEnded,      ///< a keyframe while the active submap is a revisit submap
+    kRevisitAfterJump,  ///< after a jump, tracked in an older subvolume (onJumpReference)
   };
   /// Not thread-safe.
   Reason lastReason() const { return last_reason_; }
@@ -180,8 +192,8 @@ class SubmapCreationPolicy {
 
   const SubmapCreationPolicyConfig& config() const { return config_; }
   /// "no active submap", "new map", "tracking jump", "keyframe limit", "revisit",
-  /// "anchor distance", "tracked in an older subvolume", "new keyframe after a revisit"
-  /// ("none" for kNone).
+  /// "anchor distance", "tracked in an older subvolume", "new keyframe after a revisit",
+  /// "tracked in an older subvolume after a jump" ("none" for kNone).
   static const char* reasonName(Reason reason);
 
  private:

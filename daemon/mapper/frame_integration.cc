@@ -157,24 +157,50 @@ void FrameIntegration::loop() {
   }
 }
 
+std::optional<SubmapPose> FrameIntegration::referenceHome(const Submap* active,
+                                                          int64_t reference_keyframe) const {
+  if (reference_keyframe < 0) return std::nullopt;
+  std::optional<SubmapPose> home = collection_->oldestSubmapWithKeyframe(reference_keyframe);
+  // Another map epoch's subvolume is never a home: the two maps' frames are unrelated.
+  if (home && active != nullptr &&
+      epochOfKey(home->anchor_keyframe) != epochOfKey(active->anchorKeyframe())) {
+    home.reset();
+  }
+  return home;
+}
+
+std::shared_ptr<Submap> FrameIntegration::startRevisitSubmap(const SubmapPose& home,
+                                                             int64_t frame_time_ns) {
+  // Finishes the previous submap (this thread holds no layer lock: nothing to wait for).
+  std::shared_ptr<Submap> revisit =
+      collection_->createSubmap(home.T_G_M, home.anchor_keyframe, frame_time_ns);
+  maintenance_->adoptRevisitSubmap(revisit->id(), home.id, home.anchor_keyframe,
+                                   policy_->lastReason());
+  return revisit;
+}
+
 std::shared_ptr<Submap> FrameIntegration::applyRevisitRule(std::shared_ptr<Submap> active,
                                                            int64_t reference_keyframe,
                                                            int64_t frame_time_ns) {
   if (policy_->config().revisit_after_frames <= 0 || !active) return active;
-  std::optional<SubmapPose> home;
-  if (reference_keyframe >= 0) home = collection_->oldestSubmapWithKeyframe(reference_keyframe);
-  // Another map epoch's subvolume is never a home: the two maps' frames are unrelated.
-  if (home && epochOfKey(home->anchor_keyframe) != epochOfKey(active->anchorKeyframe())) {
-    home.reset();
-  }
+  const std::optional<SubmapPose> home = referenceHome(active.get(), reference_keyframe);
   std::optional<SubmapCreationPolicy::ReferenceHome> where;
   if (home) where = SubmapCreationPolicy::ReferenceHome{home->id, home->anchor_keyframe};
   if (!policy_->onFrameReference(*active, where)) return active;
-  // Finishes the previous submap (this thread holds no layer lock: nothing to wait for).
-  std::shared_ptr<Submap> revisit =
-      collection_->createSubmap(home->T_G_M, home->anchor_keyframe, frame_time_ns);
-  maintenance_->adoptRevisitSubmap(revisit->id(), home->id, home->anchor_keyframe);
-  return revisit;
+  return startRevisitSubmap(*home, frame_time_ns);
+}
+
+std::shared_ptr<Submap> FrameIntegration::revisitAfterJump(const std::shared_ptr<Submap>& active,
+                                                           int64_t reference_keyframe,
+                                                           int64_t frame_time_ns) {
+  if (policy_->config().revisit_after_frames <= 0) return nullptr;
+  const std::optional<SubmapPose> home = referenceHome(active.get(), reference_keyframe);
+  if (!home) return nullptr;
+  if (!policy_->onJumpReference(
+          active.get(), SubmapCreationPolicy::ReferenceHome{home->id, home->anchor_keyframe})) {
+    return nullptr;
+  }
+  return startRevisitSubmap(*home, frame_time_ns);
 }
 
 void FrameIntegration::processFrame(PendingFrame pending, const Transformationd& T_G_B, bool jump,
@@ -216,6 +242,12 @@ void FrameIntegration::processFrame(PendingFrame pending, const Transformationd&
       action = policy_->onFramePose(active.get(), jump && attempt == 0, time_ns);
       if (action == SubmapCreationPolicy::FrameAction::kIntegrate && attempt == 0) {
         active = applyRevisitRule(std::move(active), reference_keyframe, time_ns);
+      } else if (action == SubmapCreationPolicy::FrameAction::kWaitForAnchor && attempt == 0) {
+        if (std::shared_ptr<Submap> revisit =
+                revisitAfterJump(active, reference_keyframe, time_ns)) {
+          active = std::move(revisit);
+          action = SubmapCreationPolicy::FrameAction::kIntegrate;
+        }
       }
     }
     if (action == SubmapCreationPolicy::FrameAction::kWaitForAnchor) {

@@ -121,6 +121,17 @@ class FrameIntegration {
   // *policy_mutex_ held.
   std::shared_ptr<Submap> applyRevisitRule(std::shared_ptr<Submap> active,
                                            int64_t reference_keyframe, int64_t frame_time_ns);
+  // The same for a frame waiting for an anchor after a tracking jump
+  // (SubmapCreationPolicy::onJumpReference): the revisit submap it starts, or null when the
+  // frame keeps waiting. Call with *policy_mutex_ held.
+  std::shared_ptr<Submap> revisitAfterJump(const std::shared_ptr<Submap>& active,
+                                           int64_t reference_keyframe, int64_t frame_time_ns);
+  // The oldest submap holding `reference_keyframe` (-1: none), unless it belongs to another
+  // map epoch than `active`'s (the two maps' frames are unrelated).
+  std::optional<SubmapPose> referenceHome(const Submap* active, int64_t reference_keyframe) const;
+  // Creates the revisit submap at `home` (its current pose and anchor) and hands it to map
+  // maintenance. Call with *policy_mutex_ held.
+  std::shared_ptr<Submap> startRevisitSubmap(const SubmapPose& home, int64_t frame_time_ns);
 
   const FrameIntegrationConfig config_;
   SubmapCollection* const collection_;

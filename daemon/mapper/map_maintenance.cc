@@ -326,7 +326,8 @@ void MapMaintenance::submitSameAnchorPairs(const std::vector<FusionPair>& pairs)
   if (!pairs.empty()) worker_->submitFusions(pairs);
 }
 
-void MapMaintenance::adoptRevisitSubmap(SubmapId revisit, SubmapId home, KeyframeId anchor) {
+void MapMaintenance::adoptRevisitSubmap(SubmapId revisit, SubmapId home, KeyframeId anchor,
+                                        SubmapCreationPolicy::Reason reason) {
   std::vector<FusionPair> exact;
   {
     std::lock_guard<std::mutex> lock(scheduler_mutex_);
@@ -337,8 +338,8 @@ void MapMaintenance::adoptRevisitSubmap(SubmapId revisit, SubmapId home, Keyfram
   log_("subvolume " + std::to_string(revisit) + " anchored at keyframe " +
        std::to_string(idOfKey(anchor)) +
        (epochOfKey(anchor) > 0 ? " of map epoch " + std::to_string(epochOfKey(anchor)) : "") +
-       " (" + SubmapCreationPolicy::reasonName(SubmapCreationPolicy::Reason::kRevisitFrames) +
-       ": revisit of subvolume " + std::to_string(home) + ")");
+       " (" + SubmapCreationPolicy::reasonName(reason) + ": revisit of subvolume " +
+       std::to_string(home) + ")");
   submitSameAnchorPairs(exact);
 }
 

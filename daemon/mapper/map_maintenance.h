@@ -58,8 +58,8 @@ class MapMaintenance {
 
   /// `collection`, `policy`, `policy_mutex` and `worker` must outlive it.
   MapMaintenance(MapMaintenanceConfig config, SubmapCollection* collection,
-                 SubmapCreationPolicy* policy, std::mutex* policy_mutex,
-                 FusionExportWorker* worker, ProblemSink problems, LogSink log);
+                 SubmapCreationPolicy* policy, std::mutex* policy_mutex, FusionExportWorker* worker,
+                 ProblemSink problems, LogSink log);
   /// Calls stop().
   ~MapMaintenance();
   MapMaintenance(const MapMaintenance&) = delete;
@@ -96,7 +96,9 @@ class MapMaintenance {
   /// fusion scheduler sharing home's anchor (FusionScheduler::addSubvolumeSharingAnchor) and
   /// logs it. Call with `*policy_mutex` held, right after SubmapCollection::createSubmap, so
   /// no keyframe joins it before the scheduler knows it.
-  void adoptRevisitSubmap(SubmapId revisit, SubmapId home, KeyframeId anchor);
+  /// `reason`: the rule that started it (logged), kRevisitFrames or kRevisitAfterJump.
+  void adoptRevisitSubmap(SubmapId revisit, SubmapId home, KeyframeId anchor,
+                          SubmapCreationPolicy::Reason reason);
   /// The worker's result for an accepted pair (FusionExportWorker::FusionCallback).
   void onFusionResult(const FusionPair& pair, bool fused);
   /// An accepted depth frame or pose at `utime` (MaintenanceClock::kInput's time).
@@ -142,8 +144,8 @@ class MapMaintenance {
   // False when stopping (the item is not queued).
   bool enqueue(Item item);
   void apply(const Item& item);
-  void applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K,
-                     bool synthesised, std::span<const uint64_t> landmark_ids);
+  void applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K, bool synthesised,
+                     std::span<const uint64_t> landmark_ids);
   void applyBatch(const std::vector<std::pair<KeyframeId, Transformationd>>& batch);
   void applyReply(const Item& item);
   // Same-anchor pairs go to the worker at once; then a covariance request, if one is due.

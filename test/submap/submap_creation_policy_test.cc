@@ -149,6 +149,50 @@ TEST(SubmapCreationPolicy, FramesTrackedInAnOlderSubmapStartARevisitSubmap) {
   EXPECT_NE(config.validate().find("revisit_max_frames"), std::string::npos);
 }
 
+// After a tracking jump, a frame whose reference keyframe lies in an older submap starts a
+// revisit submap there at once (onJumpReference) instead of waiting for the next keyframe;
+// its home must be another submap than the active one, a jump must be pending, and the
+// frames rule must be on.
+TEST(SubmapCreationPolicy, AJumpIntoAnOlderSubmapStartsARevisitSubmapAtOnce) {
+  using Home = SubmapCreationPolicy::ReferenceHome;
+  using Reason = SubmapCreationPolicy::Reason;
+  SubmapCreationPolicyConfig config;
+  config.revisit_max_frames = 3;
+  SubmapCreationPolicy policy(config);
+  Submap active(5, LayerConfig{}, Transformationd(), 50, 0);
+  const Home old_home{2, 20};
+  // No jump pending: nothing to do.
+  ASSERT_EQ(policy.onFramePose(&active, false), Action::kIntegrate);
+  EXPECT_FALSE(policy.onJumpReference(&active, old_home));
+  // A jump: frames wait, unless their reference keyframe has an older home.
+  ASSERT_EQ(policy.onFramePose(&active, true), Action::kWaitForAnchor);
+  EXPECT_FALSE(policy.onJumpReference(&active, std::nullopt));
+  EXPECT_FALSE(policy.onJumpReference(&active, Home{5, 50}));  // the active submap itself
+  EXPECT_FALSE(policy.onJumpReference(&active, Home{1, 50}));  // shares its anchor
+  EXPECT_EQ(policy.pending(), Pending::kTrackingJump);
+  EXPECT_TRUE(policy.onJumpReference(&active, old_home));
+  EXPECT_EQ(policy.lastReason(), Reason::kRevisitAfterJump);
+  EXPECT_STREQ(SubmapCreationPolicy::reasonName(policy.lastReason()),
+               "tracked in an older subvolume after a jump");
+  EXPECT_EQ(policy.pending(), Pending::kNone);
+  // The new submap is a revisit submap: frames at home renew it after revisit_max_frames, and
+  // a keyframe ends it.
+  Submap revisit(6, LayerConfig{}, Transformationd(), 20, 0);
+  EXPECT_EQ(policy.onFramePose(&revisit, false), Action::kIntegrate);
+  EXPECT_FALSE(policy.onFrameReference(revisit, old_home));
+  EXPECT_FALSE(policy.onFrameReference(revisit, old_home));
+  EXPECT_TRUE(policy.onFrameReference(revisit, old_home));
+  EXPECT_EQ(policy.lastReason(), Reason::kRevisitFrames);
+  EXPECT_TRUE(policy.onKeyframe(&revisit));
+  EXPECT_EQ(policy.lastReason(), Reason::kRevisitEnded);
+  // With the frames rule off, a jump always waits for its keyframe.
+  config.revisit_after_frames = 0;
+  SubmapCreationPolicy off(config);
+  ASSERT_EQ(off.onFramePose(&active, true), Action::kWaitForAnchor);
+  EXPECT_FALSE(off.onJumpReference(&active, old_home));
+  EXPECT_EQ(off.pending(), Pending::kTrackingJump);
+}
+
 // The policy says why it asked for each new submap (the mapper logs it).
 TEST(SubmapCreationPolicy, ReportsWhyASubmapWasCreated) {
   using Reason = SubmapCreationPolicy::Reason;

@@ -104,13 +104,7 @@ bool LocalMapper::processOne() {
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.keyframes_processed;
-    LocalMapperStats::StepSeconds& sum = stats_.cpu_s;
-    sum.refresh += cpu.refresh;
-    sum.cull_landmarks += cpu.cull_landmarks;
-    sum.triangulate += cpu.triangulate;
-    sum.fuse += cpu.fuse;
-    sum.bundle_adjustment += cpu.bundle_adjustment;
-    sum.cull_keyframes += cpu.cull_keyframes;
+    stats_.cpu_s += cpu;
   }
   if (on_keyframe_) on_keyframe_(keyframe);
   queue_.done();

@@ -90,6 +90,15 @@ struct LocalMapperStats {
     double total() const {
       return refresh + cull_landmarks + triangulate + fuse + bundle_adjustment + cull_keyframes;
     }
+    StepSeconds& operator+=(const StepSeconds& o) {
+      refresh += o.refresh;
+      cull_landmarks += o.cull_landmarks;
+      triangulate += o.triangulate;
+      fuse += o.fuse;
+      bundle_adjustment += o.bundle_adjustment;
+      cull_keyframes += o.cull_keyframes;
+      return *this;
+    }
   };
   StepSeconds cpu_s;
 };

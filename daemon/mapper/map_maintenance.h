@@ -58,8 +58,8 @@ class MapMaintenance {
 
   /// `collection`, `policy`, `policy_mutex` and `worker` must outlive it.
   MapMaintenance(MapMaintenanceConfig config, SubmapCollection* collection,
-                 SubmapCreationPolicy* policy, std::mutex* policy_mutex, FusionExportWorker* worker,
-                 ProblemSink problems, LogSink log);
+                 SubmapCreationPolicy* policy, std::mutex* policy_mutex,
+                 FusionExportWorker* worker, ProblemSink problems, LogSink log);
   /// Calls stop().
   ~MapMaintenance();
   MapMaintenance(const MapMaintenance&) = delete;
@@ -144,8 +144,8 @@ class MapMaintenance {
   // False when stopping (the item is not queued).
   bool enqueue(Item item);
   void apply(const Item& item);
-  void applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K, bool synthesised,
-                     std::span<const uint64_t> landmark_ids);
+  void applyKeyframe(KeyframeId id, int64_t utime, const Transformationd& T_G_K,
+                     bool synthesised, std::span<const uint64_t> landmark_ids);
   void applyBatch(const std::vector<std::pair<KeyframeId, Transformationd>>& batch);
   void applyReply(const Item& item);
   // Same-anchor pairs go to the worker at once; then a covariance request, if one is due.

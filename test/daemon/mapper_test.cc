@@ -384,18 +384,25 @@ TEST(MapperTest, FrameWithoutPoseIsRejectedAfterTheWait) {
   EXPECT_EQ(s.frames_pending, 0u);
 }
 
-TEST(MapperTest, NewestFrameWinsAndTheOthersAreCountedAsDropped) {
-  test::TempDir dir("mapper");
+// A started mapper with an in-tray of four (in order or newest-wins) that received six frames
+// faster than their poses: the in-tray keeps the newest four and drops frames 0 and 1.
+std::unique_ptr<Mapper> mapperWithSixFramesWaiting(const test::TempDir& dir, bool in_order) {
   MapperConfig config = testConfig(dir.path());
   config.pending_capacity = 4;
-  config.pending_in_order = false;
+  config.pending_in_order = in_order;
   config.max_pose_wait_s = 30.0;  // nothing expires during the test
-  Mapper mapper(config);
+  auto mapper = std::make_unique<Mapper>(config);
   std::string error;
-  ASSERT_TRUE(mapper.start(&error)) << error;
-  // Six frames faster than their poses: the in-tray keeps the newest four.
-  for (int i = 0; i < 6; ++i) ASSERT_TRUE(mapper.onDepthFrame(depthFrame(roomFrames()[i], i)));
-  EXPECT_EQ(mapper.status().frames_dropped, 2u);
+  EXPECT_TRUE(mapper->start(&error)) << error;
+  for (int i = 0; i < 6; ++i) EXPECT_TRUE(mapper->onDepthFrame(depthFrame(roomFrames()[i], i)));
+  EXPECT_EQ(mapper->status().frames_dropped, 2u);
+  return mapper;
+}
+
+TEST(MapperTest, NewestFrameWinsAndTheOthersAreCountedAsDropped) {
+  test::TempDir dir("mapper");
+  const std::unique_ptr<Mapper> started = mapperWithSixFramesWaiting(dir, false);
+  Mapper& mapper = *started;
   // The newest frame's pose arrives: it is integrated, the three older ones are superseded.
   ASSERT_TRUE(mapper.onFramePose(groundTruthPose(utimeOf(roomFrames()[5]), roomFrames()[5].T_G_C)));
   ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
@@ -412,15 +419,9 @@ TEST(MapperTest, NewestFrameWinsAndTheOthersAreCountedAsDropped) {
 // are dropped.
 TEST(MapperTest, InOrderEveryWaitingFrameWithAPoseIsIntegrated) {
   test::TempDir dir("mapper");
-  MapperConfig config = testConfig(dir.path());
-  ASSERT_TRUE(config.pending_in_order);
-  config.pending_capacity = 4;
-  config.max_pose_wait_s = 30.0;  // nothing expires during the test
-  Mapper mapper(config);
-  std::string error;
-  ASSERT_TRUE(mapper.start(&error)) << error;
-  for (int i = 0; i < 6; ++i) ASSERT_TRUE(mapper.onDepthFrame(depthFrame(roomFrames()[i], i)));
-  EXPECT_EQ(mapper.status().frames_dropped, 2u);  // 0 and 1 pushed out
+  ASSERT_TRUE(testConfig(dir.path()).pending_in_order);
+  const std::unique_ptr<Mapper> started = mapperWithSixFramesWaiting(dir, true);
+  Mapper& mapper = *started;
   for (int i = 2; i < 6; ++i) {
     ASSERT_TRUE(
         mapper.onFramePose(groundTruthPose(utimeOf(roomFrames()[i]), roomFrames()[i].T_G_C)));

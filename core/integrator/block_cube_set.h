@@ -19,10 +19,11 @@ namespace cblox {
 ///   more than max_bits blocks.
 /// - covers(lo, hi) says whether the box [lo, hi] lies inside the cube; contains() and
 ///   insert() take only indices inside it (callers check covers() per box).
+/// - run() reads up to 64 consecutive bits at once (a row of blocks along x).
 /// - insert() is an atomic fetch-or: two threads inserting the same block get exactly one
 ///   `true`.
 ///
-/// Thread safety: covers(), contains() and insert() are thread-safe; reset() must not run
+/// Thread safety: covers(), contains(), run() and insert() are thread-safe; reset() must not run
 /// concurrently with them.
 class BlockCubeSet {
  public:
@@ -56,6 +57,9 @@ class BlockCubeSet {
     return true;
   }
 
+  /// Blocks per side of the cube: bitOf(x, y + 1, z) = bitOf(x, y, z) + side(), and
+  /// bitOf(x, y, z + 1) = bitOf(x, y, z) + side()^2.
+  size_t side() const { return static_cast<size_t>(side_); }
   /// The bit of block (x, y, z), which must be inside the cube.
   size_t bitOf(int x, int y, int z) const {
     return (static_cast<size_t>(z - lo_.z()) * static_cast<size_t>(side_) +
@@ -65,6 +69,18 @@ class BlockCubeSet {
   }
   bool contains(size_t bit) const {
     return (words_[bit >> 6].load(std::memory_order_relaxed) >> (bit & 63)) & 1u;
+  }
+  /// The `n` (1..64) consecutive bits from `bit` on, the last of which must be inside the
+  /// cube, as a word: its bit i is set when bit + i is in the set. A block row along x is
+  /// consecutive bits, so this reads up to 64 blocks of a row in one or two loads.
+  uint64_t run(size_t bit, int n) const {
+    const size_t word = bit >> 6;
+    const unsigned offset = static_cast<unsigned>(bit & 63);
+    uint64_t bits = words_[word].load(std::memory_order_relaxed) >> offset;
+    if (offset + static_cast<unsigned>(n) > 64) {  // offset > 0 here
+      bits |= words_[word + 1].load(std::memory_order_relaxed) << (64 - offset);
+    }
+    return n == 64 ? bits : bits & ((uint64_t{1} << n) - 1);
   }
   /// True when the block was not in the set (it is now).
   bool insert(size_t bit) {

@@ -239,16 +239,27 @@ void ProjectiveTsdfIntegrator::addSegmentBlocks(const CellRay& ray, float d_min,
     const float t = std::clamp((centre - a).dot(ab) / ab_squared, 0.0f, 1.0f);
     return (a + t * ab - centre).squaredNorm() <= reach * reach;
   };
-  // Neighbouring cells find mostly the same blocks (98 % of the blocks within reach on the
-  // 7-Scenes frames): those already found skip the distance test.
+  // Neighbouring cells find mostly the same blocks (93 % of the blocks of a cell's box on the
+  // 7-Scenes frames): a box row along x is consecutive bits of the cube, read up to 64 at
+  // once, and only the blocks not found yet take the distance test.
   if (block_cube_.covers(lo, hi)) {
-    for (int z = lo.z(); z <= hi.z(); ++z) {
-      for (int y = lo.y(); y <= hi.y(); ++y) {
-        const size_t row = block_cube_.bitOf(lo.x(), y, z);
-        for (int x = lo.x(); x <= hi.x(); ++x) {
-          const size_t bit = row + static_cast<size_t>(x - lo.x());
-          if (block_cube_.contains(bit) || !withinReach(x, y, z)) continue;
-          if (block_cube_.insert(bit)) keys->push_back(packGridIndex(BlockIndex(x, y, z)));
+    const size_t side = block_cube_.side();
+    const size_t first = block_cube_.bitOf(lo.x(), lo.y(), lo.z());
+    for (int x0 = lo.x(); x0 <= hi.x(); x0 += 64) {  // once, unless the box is wider
+      const int n = std::min(64, hi.x() - x0 + 1);
+      const uint64_t all = n == 64 ? ~uint64_t{0} : (uint64_t{1} << n) - 1;
+      size_t plane = first + static_cast<size_t>(x0 - lo.x());
+      for (int z = lo.z(); z <= hi.z(); ++z, plane += side * side) {
+        size_t row = plane;
+        for (int y = lo.y(); y <= hi.y(); ++y, row += side) {
+          for (uint64_t missing = ~block_cube_.run(row, n) & all; missing != 0;
+               missing &= missing - 1) {
+            const int i = __builtin_ctzll(missing);
+            if (!withinReach(x0 + i, y, z)) continue;
+            if (block_cube_.insert(row + static_cast<size_t>(i))) {
+              keys->push_back(packGridIndex(BlockIndex(x0 + i, y, z)));
+            }
+          }
         }
       }
     }

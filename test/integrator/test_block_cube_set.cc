@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -29,9 +30,44 @@ TEST(BlockCubeSet, EveryBlockOfTheCubeHasItsOwnBitAndIsInsertedOnce) {
   }
   EXPECT_EQ(set.bitOf(-7, 5, 98), 0u);
   EXPECT_EQ(set.bitOf(-3, 9, 102), 124u);
+  EXPECT_EQ(set.side(), 5u);
+  EXPECT_EQ(set.bitOf(-6, 8, 99), set.bitOf(-6, 7, 99) + set.side());
+  EXPECT_EQ(set.bitOf(-6, 8, 100), set.bitOf(-6, 8, 99) + set.side() * set.side());
   // reset() empties the set, at a new place.
   ASSERT_TRUE(set.reset(BlockIndex(0, 0, 0), 2));
   for (size_t bit = 0; bit < 125; ++bit) EXPECT_FALSE(set.contains(bit));
+}
+
+TEST(BlockCubeSet, RunReadsConsecutiveBitsAcrossWordBoundaries) {
+  BlockCubeSet set(1u << 12);
+  ASSERT_TRUE(set.reset(BlockIndex(0, 0, 0), 4));  // 9^3 = 729 bits, 12 words
+  const std::vector<size_t> members = {0, 3, 63, 64, 65, 127, 128, 200, 700, 728};
+  for (const size_t bit : members) ASSERT_TRUE(set.insert(bit));
+  const auto expected = [&](size_t first, int n) {
+    uint64_t word = 0;
+    for (const size_t bit : members) {
+      if (bit >= first && bit < first + static_cast<size_t>(n))
+        word |= uint64_t{1} << (bit - first);
+    }
+    return word;
+  };
+  for (const auto& [first, n] : std::vector<std::pair<size_t, int>>{{0, 1},
+                                                                    {0, 4},
+                                                                    {0, 64},
+                                                                    {1, 64},
+                                                                    {60, 8},
+                                                                    {63, 2},
+                                                                    {64, 64},
+                                                                    {100, 29},
+                                                                    {127, 64},
+                                                                    {700, 29},
+                                                                    {665, 64},
+                                                                    {728, 1}}) {
+    EXPECT_EQ(set.run(first, n), expected(first, n)) << first << " " << n;
+  }
+  EXPECT_EQ(set.run(0, 64), (uint64_t{1} << 0) | (uint64_t{1} << 3) | (uint64_t{1} << 63));
+  EXPECT_EQ(set.run(63, 3), 7u);  // bits 63, 64, 65: one from each of two words
+  EXPECT_EQ(set.run(4, 59), 0u);
 }
 
 TEST(BlockCubeSet, CoversOnlyBoxesInsideTheCube) {

@@ -1,5 +1,6 @@
 #include "core/integrator/projective_tsdf_integrator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -179,6 +180,44 @@ TEST(ProjectiveTsdfIntegrator, BlockCubeAndHashSetSearchesAreBitIdentical) {
   }
   EXPECT_GT(cube.numBlocks(), 100u);
   expectBitIdenticalLayers(cube, hash);
+}
+
+// A cell whose 64 depths run from 0.4 m to 3 m in steps under the truncation is one segment
+// 2.6 m long; with 4 cm blocks and the camera looking along +x its box is about 73 blocks
+// wide in x, more than the 64 bits the block cube's search reads at once. The cube's search
+// and the hash set's find the same blocks.
+TEST(ProjectiveTsdfIntegrator, BlockCubeSearchOfBoxesWiderThan64BlocksMatchesTheHashSet) {
+  const LayerConfig layer_config{0.01f, 4};  // 4 cm blocks
+  TsdfLayer cube(layer_config);
+  TsdfLayer hash(layer_config);
+  IntegratorConfig config;
+  config.truncation_distance_m = 0.1f;
+  config.max_ray_length_m = 4.0f;  // a cube of 231^3 blocks: usable
+  ProjectiveTsdfIntegrator cube_integrator(config, &cube);
+  config.max_ray_length_m = 100.0f;  // a cube of 5515^3 blocks: the hash set
+  ProjectiveTsdfIntegrator hash_integrator(config, &hash);
+  const PinholeCamera camera = test::smallCamera();  // ray factors <= 1.2: rays <= 3.6 m
+  DepthImage depth(camera.intrinsics().width, camera.intrinsics().height, 0.0f);
+  for (int v = 56; v < 64; ++v) {  // one row of 10 cells near the optical axis
+    for (int u = 40; u < 120; ++u) {
+      depth(u, v) = 0.4f + 2.6f * static_cast<float>((v % 8) * 8 + u % 8) / 63.0f;  // 4.1 cm apart
+    }
+  }
+  Eigen::Matrix3f R_G_C;  // x_C -> -y_G, y_C -> -z_G, z_C (the optical axis) -> +x_G
+  R_G_C << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  const Transformation T_G_C(Eigen::Quaternionf(R_G_C), Eigen::Vector3f(0.13f, -0.07f, 0.02f));
+  const IntegrationStats a = cube_integrator.integrateDepthImage(T_G_C, depth, camera, nullptr);
+  const IntegrationStats b = hash_integrator.integrateDepthImage(T_G_C, depth, camera, nullptr);
+  EXPECT_GT(cube.numBlocks(), 500u);
+  EXPECT_EQ(a.voxel_updates, b.voxel_updates);
+  expectBitIdenticalLayers(cube, hash);
+  // The blocks reach from about 0.4 m to 3 m along x: wider than 64 blocks of 4 cm.
+  int x_min = std::numeric_limits<int>::max(), x_max = std::numeric_limits<int>::min();
+  for (const BlockIndex& index : cube.blockIndices()) {
+    x_min = std::min(x_min, index.x());
+    x_max = std::max(x_max, index.x());
+  }
+  EXPECT_GT(x_max - x_min + 1, 64);
 }
 
 TEST(ProjectiveTsdfIntegrator, TimeBudgetCutsTheFrameAndCountsWhatItSkipped) {

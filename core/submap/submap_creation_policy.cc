@@ -91,7 +91,7 @@ bool SubmapCreationPolicy::onKeyframe(const Submap* active, bool starts_new_map,
 bool SubmapCreationPolicy::onFrameReference(const Submap& active,
                                             const std::optional<ReferenceHome>& home) {
   if (config_.revisit_after_frames <= 0) return false;
-  if (!home || home->submap == active.id() || home->anchor == active.anchorKeyframe()) {
+  if (!home || atHome(active, *home)) {
     revisit_home_ = -1;
     revisit_votes_ = 0;
     // At home in the revisit submap started last: renewed after revisit_max_frames.
@@ -109,13 +109,7 @@ bool SubmapCreationPolicy::onFrameReference(const Submap& active,
     revisit_votes_ = 0;
   }
   if (++revisit_votes_ < config_.revisit_after_frames) return false;
-  revisit_home_ = -1;
-  revisit_votes_ = 0;
-  revisit_anchor_ = home->anchor;
-  revisit_frames_ = 0;
-  pending_ = Pending::kNone;
-  last_reason_ = Reason::kRevisitFrames;
-  return true;
+  return startRevisit(home->anchor, Reason::kRevisitFrames);
 }
 
 bool SubmapCreationPolicy::onJumpReference(const Submap* active,
@@ -123,16 +117,21 @@ bool SubmapCreationPolicy::onJumpReference(const Submap* active,
   if (config_.revisit_after_frames <= 0 || pending_ != Pending::kTrackingJump || !home) {
     return false;
   }
-  if (active != nullptr &&
-      (home->submap == active->id() || home->anchor == active->anchorKeyframe())) {
-    return false;
-  }
+  if (active != nullptr && atHome(*active, *home)) return false;
+  return startRevisit(home->anchor, Reason::kRevisitAfterJump);
+}
+
+bool SubmapCreationPolicy::atHome(const Submap& active, const ReferenceHome& home) {
+  return home.submap == active.id() || home.anchor == active.anchorKeyframe();
+}
+
+bool SubmapCreationPolicy::startRevisit(KeyframeId anchor, Reason reason) {
   pending_ = Pending::kNone;
   revisit_home_ = -1;
   revisit_votes_ = 0;
-  revisit_anchor_ = home->anchor;
+  revisit_anchor_ = anchor;
   revisit_frames_ = 0;
-  last_reason_ = Reason::kRevisitAfterJump;
+  last_reason_ = reason;
   return true;
 }
 

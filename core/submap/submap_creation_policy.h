@@ -197,6 +197,12 @@ class SubmapCreationPolicy {
   static const char* reasonName(Reason reason);
 
  private:
+  // The frame is at home: its home is the active submap or shares its anchor.
+  static bool atHome(const Submap& active, const ReferenceHome& home);
+  // A revisit submap anchored at `anchor` starts (the caller creates it): the votes are
+  // spent, its frames at home count from zero, nothing is pending. Returns true.
+  bool startRevisit(KeyframeId anchor, Reason reason);
+
   SubmapCreationPolicyConfig config_;
   Pending pending_ = Pending::kNone;
   Reason last_reason_ = Reason::kNone;

@@ -743,52 +743,54 @@ TEST(MapperTest, TrackerModeJumpIntoAnOlderSubvolumeIsIntegratedAtOnce) {
   ASSERT_GE(frames.size(), 8u);
   // Subvolumes 0 and 1 (anchored at keyframes 100 and 101), a frame tracked against 101, a
   // jump tracked against 101, then two frames tracked against 100.
-  // (The directory, log and request log outlive the mapper: it writes and calls into them.)
-  auto drive = [&](int revisit_after_frames, const test::TempDir& dir, LogLines* log,
-                   RequestLog* requests) {
-    MapperConfig config = testConfig(dir.path());
+  // (The directory, log and request log outlive the mapper: it writes and calls into them;
+  // members are destroyed in reverse order.)
+  struct Run {
+    test::TempDir dir{"mapper"};
+    LogLines log;
+    RequestLog requests;
+    std::unique_ptr<Mapper> mapper;
+  };
+  auto drive = [&](int revisit_after_frames, Run* run) {
+    MapperConfig config = testConfig(run->dir.path());
     config.creation.max_keyframes_per_subvolume = 1;
     config.creation.revisit_after_frames = revisit_after_frames;
-    std::unique_ptr<Mapper> mapper = startTrackerModeMapper(config, log, requests);
-    EXPECT_NE(mapper, nullptr);
-    if (mapper == nullptr) return mapper;
-    EXPECT_TRUE(mapper->onKeyframe(100, utimeOf(frames[0]), frames[0].T_G_C));
-    EXPECT_TRUE(mapper->onKeyframe(101, utimeOf(frames[1]), frames[1].T_G_C));
-    EXPECT_TRUE(mapper->waitUntilIdle(milliseconds(10000)));
-    integrateTrackedFrame(*mapper, 1, 101);
+    run->mapper = startTrackerModeMapper(config, &run->log, &run->requests);
+    ASSERT_NE(run->mapper, nullptr);
+    Mapper& mapper = *run->mapper;
+    EXPECT_TRUE(mapper.onKeyframe(100, utimeOf(frames[0]), frames[0].T_G_C));
+    EXPECT_TRUE(mapper.onKeyframe(101, utimeOf(frames[1]), frames[1].T_G_C));
+    EXPECT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+    integrateTrackedFrame(mapper, 1, 101);
     // A jump tracked against the active subvolume's own keyframe: the frame waits.
-    integrateTrackedFrame(*mapper, 2, 101, 0, true);
-    EXPECT_EQ(mapper->collection().size(), 2u);
-    EXPECT_EQ(mapper->status().frames_integrated, 1u);
-    integrateTrackedFrame(*mapper, 3, 100);
-    integrateTrackedFrame(*mapper, 4, 100);
-    return mapper;
+    integrateTrackedFrame(mapper, 2, 101, 0, true);
+    EXPECT_EQ(mapper.collection().size(), 2u);
+    EXPECT_EQ(mapper.status().frames_integrated, 1u);
+    integrateTrackedFrame(mapper, 3, 100);
+    integrateTrackedFrame(mapper, 4, 100);
   };
   // Tracked against keyframe 100 (subvolume 0) while the jump waits for its anchor: a revisit
   // subvolume anchored at 100 takes the frame and the next one.
-  test::TempDir dir("mapper");
-  LogLines log;
-  RequestLog requests;
-  const std::unique_ptr<Mapper> mapper = drive(10, dir, &log, &requests);
-  ASSERT_NE(mapper, nullptr);
-  ASSERT_EQ(mapper->collection().size(), 3u);
-  const std::shared_ptr<Submap> revisit = mapper->collection().getSubmap(2);
+  Run on;
+  drive(10, &on);
+  ASSERT_NE(on.mapper, nullptr);
+  const Mapper& mapper = *on.mapper;
+  ASSERT_EQ(mapper.collection().size(), 3u);
+  const std::shared_ptr<Submap> revisit = mapper.collection().getSubmap(2);
   ASSERT_NE(revisit, nullptr);
   EXPECT_EQ(revisit->anchorKeyframe(), 100);
   EXPECT_TRUE(revisit->T_G_M().isApprox(frames[0].T_G_C, 1e-12));
   EXPECT_GT(revisit->numBlocks(), 0u);
-  EXPECT_EQ(mapper->status().frames_integrated, 3u);  // 1, 3 and 4
-  EXPECT_EQ(log.countContaining("subvolume 2 anchored at keyframe 100 (tracked in an older "
-                                "subvolume after a jump: revisit of subvolume 0)"),
+  EXPECT_EQ(mapper.status().frames_integrated, 3u);  // 1, 3 and 4
+  EXPECT_EQ(on.log.countContaining("subvolume 2 anchored at keyframe 100 (tracked in an older "
+                                   "subvolume after a jump: revisit of subvolume 0)"),
             1u);
   // With the frames rule off, the same frames wait for a keyframe.
-  test::TempDir off_dir("mapper");
-  LogLines off_log;
-  RequestLog off_requests;
-  const std::unique_ptr<Mapper> off = drive(0, off_dir, &off_log, &off_requests);
-  ASSERT_NE(off, nullptr);
-  EXPECT_EQ(off->collection().size(), 2u);
-  EXPECT_EQ(off->status().frames_integrated, 1u);
+  Run off;
+  drive(0, &off);
+  ASSERT_NE(off.mapper, nullptr);
+  EXPECT_EQ(off.mapper->collection().size(), 2u);
+  EXPECT_EQ(off.mapper->status().frames_integrated, 1u);
 }
 
 // A reference keyframe that no subvolume holds, or one of another map epoch than the active

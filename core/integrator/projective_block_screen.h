@@ -1,67 +1,67 @@
 #pragma once
 
-#include <algorithm>
-#include <cmath>
-#include <cstddef>
-#include <limits>
-
 #include <Eigen/Core>
+
+#include "core/integrator/rectangle_max_table.h"
 
 namespace cblox {
 
-/// Whether any voxel of a block can be updated by a frame of the projective integrator,
-/// from the block's corners and the deepest valid depth of each cell of pixels. A voxel is updated
-/// only where its nearest pixel has a depth d with (d - z) * ray_factor >= -truncation, and
-/// ray_factor >= 1, so never where z > d + truncation. The voxel centres lie in the cube of the
-/// eight corner centres, so (in front of the camera) their depths lie between the corners' and
-/// their projections within the corners' bounding box.
-struct ProjectiveBlockScreen {
-  Eigen::Matrix3f R_C_G;
-  Eigen::Vector3f t_C_G;
-  float fx, fy, cx, cy;  // cx, cy with the +0.5 of rounding to the nearest pixel
-  int width, height;
-  float first_centre;  // from the block's origin to its first voxel centre, per axis
-  float centre_span;   // from the first to the last voxel centre, per axis
-  float truncation;
-  const float* cell_max_depth;  // per cell of cell_pixels^2 pixels, 0 where none is valid
-  int cells_x;                  // cells per image row
-  int cell_pixels;
+/// Which voxel rows of a block a frame of the projective integrator can update, from the
+/// corners of the block's parts and the deepest valid depth of each cell of pixels.
+///
+/// A block's rows of voxels run along x; they are split into four quadrants by halving the
+/// y and z voxel indices: quadrant q = 2 * z_half + y_half holds the rows j in y_half's
+/// range and k in z_half's, the lower half of n = voxels_per_side being [0, ceil(n / 2))
+/// and the upper [ceil(n / 2), n) (empty when n = 1).
+///
+/// A voxel is updated only where its nearest pixel has a depth d with
+/// (d - z) * ray_factor >= -truncation, and ray_factor >= 1, so never where z > d + truncation.
+/// The voxel centres of a quadrant lie in the box of its eight corner centres, so (in front of
+/// the camera) their depths lie between the corners' and their projections within the
+/// corners' bounding box. A quadrant is rejected when that box projects outside the image,
+/// sees only pixels without depth, or its nearest corner is more than the truncation behind
+/// the deepest pixel of the 8x8-pixel cells under it.
+class ProjectiveBlockScreen {
+ public:
+  /// One frame's side of the screen. The cell table must outlive the screen.
+  struct Frame {
+    Eigen::Matrix3f R_C_G;
+    Eigen::Vector3f t_C_G;
+    float fx, fy, cx, cy;  ///< cx, cy with the +0.5 of rounding to the nearest pixel
+    int width, height;
+    float voxel_size;
+    int voxels_per_side;
+    float truncation;
+    /// The deepest valid depth per cell of cell_pixels^2 pixels, 0 where none is valid.
+    const RectangleMaxTable* cell_max_depth;
+    int cell_pixels;  ///< a power of two
+  };
 
-  /// False only when no voxel of the block whose origin (minimum corner) is `origin` can
-  /// be updated. Thread-safe (const).
-  bool mayUpdate(const Eigen::Vector3f& origin) const {
-    float z_min = std::numeric_limits<float>::infinity();
-    float u_min = z_min, v_min = z_min, u_max = -z_min, v_max = -z_min;
-    for (int corner = 0; corner < 8; ++corner) {
-      const Eigen::Vector3f p =
-          origin + Eigen::Vector3f(corner & 1 ? first_centre + centre_span : first_centre,
-                                   corner & 2 ? first_centre + centre_span : first_centre,
-                                   corner & 4 ? first_centre + centre_span : first_centre);
-      const Eigen::Vector3f c = R_C_G * p + t_C_G;
-      if (!(c.z() > 1e-3f)) return true;  // near or behind the camera plane: not bounded here
-      z_min = std::min(z_min, c.z());
-      const float u = fx * c.x() / c.z() + cx, v = fy * c.y() / c.z() + cy;
-      u_min = std::min(u_min, u);
-      u_max = std::max(u_max, u);
-      v_min = std::min(v_min, v);
-      v_max = std::max(v_max, v);
-    }
-    // The voxels' nearest pixels, with one pixel of margin for rounding.
-    const int u0 = std::max(0, static_cast<int>(std::floor(u_min)) - 1);
-    const int u1 = std::min(width - 1, static_cast<int>(std::floor(u_max)) + 1);
-    const int v0 = std::max(0, static_cast<int>(std::floor(v_min)) - 1);
-    const int v1 = std::min(height - 1, static_cast<int>(std::floor(v_max)) + 1);
-    if (u0 > u1 || v0 > v1) return false;  // the whole block projects outside the image
-    float d_max = 0.0f;
-    for (int cv = v0 / cell_pixels; cv <= v1 / cell_pixels; ++cv) {
-      for (int cu = u0 / cell_pixels; cu <= u1 / cell_pixels; ++cu) {
-        d_max = std::max(d_max, cell_max_depth[static_cast<size_t>(cv) * cells_x + cu]);
-      }
-    }
-    if (d_max <= 0.0f) return false;  // no valid pixel under the block
-    // A margin of 0.01 % + 0.1 mm for the float rounding of the voxel loop.
-    return !(z_min > (d_max + truncation) * 1.0001f + 1e-4f);
+  /// Throws std::invalid_argument when cell_pixels is not a power of two.
+  explicit ProjectiveBlockScreen(const Frame& frame);
+
+  /// Bit q set when a voxel of quadrant q of the block whose origin (minimum corner) is
+  /// `origin` may be updated; 0 when no voxel of the block can be. Thread-safe (const).
+  unsigned rowQuadrants(const Eigen::Vector3f& origin) const;
+
+  /// The rows [begin, end) of y (or z) half `half` (0 or 1) of a block of
+  /// `voxels_per_side` voxels per side.
+  static int halfBegin(int voxels_per_side, int half) {
+    return half == 0 ? 0 : (voxels_per_side + 1) / 2;
   }
+  static int halfEnd(int voxels_per_side, int half) {
+    return half == 0 ? (voxels_per_side + 1) / 2 : voxels_per_side;
+  }
+
+ private:
+  static constexpr int kCorners = 32;  // 8 per quadrant
+
+  Frame frame_;
+  // The quadrants' corner centres relative to the block's first voxel centre, in the camera
+  // frame: corner c of quadrant q at 4c + q, so that the quadrants fill the lanes of a vector.
+  alignas(16) float offset_x_[kCorners], offset_y_[kCorners], offset_z_[kCorners];
+  unsigned nonempty_ = 0;  // the quadrants that hold rows
+  int cell_shift_ = 0;     // log2(cell_pixels)
 };
 
 }  // namespace cblox

@@ -27,6 +27,9 @@ constexpr int kBlockSetLog2Buckets = 16;
 constexpr size_t kBlockCubeMaxBits = size_t{1} << 24;
 constexpr size_t kBlocksPerClaim = 4;
 constexpr int kSearchCellPixels = 8;  // block search cell (pixels per side)
+// Squares of up to 8 cells in the screen's table: a block's part 0.5 m away spans about
+// 20 cells on 640x480 frames, 6 lookups.
+constexpr int kCellTableLevels = 4;
 
 struct ThreadState {
   IntegrationStats stats;
@@ -377,42 +380,37 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   const float voxel_size = layer_->voxelSize();
   const float fx = static_cast<float>(K.fx), fy = static_cast<float>(K.fy);
   const float cx = static_cast<float>(K.cx), cy = static_cast<float>(K.cy);
+  cell_depth_table_.build(cell_max_depth_.data(), cells_x, cells_y, kCellTableLevels);
   // Blocks no voxel of which can be updated are neither allocated nor visited (on the
   // 7-Scenes frames half of the blocks that were allocated for a frame and freed unused).
-  const ProjectiveBlockScreen screen{R_C_G,
-                                     t_C_G,
-                                     fx,
-                                     fy,
-                                     cx + 0.5f,
-                                     cy + 0.5f,
-                                     width,
-                                     height,
-                                     0.5f * voxel_size,
-                                     layer_->blockSize() - voxel_size,
-                                     config_.truncation_distance_m,
-                                     cell_max_depth_.data(),
-                                     cells_x,
-                                     kSearchCellPixels};
+  const ProjectiveBlockScreen screen({R_C_G, t_C_G, fx, fy, cx + 0.5f, cy + 0.5f, width, height,
+                                      voxel_size, layer_->voxelsPerSide(),
+                                      config_.truncation_distance_m, &cell_depth_table_,
+                                      kSearchCellPixels});
   std::vector<Block*> blocks;
   std::vector<uint8_t> newly_allocated;
   blocks.reserve(keys.size());
   newly_allocated.reserve(keys.size());
-  std::vector<uint8_t> keep(keys.size());
+  std::vector<uint8_t> quadrants(keys.size());  // ProjectiveBlockScreen::rowQuadrants
   std::atomic<size_t> next_key{0};
   constexpr size_t kKeysPerClaim = 64;
   runThreadTeam(num_threads, [&](int) {
     for (size_t k0 = next_key.fetch_add(kKeysPerClaim); k0 < keys.size();
          k0 = next_key.fetch_add(kKeysPerClaim)) {
       for (size_t k = k0; k < std::min(k0 + kKeysPerClaim, keys.size()); ++k) {
-        keep[k] = screen.mayUpdate(unpackGridIndex(keys[k]).cast<float>() * layer_->blockSize());
+        quadrants[k] = static_cast<uint8_t>(
+            screen.rowQuadrants(unpackGridIndex(keys[k]).cast<float>() * layer_->blockSize()));
       }
     }
   });
+  std::vector<uint8_t> block_quadrants;
+  block_quadrants.reserve(keys.size());
   for (size_t k = 0; k < keys.size(); ++k) {
-    if (!keep[k]) continue;
+    if (quadrants[k] == 0) continue;
     bool is_new = false;
     blocks.push_back(layer_->allocateBlock(unpackGridIndex(keys[k]), &is_new));
     newly_allocated.push_back(is_new ? 1 : 0);
+    block_quadrants.push_back(quadrants[k]);
   }
 
   // Phase B: every voxel of those blocks, projected into the image; one thread per block.
@@ -444,13 +442,15 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
     }
     std::sort(order.begin(), order.end());
     std::vector<Block*> sorted_blocks(blocks.size());
-    std::vector<uint8_t> sorted_new(blocks.size());
+    std::vector<uint8_t> sorted_new(blocks.size()), sorted_quadrants(blocks.size());
     for (size_t b = 0; b < blocks.size(); ++b) {
       sorted_blocks[b] = blocks[order[b].second];
       sorted_new[b] = newly_allocated[order[b].second];
+      sorted_quadrants[b] = block_quadrants[order[b].second];
     }
     blocks.swap(sorted_blocks);
     newly_allocated.swap(sorted_new);
+    block_quadrants.swap(sorted_quadrants);
   }
   std::vector<uint8_t> touched(blocks.size(), 0);
   // Claims of kBlocksPerClaim neighbouring blocks; under a time budget they are taken in
@@ -465,6 +465,7 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
                                   : nullptr;
   const ProjectiveVoxelRows rows({fx, fy, cx, cy, width, height, samples_.data(), colors}, updater,
                                  config_.vectorized);
+  const unsigned all_quadrants = vps > 1 ? 0xFu : 0x1u;
   runThreadTeam(num_threads, [&](int id) {
     IntegrationStats& stats = states[static_cast<size_t>(id)].stats;
     std::vector<Eigen::Vector3f> row_origins(static_cast<size_t>(vps) * static_cast<size_t>(vps));
@@ -483,11 +484,37 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
         TsdfVoxel* const voxel = block.voxels();
         const Eigen::Vector3f first_center_C =
             R_C_G * (block.origin() + Eigen::Vector3f::Constant(0.5f * voxel_size)) + t_C_G;
-        // All the rows of the block in one call.
         for (size_t r = 0; r < row_origins.size(); ++r) {
           row_origins[r] = first_center_C + row_offsets[r];
         }
-        const size_t updates = rows.update(row_origins.data(), vps * vps, step_x, vps, voxel);
+        // The rows of the quadrants the screen kept: all in one call, else per z half the
+        // whole half (both y halves kept: consecutive rows) or each row range of one y half.
+        const unsigned kept = block_quadrants[b];
+        size_t updates = 0;
+        if (kept == all_quadrants) {
+          updates = rows.update(row_origins.data(), vps * vps, step_x, vps, voxel);
+        } else {
+          for (int z_half = 0; z_half < 2; ++z_half) {
+            const unsigned y_halves = (kept >> (2 * z_half)) & 3u;
+            if (y_halves == 0) continue;
+            const int k0 = ProjectiveBlockScreen::halfBegin(vps, z_half);
+            const int k1 = ProjectiveBlockScreen::halfEnd(vps, z_half);
+            if (y_halves == 3u) {
+              const int r0 = k0 * vps;
+              updates += rows.update(&row_origins[static_cast<size_t>(r0)], (k1 - k0) * vps, step_x,
+                                     vps, voxel + static_cast<size_t>(r0) * vps);
+              continue;
+            }
+            const int y_half = y_halves == 1u ? 0 : 1;
+            const int j0 = ProjectiveBlockScreen::halfBegin(vps, y_half);
+            const int j1 = ProjectiveBlockScreen::halfEnd(vps, y_half);
+            for (int k = k0; k < k1; ++k) {
+              const int r0 = k * vps + j0;
+              updates += rows.update(&row_origins[static_cast<size_t>(r0)], j1 - j0, step_x, vps,
+                                     voxel + static_cast<size_t>(r0) * vps);
+            }
+          }
+        }
         if (updates > 0) {
           touched[b] = 1;
           block.setUpdated(true);

@@ -11,6 +11,7 @@
 #include "core/integrator/integration_stats.h"
 #include "core/integrator/integrator_config.h"
 #include "core/integrator/projective_voxel_rows.h"
+#include "core/integrator/rectangle_max_table.h"
 #include "core/tsdf/tsdf_layer.h"
 
 namespace cblox {
@@ -29,10 +30,11 @@ namespace cblox {
 /// depth, widened by the truncation and the cell's lateral extent, so the empty space
 /// between a foreground and a background surface gets no blocks. No voxel within
 /// truncation of a measured point is missed. A block found this way is then screened
-/// (ProjectiveBlockScreen): if all its voxels lie more than the truncation behind the deepest
-/// valid pixel under it, or outside the image, it is neither allocated nor visited. The
-/// blocks found so far are kept in one bit each of a cube of blocks around the sensor
-/// (BlockCubeSet), as neighbouring cells find mostly the same blocks.
+/// (ProjectiveBlockScreen) in four parts, its rows of voxels split by halving y and z: a
+/// part whose voxels all lie more than the truncation behind the deepest valid pixel under
+/// it, or outside the image, is not visited, and a block with no part left is not
+/// allocated. The blocks found so far are kept in one bit each of a cube of blocks around
+/// the sensor (BlockCubeSet), as neighbouring cells find mostly the same blocks.
 ///
 /// Voxels are updated a row at a time (ProjectiveVoxelRows: eight voxels at once on AVX2
 /// CPUs, IntegratorConfig::vectorized).
@@ -78,7 +80,8 @@ class ProjectiveTsdfIntegrator {
   std::vector<ProjectivePixelSample> samples_;
   // Per 8x8-pixel search cell of the current frame: its deepest valid depth, 0 if none.
   std::vector<float> cell_max_depth_;
-  int cells_x_ = 0;  // per pixel; ray factors for factor_camera_
+  RectangleMaxTable cell_depth_table_;  // cell_max_depth_'s, for the block screen
+  int cells_x_ = 0;                     // per pixel; ray factors for factor_camera_
   PinholeIntrinsics factor_camera_;
 };
 

@@ -12,6 +12,7 @@
 #endif
 
 #include "core/integrator/deadline.h"
+#include "core/integrator/depth_groups.h"
 #include "core/integrator/even_coverage_order.h"
 #include "core/integrator/thread_team.h"
 
@@ -204,15 +205,8 @@ void ProjectiveTsdfIntegrator::collectBlocks(const Eigen::Matrix3f& R_G_C,
       if (row[u].depth > 0.0f) depths[n++] = row[u].depth;
     }
   }
-  std::sort(depths, depths + n);
-  float first = depths[0];
-  for (int i = 1; i < n; ++i) {
-    if (depths[i] - depths[i - 1] > truncation) {
-      addSegmentBlocks(ray, first, depths[i - 1], keys);
-      first = depths[i];
-    }
-  }
-  addSegmentBlocks(ray, first, depths[n - 1], keys);
+  forEachDepthGroup(depths, n, range.d_min, range.d_max, truncation,
+                    [&](float first, float last) { addSegmentBlocks(ray, first, last, keys); });
 }
 
 void ProjectiveTsdfIntegrator::addSegmentBlocks(const CellRay& ray, float d_min, float d_max,

@@ -47,6 +47,7 @@
 #include "daemon/common/cli.h"
 #include "drivers/dataset/seven_scenes_reader.h"
 #include "test/bench/bench_frames.h"
+#include "test/bench/bench_stats.h"
 #ifdef CBLOX_HAVE_OPEN3D
 #include "test/bench/open3d_peer.h"
 #endif
@@ -69,16 +70,6 @@ constexpr int kExitNoOpen3d = 3;
 constexpr int kExitNoVoxblox = 4;
 constexpr int kExitNoPeers = 5;
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
-}
 double peakRssMiB() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);

@@ -34,7 +34,8 @@ Open3dResult runOpen3dScalableTsdf(const BenchSequence& sequence, float voxel_si
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
             .count());
   }
-  result.mesh_vertices = volume.ExtractTriangleMesh()->vertices_.size();
+  result.mesh_positions = volume.ExtractTriangleMesh()->vertices_;
+  result.mesh_vertices = result.mesh_positions.size();
   return result;
 }
 

@@ -2,6 +2,8 @@
 
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "test/bench/bench_frames.h"
 
 namespace cblox::bench {
@@ -12,6 +14,7 @@ namespace cblox::bench {
 struct Open3dResult {
   std::vector<double> frame_ms;
   size_t mesh_vertices = 0;
+  std::vector<Eigen::Vector3d> mesh_positions;  ///< the extracted mesh's vertices, world frame
 };
 Open3dResult runOpen3dScalableTsdf(const BenchSequence& sequence, float voxel_size,
                                    float truncation, float max_depth, int num_threads);

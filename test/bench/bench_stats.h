@@ -1,0 +1,26 @@
+#pragma once
+
+// Order statistics of the benchmarks' per-frame figures.
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+namespace cblox::bench {
+
+/// The median (the mean of the two middle values of an even count); 0 when empty.
+inline double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+/// The value at rank round(q * (n - 1)) of the sorted values, q in [0, 1]; 0 when empty.
+inline double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1,
+                    static_cast<size_t>(q * static_cast<double>(v.size() - 1) + 0.5))];
+}
+
+}  // namespace cblox::bench

@@ -25,17 +25,13 @@
 #include "drivers/synthetic/synthetic_frame_source.h"
 #include "test/bench/bench_frames.h"
 #include "test/bench/bench_stats.h"
+#include "test/bench/integrator_bench_settings.h"
 #ifdef CBLOX_HAVE_OPEN3D
 #include "test/bench/open3d_peer.h"
 #endif
 
 namespace cblox::bench {
 namespace {
-
-constexpr float kVoxelSize = 0.02f;
-constexpr float kTruncation = 4 * kVoxelSize;
-constexpr float kMaxDepth = 4.0f;
-constexpr int kExitNoOpen3d = 3;
 
 // config/integrate.yaml's synthetic section.
 BenchSequence renderRoom(const AnalyticScene& room, int frames) {
@@ -63,11 +59,7 @@ struct Row {
 Row runProjective(const BenchSequence& seq, int threads) {
   Row row{"projective", threads, {}, {}};
   TsdfLayer layer(LayerConfig{kVoxelSize, 8});
-  IntegratorConfig config;
-  config.truncation_distance_m = kTruncation;
-  config.max_ray_length_m = kMaxDepth * 1.3f;
-  config.num_threads = threads;
-  ProjectiveTsdfIntegrator integrator(config, &layer);
+  ProjectiveTsdfIntegrator integrator(benchIntegratorConfig(threads), &layer);
   const PinholeCamera camera(seq.intrinsics);
   for (const BenchFrame& frame : seq.frames) {
     const auto start = std::chrono::steady_clock::now();

@@ -48,6 +48,7 @@
 #include "drivers/dataset/seven_scenes_reader.h"
 #include "test/bench/bench_frames.h"
 #include "test/bench/bench_stats.h"
+#include "test/bench/integrator_bench_settings.h"
 #ifdef CBLOX_HAVE_OPEN3D
 #include "test/bench/open3d_peer.h"
 #endif
@@ -57,18 +58,6 @@
 
 namespace cblox::bench {
 namespace {
-
-constexpr float kVoxelSize = 0.02f;
-constexpr float kTruncation = 4 * kVoxelSize;
-constexpr float kMaxDepth = 4.0f;
-// Depth is cut at kMaxDepth by the point cloud conversion; the rays to off-axis pixels are
-// longer than their depth, so the ray-length limit keeps a margin (ours and voxblox's).
-constexpr float kMaxRayLength = kMaxDepth * 1.3f;
-
-// Exit statuses of a run whose peer is not built (see the header comment).
-constexpr int kExitNoOpen3d = 3;
-constexpr int kExitNoVoxblox = 4;
-constexpr int kExitNoPeers = 5;
 
 double peakRssMiB() {
   rusage usage{};
@@ -152,10 +141,7 @@ Run integrateOnce(const BenchSequence& seq, Kind kind, int threads, int voxels_p
   run.threads = threads;
   run.voxels_per_side = voxels_per_side;
   run.layer = std::make_shared<TsdfLayer>(LayerConfig{kVoxelSize, voxels_per_side});
-  IntegratorConfig config;
-  config.truncation_distance_m = kTruncation;
-  config.max_ray_length_m = kMaxRayLength;
-  config.num_threads = threads;
+  IntegratorConfig config = benchIntegratorConfig(threads);
   config.visited_voxel_set = variant.visited;
   config.start_voxel_subsampling_factor = variant.start_voxel_subsampling_factor;
   config.vectorized = kind != Kind::kProjectivePortable;

@@ -108,15 +108,32 @@ __attribute__((target("avx2"))) inline void storeVoxels(const Soa& v, TsdfVoxel*
   _mm256_storeu_ps(p + 16, _mm256_blend_ps(_mm256_blend_ps(d, w, 0x49), c, 0x92));
 }
 
-// (old * a + new * b + 128) >> 8 of the colour byte at `shift` of each word.
-__attribute__((target("avx2"))) inline __m256i blendChannel(__m256i old_c, __m256i new_c, __m256i a,
-                                                            __m256i b, int shift) {
-  const __m256i byte = _mm256_set1_epi32(0xFF);
-  const __m256i o = _mm256_and_si256(_mm256_srli_epi32(old_c, shift), byte);
-  const __m256i n = _mm256_and_si256(_mm256_srli_epi32(new_c, shift), byte);
-  const __m256i sum = _mm256_add_epi32(
-      _mm256_add_epi32(_mm256_mullo_epi32(o, a), _mm256_mullo_epi32(n, b)), _mm256_set1_epi32(128));
-  return _mm256_slli_epi32(_mm256_srli_epi32(sum, 8), shift);
+// (old * a + new * b + 128) >> 8 of every byte of each word, a + b = 256 per word. In
+// 16-bit lanes: a byte times a or b is at most 255 * 256, and the sum plus 128 at most
+// 255 * 256 + 128 < 2^16, so the low 16 bits of each product and sum are the exact values.
+__attribute__((target("avx2"))) inline __m256i blendBytes(__m256i old_c, __m256i new_c, __m256i a,
+                                                          __m256i b) {
+  const __m256i zero = _mm256_setzero_si256();
+  // Each word's weight in both of its 16-bit halves, then spread like the unpacked bytes
+  // (unpacklo/hi_epi8 take words 0-1 / 2-3 of each 128-bit half, four bytes per word).
+  const __m256i a2 = _mm256_or_si256(a, _mm256_slli_epi32(a, 16));
+  const __m256i b2 = _mm256_or_si256(b, _mm256_slli_epi32(b, 16));
+  const __m256i round = _mm256_set1_epi16(128);
+  const __m256i lo = _mm256_srli_epi16(
+      _mm256_add_epi16(
+          _mm256_add_epi16(
+              _mm256_mullo_epi16(_mm256_unpacklo_epi8(old_c, zero), _mm256_unpacklo_epi32(a2, a2)),
+              _mm256_mullo_epi16(_mm256_unpacklo_epi8(new_c, zero), _mm256_unpacklo_epi32(b2, b2))),
+          round),
+      8);
+  const __m256i hi = _mm256_srli_epi16(
+      _mm256_add_epi16(
+          _mm256_add_epi16(
+              _mm256_mullo_epi16(_mm256_unpackhi_epi8(old_c, zero), _mm256_unpackhi_epi32(a2, a2)),
+              _mm256_mullo_epi16(_mm256_unpackhi_epi8(new_c, zero), _mm256_unpackhi_epi32(b2, b2))),
+          round),
+      8);
+  return _mm256_packus_epi16(lo, hi);
 }
 #endif
 
@@ -299,9 +316,7 @@ __attribute__((target("avx2"))) size_t ProjectiveVoxelRows::updateAvx2(
               _mm256_mul_ps(_mm256_mul_ps(weight, inv_new_weight), _mm256_set1_ps(256.0f)),
               _mm256_set1_ps(0.5f)));
           const __m256i a = _mm256_sub_epi32(_mm256_set1_epi32(256), b);
-          blended = _mm256_or_si256(_mm256_or_si256(blendChannel(old_c, new_c, a, b, 0),
-                                                    blendChannel(old_c, new_c, a, b, 8)),
-                                    blendChannel(old_c, new_c, a, b, 16));
+          blended = _mm256_and_si256(blendBytes(old_c, new_c, a, b), rgb);
         } else {  // kOverwrite
           blended = _mm256_and_si256(new_c, rgb);
         }

@@ -108,6 +108,15 @@ __attribute__((target("avx2"))) inline void storeVoxels(const Soa& v, TsdfVoxel*
   _mm256_storeu_ps(p + 16, _mm256_blend_ps(_mm256_blend_ps(d, w, 0x49), c, 0x92));
 }
 
+// (o * a + n * b + 128) >> 8 in each 16-bit lane.
+__attribute__((target("avx2"))) inline __m256i blendLanes16(__m256i o, __m256i n, __m256i a,
+                                                            __m256i b) {
+  return _mm256_srli_epi16(
+      _mm256_add_epi16(_mm256_add_epi16(_mm256_mullo_epi16(o, a), _mm256_mullo_epi16(n, b)),
+                       _mm256_set1_epi16(128)),
+      8);
+}
+
 // (old * a + new * b + 128) >> 8 of every byte of each word, a + b = 256 per word. In
 // 16-bit lanes: a byte times a or b is at most 255 * 256, and the sum plus 128 at most
 // 255 * 256 + 128 < 2^16, so the low 16 bits of each product and sum are the exact values.
@@ -118,21 +127,12 @@ __attribute__((target("avx2"))) inline __m256i blendBytes(__m256i old_c, __m256i
   // (unpacklo/hi_epi8 take words 0-1 / 2-3 of each 128-bit half, four bytes per word).
   const __m256i a2 = _mm256_or_si256(a, _mm256_slli_epi32(a, 16));
   const __m256i b2 = _mm256_or_si256(b, _mm256_slli_epi32(b, 16));
-  const __m256i round = _mm256_set1_epi16(128);
-  const __m256i lo = _mm256_srli_epi16(
-      _mm256_add_epi16(
-          _mm256_add_epi16(
-              _mm256_mullo_epi16(_mm256_unpacklo_epi8(old_c, zero), _mm256_unpacklo_epi32(a2, a2)),
-              _mm256_mullo_epi16(_mm256_unpacklo_epi8(new_c, zero), _mm256_unpacklo_epi32(b2, b2))),
-          round),
-      8);
-  const __m256i hi = _mm256_srli_epi16(
-      _mm256_add_epi16(
-          _mm256_add_epi16(
-              _mm256_mullo_epi16(_mm256_unpackhi_epi8(old_c, zero), _mm256_unpackhi_epi32(a2, a2)),
-              _mm256_mullo_epi16(_mm256_unpackhi_epi8(new_c, zero), _mm256_unpackhi_epi32(b2, b2))),
-          round),
-      8);
+  const __m256i lo =
+      blendLanes16(_mm256_unpacklo_epi8(old_c, zero), _mm256_unpacklo_epi8(new_c, zero),
+                   _mm256_unpacklo_epi32(a2, a2), _mm256_unpacklo_epi32(b2, b2));
+  const __m256i hi =
+      blendLanes16(_mm256_unpackhi_epi8(old_c, zero), _mm256_unpackhi_epi8(new_c, zero),
+                   _mm256_unpackhi_epi32(a2, a2), _mm256_unpackhi_epi32(b2, b2));
   return _mm256_packus_epi16(lo, hi);
 }
 #endif

@@ -30,7 +30,7 @@
 #include "daemon/common/run_loop.h"
 #include "daemon/common/yaml_config.h"
 #include "drivers/open_frame_source.h"
-#include "drivers/synthetic/scenes.h"
+#include "drivers/synthetic/demo_room_orbit.h"
 #include "drivers/synthetic/synthetic_frame_source.h"
 
 namespace cblox {
@@ -57,23 +57,12 @@ struct Frame {
   ColorImage color;
 };
 
-/// Settings of the built-in synthetic room source (YAML section `synthetic`).
-struct SyntheticConfig {
-  int width = 640, height = 480;
-  double fx = 525.0, fy = 525.0;
-  int frames = 60;
-  double rate_hz = 30.0;
-  double orbit_radius_m = 1.5;
-  double orbit_height_m = 1.4;
-  double look_at_height_m = 1.0;
-  double max_range_m = 6.0;
-};
-
-SyntheticConfig loadSyntheticSettings(const YAML::Node& node) {
+/// The built-in synthetic room source's settings (YAML section `synthetic`).
+DemoRoomOrbit loadSyntheticSettings(const YAML::Node& node) {
   requireKnownKeys(node, "synthetic",
                    {"width", "height", "fx", "fy", "frames", "rate_hz", "orbit_radius_m",
                     "orbit_height_m", "look_at_height_m", "max_range_m"});
-  SyntheticConfig s;
+  DemoRoomOrbit s;
   if (isAbsent(node)) return s;
   readOptional(node, "synthetic", "width", &s.width);
   readOptional(node, "synthetic", "height", &s.height);
@@ -101,15 +90,11 @@ struct Source {
 Source openSource(const Options& options, const YAML::Node& root) {
   Source source;
   if (options.source == "synthetic-room") {
-    const SyntheticConfig s = loadSyntheticSettings(root["synthetic"]);
-    source.intrinsics = {s.fx, s.fy, (s.width - 1) / 2.0, (s.height - 1) / 2.0, s.width, s.height};
-    const int frames = options.frames.value_or(s.frames);
-    const auto trajectory =
-        makeOrbitTrajectory(Eigen::Vector3d(0, 0, 0), s.orbit_radius_m, s.orbit_height_m, frames,
-                            Eigen::Vector3d(0, 0, s.look_at_height_m));
-    source.ground_truth = makeDemoRoom();
-    auto synthetic = std::make_shared<SyntheticDepthSource>(*source.ground_truth, source.intrinsics,
-                                                            trajectory, s.rate_hz, s.max_range_m);
+    DemoRoomOrbit s = loadSyntheticSettings(root["synthetic"]);
+    s.frames = options.frames.value_or(s.frames);
+    source.intrinsics = s.intrinsics();
+    auto synthetic = std::make_shared<SyntheticDepthSource>(s.source());
+    source.ground_truth = synthetic->scene();
     source.size = synthetic->size();
     source.next = [synthetic](Frame* frame) {
       SyntheticFrame f;

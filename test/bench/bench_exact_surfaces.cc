@@ -10,6 +10,7 @@
 // Exit status: 0; 3 when built without the Open3D peer (our rows are printed, no ratio);
 // 2 on a usage error.
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -18,11 +19,11 @@
 
 #include <CLI/CLI.hpp>
 
+#include "core/eval/trajectory_metrics.h"
 #include "core/integrator/projective_tsdf_integrator.h"
 #include "core/mesh/mesh_integrator.h"
 #include "daemon/common/cli.h"
-#include "drivers/synthetic/scenes.h"
-#include "drivers/synthetic/synthetic_frame_source.h"
+#include "drivers/synthetic/demo_room_orbit.h"
 #include "test/bench/bench_frames.h"
 #include "test/bench/bench_stats.h"
 #include "test/bench/integrator_bench_settings.h"
@@ -33,16 +34,12 @@
 namespace cblox::bench {
 namespace {
 
-// config/integrate.yaml's synthetic section.
-BenchSequence renderRoom(const AnalyticScene& room, int frames) {
+// DemoRoomOrbit's frames (config/integrate.yaml's synthetic section), depth cut at kMaxDepth.
+BenchSequence renderRoom(SyntheticDepthSource* source) {
   BenchSequence seq;
-  seq.intrinsics = {525.0, 525.0, 319.5, 239.5, 640, 480};
-  SyntheticDepthSource source(
-      room, seq.intrinsics,
-      makeOrbitTrajectory(Eigen::Vector3d::Zero(), 1.5, 1.4, frames, Eigen::Vector3d(0, 0, 1.0)),
-      30.0, 6.0);
+  seq.intrinsics = source->camera().intrinsics();
   SyntheticFrame frame;
-  while (source.next(&frame)) {
+  while (source->next(&frame)) {
     for (float& d : frame.depth.data) d = d > kMaxDepth ? 0.0f : d;  // as Open3D's depth_trunc
     seq.frames.push_back({frame.T_G_C, std::move(frame.depth), std::move(frame.color)});
   }
@@ -78,26 +75,18 @@ Row runProjective(const BenchSequence& seq, int threads) {
   return row;
 }
 
-void keepFastest(Row* best, const Row& again) {
-  for (size_t i = 0; i < best->frame_ms.size() && i < again.frame_ms.size(); ++i) {
-    best->frame_ms[i] = std::min(best->frame_ms[i], again.frame_ms[i]);
-  }
-}
-
 void printRow(const Row& row, const AnalyticScene& room) {
   std::vector<double> errors;
-  double sum_sq = 0.0;
-  size_t within_voxel = 0;
-  for (const Eigen::Vector3d& v : row.vertices) {
-    errors.push_back(std::abs(room.signedDistance(v)));
-    sum_sq += errors.back() * errors.back();
-    within_voxel += errors.back() <= kVoxelSize ? 1 : 0;
-  }
-  const double n = static_cast<double>(std::max<size_t>(errors.size(), 1));
+  for (const Eigen::Vector3d& v : row.vertices) errors.push_back(std::abs(room.signedDistance(v)));
+  const double within_voxel =
+      static_cast<double>(
+          std::count_if(errors.begin(), errors.end(), [](double e) { return e <= kVoxelSize; })) /
+      static_cast<double>(std::max<size_t>(errors.size(), 1));
+  const ErrorStatistics stats = computeErrorStatistics(std::move(errors));
   std::printf("| %s | %d | %.2f | %.2f | %zu | %.2f mm | %.2f mm | %.2f mm | %.2f %% |\n",
               row.name.c_str(), row.threads, median(row.frame_ms), percentile(row.frame_ms, 0.95),
-              row.vertices.size(), 1e3 * std::sqrt(sum_sq / n), 1e3 * median(errors),
-              1e3 * percentile(errors, 0.9), 100.0 * static_cast<double>(within_voxel) / n);
+              row.vertices.size(), 1e3 * stats.rmse, 1e3 * stats.median, 1e3 * stats.p90,
+              100.0 * within_voxel);
 }
 
 }  // namespace
@@ -121,8 +110,11 @@ int main(int argc, char** argv) {
     return 2;
   }
   repeats = std::max(1, repeats);
-  const cblox::AnalyticScene room = cblox::makeDemoRoom();
-  const BenchSequence seq = renderRoom(room, frames);
+  cblox::DemoRoomOrbit orbit;
+  orbit.frames = frames;
+  cblox::SyntheticDepthSource source = orbit.source();
+  const cblox::AnalyticScene& room = source.scene();
+  const BenchSequence seq = renderRoom(&source);
   std::printf(
       "analytic room, %zu frames 640x480; voxel %.3f m, truncation %.3f m, depth cut at "
       "%.1f m; %d rounds\n",
@@ -134,7 +126,7 @@ int main(int argc, char** argv) {
       if (round == 0) {
         rows.push_back(std::move(row));
       } else {
-        keepFastest(&rows[r], row);
+        keepFastestPerFrame(&rows[r].frame_ms, row.frame_ms);
       }
       ++r;
     };

@@ -86,12 +86,8 @@ struct Run {
 // Keeps, per frame, the faster of two runs of one configuration: the machine is shared,
 // and interference only ever adds time.
 void keepFastest(Run* best, const Run& again) {
-  for (size_t i = 0; i < best->frame_ms.size() && i < again.frame_ms.size(); ++i) {
-    best->frame_ms[i] = std::min(best->frame_ms[i], again.frame_ms[i]);
-  }
-  for (size_t i = 0; i < best->conversion_ms.size() && i < again.conversion_ms.size(); ++i) {
-    best->conversion_ms[i] = std::min(best->conversion_ms[i], again.conversion_ms[i]);
-  }
+  keepFastestPerFrame(&best->frame_ms, again.frame_ms);
+  keepFastestPerFrame(&best->conversion_ms, again.conversion_ms);
   best->mesh_ms = std::min(best->mesh_ms, again.mesh_ms);
 }
 

@@ -23,4 +23,13 @@ inline double percentile(std::vector<double> v, double q) {
                     static_cast<size_t>(q * static_cast<double>(v.size() - 1) + 0.5))];
 }
 
+/// Keeps per frame the faster of two rounds of one configuration (`best` and `again` are
+/// per-frame times of the same frames): the machine is shared, and interference only ever
+/// adds time.
+inline void keepFastestPerFrame(std::vector<double>* best, const std::vector<double>& again) {
+  for (size_t i = 0; i < best->size() && i < again.size(); ++i) {
+    (*best)[i] = std::min((*best)[i], again[i]);
+  }
+}
+
 }  // namespace cblox::bench

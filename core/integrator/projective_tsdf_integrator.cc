@@ -177,8 +177,8 @@ void ProjectiveTsdfIntegrator::collectBlocks(const Eigen::Matrix3f& R_G_C,
   const int u1 = std::min(u0 + kSearchCellPixels, width);
   const int v1 = std::min(v0 + kSearchCellPixels, height);
   const DepthRange range = cellDepthRange(samples_.data(), width, u0, v0, u1, v1);
-  cell_max_depth_[static_cast<size_t>(v0 / kSearchCellPixels) * cells_x_ + u0 / kSearchCellPixels] =
-      range.count > 0 ? range.d_max : 0.0f;
+  cell_depth_table_.grid()[static_cast<size_t>(v0 / kSearchCellPixels) * cell_depth_table_.width() +
+                           u0 / kSearchCellPixels] = range.count > 0 ? range.d_max : 0.0f;
   if (range.count == 0) return;  // no valid pixel
   const float truncation = config_.truncation_distance_m;
   // The cell's rays leave its centre ray by at most half its diagonal (plus the half pixel
@@ -348,8 +348,7 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   const Eigen::Vector3f t_G_C = T_G_C.translation();
   const int cells_x = (width + kSearchCellPixels - 1) / kSearchCellPixels;
   const int cells_y = (height + kSearchCellPixels - 1) / kSearchCellPixels;
-  cells_x_ = cells_x;
-  cell_max_depth_.resize(static_cast<size_t>(cells_x) * static_cast<size_t>(cells_y));
+  cell_depth_table_.resetGrid(cells_x, cells_y, kCellTableLevels);
   std::atomic<int> next_cell{0};
   runThreadTeam(num_threads, [&](int id) {
     ThreadState& state = states[static_cast<size_t>(id)];
@@ -374,7 +373,7 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
   const float voxel_size = layer_->voxelSize();
   const float fx = static_cast<float>(K.fx), fy = static_cast<float>(K.fy);
   const float cx = static_cast<float>(K.cx), cy = static_cast<float>(K.cy);
-  cell_depth_table_.build(cell_max_depth_.data(), cells_x, cells_y, kCellTableLevels);
+  cell_depth_table_.buildLevels();
   // Blocks no voxel of which can be updated are neither allocated nor visited (on the
   // 7-Scenes frames half of the blocks that were allocated for a frame and freed unused).
   const ProjectiveBlockScreen screen({R_C_G, t_C_G, fx, fy, cx + 0.5f, cy + 0.5f, width, height,

@@ -77,11 +77,10 @@ class ProjectiveTsdfIntegrator {
   BlockCubeSet block_cube_;
   ApproxHashSet block_set_;
   int width_ = 0, height_ = 0;
-  std::vector<ProjectivePixelSample> samples_;
-  // Per 8x8-pixel search cell of the current frame: its deepest valid depth, 0 if none.
-  std::vector<float> cell_max_depth_;
-  RectangleMaxTable cell_depth_table_;  // cell_max_depth_'s, for the block screen
-  int cells_x_ = 0;                     // per pixel; ray factors for factor_camera_
+  std::vector<ProjectivePixelSample> samples_;  // per pixel; ray factors for factor_camera_
+  // Per 8x8-pixel search cell of the current frame: its deepest valid depth, 0 if none
+  // (the table's grid, filled by the search; its levels serve the block screen).
+  RectangleMaxTable cell_depth_table_;
   PinholeIntrinsics factor_camera_;
 };
 

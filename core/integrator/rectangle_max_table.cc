@@ -6,7 +6,7 @@
 
 namespace cblox {
 
-void RectangleMaxTable::build(const float* values, int width, int height, int levels) {
+float* RectangleMaxTable::resetGrid(int width, int height, int levels) {
   if (width < 1 || height < 1 || levels < 1) {
     throw std::invalid_argument("RectangleMaxTable: empty grid or no level");
   }
@@ -15,10 +15,14 @@ void RectangleMaxTable::build(const float* values, int width, int height, int le
   levels_ = levels;
   cells_ = static_cast<size_t>(width) * static_cast<size_t>(height);
   data_.resize(cells_ * static_cast<size_t>(levels));
-  std::copy(values, values + cells_, data_.begin());
+  return data_.data();
+}
+
+void RectangleMaxTable::buildLevels() {
+  const int width = width_, height = height_;
   // Level k from level k - 1: the four squares of half the side that make up each square.
   // Only the cells whose square lies inside the grid are filled (and ever read).
-  for (int level = 1; level < levels; ++level) {
+  for (int level = 1; level < levels_; ++level) {
     const int half = 1 << (level - 1), side = 1 << level;
     const float* below = data_.data() + static_cast<size_t>(level - 1) * cells_;
     float* out = data_.data() + static_cast<size_t>(level) * cells_;

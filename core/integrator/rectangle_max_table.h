@@ -12,12 +12,16 @@ namespace cblox {
 /// (overlapping at its far edges, which a maximum does not mind): 4 lookups for a square,
 /// about 2 * long / short for a long one, more when it is wider than the top level.
 ///
-/// Thread safety: max() is const and may run concurrently; build() must not.
+/// Thread safety: max() is const and may run concurrently; resetGrid() and buildLevels() must
+/// not. Different cells of the grid may be filled concurrently.
 class RectangleMaxTable {
  public:
-  /// Builds the table of the width x height grid `values` (row-major) with squares of up to
-  /// 2^(levels - 1) cells per side; levels >= 1.
-  void build(const float* values, int width, int height, int levels);
+  /// Sizes the table for a width x height grid (row-major) with squares of up to
+  /// 2^(levels - 1) cells per side, and returns the grid, to be filled before buildLevels().
+  /// Throws std::invalid_argument for an empty grid or levels < 1.
+  float* resetGrid(int width, int height, int levels);
+  /// The levels above the grid, from its values.
+  void buildLevels();
 
   /// The maximum of columns [x0, x1] and rows [y0, y1], inclusive; 0 <= x0 <= x1 < width and
   /// 0 <= y0 <= y1 < height.
@@ -42,6 +46,8 @@ class RectangleMaxTable {
     return m;
   }
 
+  /// The grid (level 0) of the last resetGrid().
+  float* grid() { return data_.data(); }
   int width() const { return width_; }
   int height() const { return height_; }
 

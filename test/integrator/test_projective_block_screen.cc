@@ -1,5 +1,6 @@
 #include "core/integrator/projective_block_screen.h"
 
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -53,7 +54,8 @@ TEST(ProjectiveBlockScreen, ARejectedQuadrantIsNeverUpdated) {
     const Transformation T_G_C(q, Eigen::Vector3f(unit(rng), unit(rng), unit(rng)) * 2.0f);
     const Transformation T_C_G = T_G_C.inverse();
     RectangleMaxTable cell_table;
-    cell_table.build(cell_max.data(), cells_x, cells_y, 2);
+    std::copy(cell_max.begin(), cell_max.end(), cell_table.resetGrid(cells_x, cells_y, 2));
+    cell_table.buildLevels();
     const ProjectiveBlockScreen screen({T_C_G.rotationMatrix(), T_C_G.translation(), fx, fy,
                                         cx + 0.5f, cy + 0.5f, kWidth, kHeight, kVoxel, kVps,
                                         kTruncation, &cell_table, kCell});

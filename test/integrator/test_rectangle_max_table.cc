@@ -22,7 +22,8 @@ TEST(RectangleMaxTable, EveryRectangleGivesItsMaximum) {
     std::vector<float> grid(static_cast<size_t>(width * height));
     for (float& v : grid) v = value(rng);
     RectangleMaxTable table;
-    table.build(grid.data(), width, height, levels);
+    std::copy(grid.begin(), grid.end(), table.resetGrid(width, height, levels));
+    table.buildLevels();
     ASSERT_EQ(table.width(), width);
     ASSERT_EQ(table.height(), height);
     for (int y0 = 0; y0 < height; ++y0) {
@@ -51,7 +52,8 @@ TEST(RectangleMaxTable, APeakIsSeenExactlyByTheRectanglesHoldingIt) {
   std::vector<float> grid(kWidth * kHeight, 0.0f);
   grid[5 * kWidth + 9] = 2.5f;
   RectangleMaxTable table;
-  table.build(grid.data(), kWidth, kHeight, 4);
+  std::copy(grid.begin(), grid.end(), table.resetGrid(kWidth, kHeight, 4));
+  table.buildLevels();
   for (int y0 = 0; y0 < kHeight; ++y0) {
     for (int y1 = y0; y1 < kHeight; ++y1) {
       for (int x0 = 0; x0 < kWidth; ++x0) {
@@ -65,11 +67,10 @@ TEST(RectangleMaxTable, APeakIsSeenExactlyByTheRectanglesHoldingIt) {
 }
 
 TEST(RectangleMaxTable, RejectsAnEmptyGridOrNoLevel) {
-  const float one = 1.0f;
   RectangleMaxTable table;
-  EXPECT_THROW(table.build(&one, 0, 1, 1), std::invalid_argument);
-  EXPECT_THROW(table.build(&one, 1, 0, 1), std::invalid_argument);
-  EXPECT_THROW(table.build(&one, 1, 1, 0), std::invalid_argument);
+  EXPECT_THROW(table.resetGrid(0, 1, 1), std::invalid_argument);
+  EXPECT_THROW(table.resetGrid(1, 0, 1), std::invalid_argument);
+  EXPECT_THROW(table.resetGrid(1, 1, 0), std::invalid_argument);
 }
 
 }  // namespace

@@ -43,6 +43,8 @@ class ProjectiveBlockScreen {
   /// Bit q set when a voxel of quadrant q of the block whose origin (minimum corner) is
   /// `origin` may be updated; 0 when no voxel of the block can be. Thread-safe (const).
   unsigned rowQuadrants(const Eigen::Vector3f& origin) const;
+  /// The quadrants that hold rows: 0xF, or 0x1 for blocks of one voxel.
+  unsigned nonemptyQuadrants() const { return nonempty_; }
 
   /// The rows [begin, end) of y (or z) half `half` (0 or 1) of a block of
   /// `voxels_per_side` voxels per side.

@@ -458,7 +458,7 @@ IntegrationStats ProjectiveTsdfIntegrator::integrateDepthImage(const Transformat
                                   : nullptr;
   const ProjectiveVoxelRows rows({fx, fy, cx, cy, width, height, samples_.data(), colors}, updater,
                                  config_.vectorized);
-  const unsigned all_quadrants = vps > 1 ? 0xFu : 0x1u;
+  const unsigned all_quadrants = screen.nonemptyQuadrants();
   runThreadTeam(num_threads, [&](int id) {
     IntegrationStats& stats = states[static_cast<size_t>(id)].stats;
     std::vector<Eigen::Vector3f> row_origins(static_cast<size_t>(vps) * static_cast<size_t>(vps));

@@ -32,7 +32,7 @@ export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/s
 "$BUILD_DIR/test/integrator/test_integrator" --gtest_brief=1
 "$BUILD_DIR/test/mesh/test_mesh" --gtest_brief=1
 "$BUILD_DIR/test/submap/test_submap" --gtest_brief=1
-"$BUILD_DIR/test/daemon/test_mapper" --gtest_brief=1
+"$BUILD_DIR/test/mapping/test_mapper" --gtest_brief=1
 "$BUILD_DIR/test/tracking/test_tracking" --gtest_brief=1 \
   --gtest_filter='RgbdTrackingTest.*:SparseMapTest.*:KeyframeTriangulationTest.*'
 "$BUILD_DIR/test/daemon/test_stereo_depth_worker" --gtest_brief=1

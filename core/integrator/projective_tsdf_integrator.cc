@@ -11,10 +11,10 @@
 #include <emmintrin.h>
 #endif
 
+#include "core/common/thread_team.h"
 #include "core/integrator/deadline.h"
 #include "core/integrator/depth_groups.h"
 #include "core/integrator/even_coverage_order.h"
-#include "core/integrator/thread_team.h"
 
 #include "core/integrator/projective_block_screen.h"
 #include "core/integrator/projective_voxel_rows.h"

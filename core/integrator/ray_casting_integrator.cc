@@ -6,11 +6,11 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/common/thread_team.h"
 #include "core/integrator/deadline.h"
 #include "core/integrator/even_coverage_order.h"
 #include "core/integrator/grid_ray_traversal.h"
 #include "core/integrator/ray_point_screen.h"
-#include "core/integrator/thread_team.h"
 #include "core/integrator/tsdf_voxel_update.h"
 
 namespace cblox {

@@ -13,7 +13,7 @@
 
 #include <absl/container/flat_hash_set.h>
 
-#include "core/integrator/thread_team.h"
+#include "core/common/thread_team.h"
 #include "core/tsdf/block_index.h"
 
 namespace cblox {

@@ -21,7 +21,7 @@ namespace cblox {
 /// Thread safety: index/geometry accessors are immutable and thread-safe. Voxel access is
 /// not synchronised: concurrent writers must hold lock() (the ray-casting integrators do),
 /// or own the block exclusively (the projective integrator partitions blocks by thread).
-/// The `updated` flag is atomic.
+/// The `updated` flag and the change count are atomic.
 class Block {
  public:
   Block(const BlockIndex& index, int voxels_per_side, float voxel_size);
@@ -64,7 +64,15 @@ class Block {
   /// Set by integrators when a voxel changed; cleared by whoever consumes the change
   /// (the incremental mesher).
   bool updated() const { return updated_.load(std::memory_order_acquire); }
-  void setUpdated(bool value) { updated_.store(value, std::memory_order_release); }
+  /// setUpdated(true) also advances changeCount().
+  void setUpdated(bool value) {
+    if (value) change_count_.fetch_add(1, std::memory_order_acq_rel);
+    updated_.store(value, std::memory_order_release);
+  }
+  /// Number of setUpdated(true) calls so far. Unlike `updated`, nobody clears it, so any
+  /// number of consumers (the mesher, the distance field) can each keep the count they last
+  /// saw and tell whether the block changed since.
+  uint64_t changeCount() const { return change_count_.load(std::memory_order_acquire); }
 
   /// Per-call scratch for integrators: one "visited" bit per voxel, valid for one
   /// integration epoch (TsdfLayer::nextIntegrationEpoch). Returns true when the voxel had
@@ -105,6 +113,7 @@ class Block {
   uint64_t visited_epoch_ = 0;  // 0: never used (epochs start at 1)
   std::unique_ptr<uint64_t[]> visited_bits_;
   std::atomic<bool> updated_{false};
+  std::atomic<uint64_t> change_count_{0};
 };
 
 }  // namespace cblox

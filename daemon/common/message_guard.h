@@ -18,10 +18,10 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "core/common/rate_limited_log.h"
 #include "daemon/common/heartbeat.h"
-#include "daemon/common/peer_watch.h"
 #include "daemon/common/input_watch.h"
-#include "daemon/common/rate_limited_log.h"
+#include "daemon/common/peer_watch.h"
 #include "lcmtypes/wire_check.h"
 
 namespace cblox {

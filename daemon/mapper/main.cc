@@ -31,11 +31,11 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "core/mapping/mapper.h"
 #include "daemon/common/daemon_options.h"
 #include "daemon/common/input_watch.h"
 #include "daemon/common/run_loop.h"
 #include "daemon/common/yaml_config.h"
-#include "daemon/mapper/mapper.h"
 #include "daemon/mapper/mapper_config_loader.h"
 #include "daemon/mapper/mapper_lcm_node.h"
 

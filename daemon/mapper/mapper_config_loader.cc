@@ -100,7 +100,7 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   requireKnownKeys(root, top,
                    {"pose_source", "lcm_url", "output_dir", "input_silence_s", "channels", "layer",
                     "integrator", "mesh", "fusion", "maintenance", "subvolumes", "poses", "queues",
-                    "worker", "status", "checkpoint", "memory"});
+                    "worker", "status", "checkpoint", "memory", "planning"});
   if (isAbsent(root)) return config;
 
   if (root["pose_source"]) {
@@ -213,6 +213,16 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
     readOptional(memory, "memory", "cap_mb", &m.memory_cap.cap_mb);
     readOptional(memory, "memory", "near_only_fraction", &m.memory_cap.near_only_fraction);
     readOptional(memory, "memory", "near_distance_m", &m.memory_cap.near_distance_m);
+  }
+
+  const YAML::Node planning = root["planning"];
+  requireKnownKeys(planning, "planning",
+                   {"enabled", "max_distance_m", "min_weight", "refresh_period_s"});
+  if (!isAbsent(planning)) {
+    readOptional(planning, "planning", "enabled", &m.planning.enabled);
+    readOptional(planning, "planning", "max_distance_m", &m.planning.esdf.max_distance_m);
+    readOptional(planning, "planning", "min_weight", &m.planning.esdf.min_weight);
+    readOptional(planning, "planning", "refresh_period_s", &m.planning.refresh_period_s);
   }
 
   if (const std::string e = config.validate(); !e.empty()) throw ConfigError(top + ": " + e);

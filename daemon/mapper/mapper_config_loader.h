@@ -6,7 +6,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "daemon/mapper/mapper_config.h"
+#include "daemon/mapper/mapper_process_config.h"
 
 namespace cblox {
 

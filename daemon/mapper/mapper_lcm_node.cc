@@ -10,10 +10,10 @@
 #include <cblox/heartbeat_t.hpp>
 #include <cblox/map_status_t.hpp>
 
+#include "core/mapping/map_epoch_key.h"
 #include "daemon/common/heartbeat.h"
 #include "daemon/common/lcm_messages.h"
 #include "daemon/common/run_loop.h"
-#include "daemon/mapper/map_epoch_key.h"
 
 namespace cblox {
 

@@ -22,9 +22,9 @@
 #include <cblox/pose_stamped_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 
+#include "core/mapping/mapper.h"
 #include "daemon/common/message_guard.h"
-#include "daemon/mapper/mapper.h"
-#include "daemon/mapper/mapper_config.h"
+#include "daemon/mapper/mapper_process_config.h"
 
 namespace cblox {
 

@@ -20,9 +20,9 @@
 #include <cblox/stereo_pair_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 
+#include "core/common/text_format.h"
 #include "daemon/common/lcm_messages.h"
 #include "daemon/common/message_guard.h"
-#include "daemon/common/text_format.h"
 #include "daemon/mapper/mapper_lcm_node.h"
 #include "daemon/tracker/tracker_lcm_node.h"
 #include "lcmtypes/wire_check.h"

@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "core/geometry/se3.h"
+#include "core/mapping/mapper.h"
 #include "core/vocabulary/binary_vocabulary.h"
-#include "daemon/mapper/mapper.h"
-#include "daemon/mapper/mapper_config.h"
+#include "daemon/mapper/mapper_process_config.h"
 #include "daemon/tracker/tracker_config.h"
 #include "daemon/tracker/tracker_node.h"
 

@@ -29,11 +29,11 @@
 #include <string>
 #include <vector>
 
+#include "core/common/text_format.h"
 #include "core/features/orb_extractor.h"
 #include "core/vocabulary/binary_vocabulary.h"
 #include "daemon/capture/capture_config.h"
 #include "daemon/common/cli.h"
-#include "daemon/common/text_format.h"
 #include "daemon/common/yaml_config.h"
 #include "drivers/open_frame_source.h"
 #include "drivers/sim/builtin_scenes.h"

@@ -4,7 +4,7 @@
 #include <utility>
 
 #include "core/common/thread_name.h"
-#include "daemon/common/thread_priority.h"
+#include "core/common/thread_priority.h"
 
 namespace cblox {
 

@@ -11,9 +11,9 @@
 #include <utility>
 
 #include "core/common/thread_name.h"
-#include "daemon/common/thread_priority.h"
-#include "daemon/common/time_restart.h"
-#include "daemon/common/utime_ns.h"
+#include "core/common/thread_priority.h"
+#include "core/common/time_restart.h"
+#include "core/common/utime_ns.h"
 
 namespace cblox {
 namespace {

@@ -18,15 +18,15 @@
 #include <string>
 #include <thread>
 
+#include "core/common/checkpoint_config.h"
+#include "core/common/in_tray.h"
+#include "core/common/rate_limited_log.h"
+#include "core/common/timing_window.h"
 #include "core/geometry/se3.h"
 #include "core/geometry/stereo_rig.h"
 #include "core/tracking/keyframe_covariance_service.h"
 #include "core/tracking/slam_system.h"
 #include "core/vocabulary/binary_vocabulary.h"
-#include "daemon/common/checkpoint_config.h"
-#include "daemon/common/in_tray.h"
-#include "daemon/common/rate_limited_log.h"
-#include "daemon/common/timing_window.h"
 #include "daemon/tracker/ground_truth_buffer.h"
 #include "daemon/tracker/image_check.h"
 #include "daemon/tracker/tracker_checkpoint_worker.h"

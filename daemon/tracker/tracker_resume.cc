@@ -17,7 +17,7 @@ std::optional<TrackerResume> loadTrackerResume(const std::string& dir, std::stri
     if (!resume.map) return std::nullopt;
   }
   if (!resume.map && !lease) return std::nullopt;
-  // Ids are keyed by the mapper below 2^40 (daemon/mapper/map_epoch_key.h); a lease far above
+  // Ids are keyed by the mapper below 2^40 (core/mapping/map_epoch_key.h); a lease far above
   // the saved map (many keyframes published after it: checkpoints failing for long) is not
   // continued either, since every skipped id would cost a stand-in keyframe.
   const bool lease_fits =
@@ -42,7 +42,7 @@ std::optional<TrackerResume> loadTrackerResume(const std::string& dir, std::stri
     return resume;
   }
   const int32_t newest = std::max(resume.map ? resume.map->map_epoch : 0, lease->map_epoch);
-  if (newest >= (int32_t{1} << 22) - 1) {  // daemon/mapper/map_epoch_key.h's kMaxMapEpoch
+  if (newest >= (int32_t{1} << 22) - 1) {  // core/mapping/map_epoch_key.h's kMaxMapEpoch
     *error = dir + ": map epoch " + std::to_string(newest) + " leaves no epoch to start";
     return std::nullopt;
   }

@@ -6,7 +6,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "core/eval/quantile.h"
+#include "core/common/quantile.h"
 
 namespace cblox {
 

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "core/integrator/thread_team.h"
+#include "core/common/thread_team.h"
 
 namespace cblox {
 namespace {

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/eval/quantile.h"
+#include "core/common/quantile.h"
 
 namespace cblox {
 

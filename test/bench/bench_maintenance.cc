@@ -74,16 +74,16 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "core/common/quantile.h"
 #include "core/eval/mesh_accuracy.h"
-#include "core/eval/quantile.h"
 #include "core/eval/scatter_plot.h"
 #include "core/eval/umeyama.h"
+#include "core/mapping/mapper.h"
 #include "core/raycast/triangle_mesh_raycaster.h"
 #include "core/submap/submap_fusion.h"
 #include "core/tracking/keyframe_covariance_service.h"
 #include "core/tracking/slam_system.h"
 #include "daemon/common/cli.h"
-#include "daemon/mapper/mapper.h"
 #include "daemon/tracker/tracker_config.h"
 #include "drivers/open_frame_source.h"
 #include "drivers/sim/builtin_scenes.h"

@@ -27,7 +27,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "core/eval/quantile.h"
+#include "core/common/quantile.h"
 #include "daemon/common/cli.h"
 #include "drivers/open_frame_source.h"
 #include "drivers/stereo_depth/depth_accuracy.h"

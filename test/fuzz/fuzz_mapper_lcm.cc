@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "daemon/mapper/mapper.h"
-#include "daemon/mapper/mapper_config.h"
+#include "core/mapping/mapper.h"
 #include "daemon/mapper/mapper_lcm_node.h"
+#include "daemon/mapper/mapper_process_config.h"
 #include "test/fuzz/support/fuzz_check.h"
 #include "test/fuzz/support/fuzz_files.h"
 #include "test/fuzz/support/memq_bus.h"

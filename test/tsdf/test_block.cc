@@ -24,8 +24,17 @@ TEST(Block, StartsUnobservedAndCountsObservedVoxels) {
   block.voxel({3, 4, 5}).weight = 1.0f;
   block.voxel(0).weight = 0.5f;
   EXPECT_EQ(block.countObservedVoxels(), 2);
+  EXPECT_EQ(block.changeCount(), 0u);
   block.setUpdated(true);
   EXPECT_TRUE(block.updated());
+  EXPECT_EQ(block.changeCount(), 1u);
+  // Clearing the flag (the mesher consumed the change) keeps the count; each later change
+  // advances it again.
+  block.setUpdated(false);
+  EXPECT_FALSE(block.updated());
+  EXPECT_EQ(block.changeCount(), 1u);
+  block.setUpdated(true);
+  EXPECT_EQ(block.changeCount(), 2u);
   EXPECT_EQ(block.memoryBytes(), sizeof(Block) + 4096 * sizeof(TsdfVoxel));
 }
 

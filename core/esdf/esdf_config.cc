@@ -1,0 +1,17 @@
+#include "core/esdf/esdf_config.h"
+
+#include <cmath>
+
+namespace cblox {
+
+std::string EsdfConfig::validate() const {
+  if (!std::isfinite(max_distance_m) || !(max_distance_m > 0.0f)) {
+    return "max_distance_m must be finite and > 0, got " + std::to_string(max_distance_m);
+  }
+  if (!std::isfinite(min_weight) || min_weight < 0.0f) {
+    return "min_weight must be finite and >= 0, got " + std::to_string(min_weight);
+  }
+  return {};
+}
+
+}  // namespace cblox

@@ -1,0 +1,281 @@
+#include "core/esdf/esdf_integrator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace cblox {
+namespace {
+
+// Queue keys are distances in 1/kKeySteps voxel.
+constexpr float kKeySteps = 8.0f;
+// A bucket keeps at most this many entries' storage between updates.
+constexpr size_t kKeepBucketEntries = 4096;
+
+Eigen::Vector3i siteOf(const EsdfVoxel& v) { return {v.site[0], v.site[1], v.site[2]}; }
+
+void setSite(EsdfVoxel* v, const Eigen::Vector3i& offset) {
+  v->site[0] = static_cast<int16_t>(offset.x());
+  v->site[1] = static_cast<int16_t>(offset.y());
+  v->site[2] = static_cast<int16_t>(offset.z());
+  v->flags = static_cast<uint8_t>(v->flags | EsdfVoxel::kHasSite);
+}
+
+}  // namespace
+
+EsdfIntegrator::EsdfIntegrator(const EsdfConfig& config) : config_(config) {
+  if (const std::string e = config.validate(); !e.empty()) throw std::invalid_argument(e);
+  for (int z = -1; z <= 1; ++z) {
+    for (int y = -1; y <= 1; ++y) {
+      for (int x = -1; x <= 1; ++x) {
+        if (x != 0 || y != 0 || z != 0) neighbours_.emplace_back(x, y, z);
+      }
+    }
+  }
+}
+
+void EsdfIntegrator::prepare(const EsdfLayer& esdf) {
+  if (esdf.maxDistance() != config_.max_distance_m) {
+    throw std::invalid_argument("the distance field's max distance differs from the config's");
+  }
+  const double reach = static_cast<double>(config_.max_distance_m) / esdf.voxelSize() + 2.0;
+  if (reach > 30000.0) {
+    throw std::invalid_argument("max_distance_m spans more than 30000 voxels");
+  }
+  voxel_size_ = esdf.voxelSize();
+  voxels_per_side_ = esdf.voxelsPerSide();
+  voxels_per_side_log2_ = esdf.voxelsPerSideLog2();
+  neighbour_linear_.clear();
+  for (const GridIndex& d : neighbours_) {
+    neighbour_linear_.push_back(d.x() + voxels_per_side_ * (d.y() + voxels_per_side_ * d.z()));
+  }
+  // A site is carried one voxel past the cap, so that voxels at the cap know they are there.
+  max_reach_ = config_.max_distance_m + voxel_size_;
+  const auto max_key = static_cast<uint32_t>(std::ceil(reach * kKeySteps));
+  // Centre distances of every offset a wave can carry, by squared length in voxels.
+  const auto max_sq = static_cast<size_t>(std::ceil((reach + 1.0) * (reach + 1.0)));
+  if (centre_distance_.size() != max_sq + 1 || centre_distance_voxel_ != voxel_size_) {
+    centre_distance_.resize(max_sq + 1);
+    for (size_t i = 0; i <= max_sq; ++i) {
+      centre_distance_[i] = std::sqrt(static_cast<float>(i)) * voxel_size_;
+    }
+    centre_distance_voxel_ = voxel_size_;
+  }
+  if (max_key != max_key_) {
+    max_key_ = max_key;
+    queue_ = DistanceBucketQueue<Entry>(max_key_);
+  }
+}
+
+uint32_t EsdfIntegrator::keyOf(float distance) const {
+  const float steps = std::max(0.0f, distance) / voxel_size_ * kKeySteps;
+  return steps >= static_cast<float>(max_key_) ? max_key_ : static_cast<uint32_t>(steps);
+}
+
+EsdfIntegrator::VoxelRef EsdfIntegrator::neighbour(EsdfLayer* esdf, EsdfBlock* block,
+                                                   const GridIndex& local,
+                                                   const GridIndex& delta) const {
+  const GridIndex n = local + delta;
+  const int mask = voxels_per_side_ - 1;
+  const auto side = [this](int c) { return c < 0 ? -1 : (c >= voxels_per_side_ ? 1 : 0); };
+  VoxelRef ref;
+  ref.block = block->neighbours[static_cast<size_t>(
+      EsdfBlock::neighbourSlot(side(n.x()), side(n.y()), side(n.z())))];
+  if (ref.block != nullptr) {
+    ref.local = GridIndex(n.x() & mask, n.y() & mask, n.z() & mask);
+    ref.linear = esdf->linearIndex(ref.local);
+  }
+  return ref;
+}
+
+const EsdfVoxel* EsdfIntegrator::siteAt(const EsdfLayer& esdf, const EsdfBlock& block,
+                                        const GridIndex& local,
+                                        const Eigen::Vector3i& offset) const {
+  const GridIndex n = local + offset;
+  const EsdfVoxel* v =
+      n.minCoeff() >= 0 && n.maxCoeff() < voxels_per_side_
+          ? &block.voxels[static_cast<size_t>(esdf.linearIndex(n))]
+          : esdf.getVoxel(block.index * voxels_per_side_ + n);
+  return v != nullptr && v->isSite() ? v : nullptr;
+}
+
+void EsdfIntegrator::readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStats* stats) {
+  const Block& tsdf = *block->tsdf;
+  for (int linear = 0; linear < esdf->voxelsPerBlock(); ++linear) {
+    const TsdfVoxel& t = tsdf.voxel(linear);
+    EsdfVoxel& v = block->voxels[static_cast<size_t>(linear)];
+    const bool observed = t.weight > 0.0f && t.weight >= config_.min_weight;
+    v.state = !observed           ? VoxelState::kUnknown
+              : t.distance <= 0.0f ? VoxelState::kOccupied
+                                   : VoxelState::kFree;
+    if (observed && t.distance < voxel_size_) {
+      if (!v.isSite()) {
+        v.flags = EsdfVoxel::kSite;
+        setSite(&v, Eigen::Vector3i::Zero());
+        queue_.push(0, {block, linear});
+        ++stats->sites_added;
+      } else if (std::abs(siteDistance(t.distance) - siteDistance(v.own_distance)) * kKeySteps >
+                 voxel_size_) {
+        // Moved by more than a key step: its wave may now win voxels that another site has.
+        queue_.push(0, {block, linear});
+      }
+      v.own_distance = t.distance;
+      continue;
+    }
+    if (v.isSite()) {
+      // The surface is gone: the raise wave clears the voxels that took it as their site.
+      v.flags = EsdfVoxel::kRaise;
+      queue_.push(0, {block, linear});
+      ++stats->sites_removed;
+    } else if (v.flags == 0) {
+      v.own_distance = config_.max_distance_m;
+    }
+  }
+}
+
+void EsdfIntegrator::seedFromNeighbours(EsdfLayer* esdf, EsdfBlock* block) {
+  const int last = voxels_per_side_ - 1;
+  for (const GridIndex& d : neighbours_) {
+    EsdfBlock* other = esdf->getBlock(block->index + d);
+    if (other == nullptr) continue;
+    // The voxels of `other` that touch `block`: per axis the last layer when `other` lies
+    // below, the first when above, all when level.
+    GridIndex lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = d[a] < 0 ? last : 0;
+      hi[a] = d[a] > 0 ? 0 : last;
+    }
+    for (int z = lo.z(); z <= hi.z(); ++z) {
+      for (int y = lo.y(); y <= hi.y(); ++y) {
+        for (int x = lo.x(); x <= hi.x(); ++x) {
+          const int linear = esdf->linearIndex(GridIndex(x, y, z));
+          const EsdfVoxel& v = other->voxels[static_cast<size_t>(linear)];
+          if (v.hasSite() && (v.flags & EsdfVoxel::kRaise) == 0) {
+            queue_.push(v.isSite() ? 0 : keyOf(v.own_distance), {other, linear});
+          }
+        }
+      }
+    }
+  }
+}
+
+void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
+  const int mask = voxels_per_side_ - 1;
+  Entry entry{nullptr, 0};
+  uint32_t key = 0;
+  while (!queue_.empty()) {
+    queue_.pop(&entry, &key);
+    ++stats->voxels_popped;
+    EsdfVoxel& v = entry.block->voxels[static_cast<size_t>(entry.linear)];
+    const GridIndex local(entry.linear & mask, (entry.linear >> voxels_per_side_log2_) & mask,
+                          entry.linear >> (2 * voxels_per_side_log2_));
+    if ((v.flags & EsdfVoxel::kRaise) != 0) {
+      // Raise: neighbours whose site is no site any more join the wave; neighbours with a
+      // valid site become sources of the lower wave that refills the cleared region.
+      for (const GridIndex& d : neighbours_) {
+        const VoxelRef n = neighbour(esdf, entry.block, local, d);
+        if (n.block == nullptr) continue;
+        EsdfVoxel& nv = *n.voxel();
+        if (!nv.hasSite()) continue;
+        if (nv.isSite()) {
+          queue_.push(0, {n.block, n.linear});
+          continue;
+        }
+        if (siteAt(*esdf, *n.block, n.local, siteOf(nv)) == nullptr) nv.flags = EsdfVoxel::kRaise;
+        queue_.push(keyOf(nv.own_distance), {n.block, n.linear});
+      }
+      v.flags = 0;
+      v.own_distance = config_.max_distance_m;
+      continue;
+    }
+    if (!v.hasSite()) continue;
+    const Eigen::Vector3i site = siteOf(v);
+    float site_distance = siteDistance(v.own_distance);
+    if (!v.isSite()) {
+      if (keyOf(v.own_distance) != key) continue;  // improved since it was queued
+      const EsdfVoxel* s = siteAt(*esdf, *entry.block, local, site);
+      if (s == nullptr) continue;  // its site vanished; a raise wave is on its way
+      site_distance = siteDistance(s->own_distance);
+    }
+    const bool interior = local.minCoeff() > 0 && local.maxCoeff() < voxels_per_side_ - 1;
+    for (size_t k = 0; k < neighbours_.size(); ++k) {
+      const GridIndex& d = neighbours_[k];
+      VoxelRef n;
+      if (interior) {  // the common case: no block border to cross
+        n.block = entry.block;
+        n.linear = entry.linear + neighbour_linear_[k];
+      } else {
+        n = neighbour(esdf, entry.block, local, d);
+        if (n.block == nullptr) continue;
+      }
+      EsdfVoxel& nv = *n.voxel();
+      if (nv.isSite() || (nv.flags & EsdfVoxel::kRaise) != 0) continue;
+      const Eigen::Vector3i offset = site - d;
+      const auto sq = static_cast<size_t>(offset.squaredNorm());
+      if (sq >= centre_distance_.size()) continue;
+      const float through = std::max(0.0f, centre_distance_[sq] + site_distance);
+      if (through > max_reach_) continue;
+      if (nv.hasSite() && through >= nv.own_distance) continue;
+      setSite(&nv, offset);
+      nv.own_distance = through;
+      queue_.push(keyOf(through), {n.block, n.linear});
+    }
+  }
+  queue_.releaseLargeBuckets(kKeepBucketEntries);
+}
+
+EsdfUpdateStats EsdfIntegrator::stage(const TsdfLayer& tsdf, EsdfLayer* esdf) {
+  if (tsdf.voxelSize() != esdf->voxelSize() || tsdf.voxelsPerSide() != esdf->voxelsPerSide()) {
+    throw std::invalid_argument("the TSDF and distance-field layers have different geometry");
+  }
+  prepare(*esdf);
+  EsdfUpdateStats stats;
+  std::vector<EsdfBlock*> added;
+  std::vector<EsdfBlock*> changed;
+  for (const auto& [key, tsdf_block] : tsdf.blocks()) {
+    bool fresh = false;
+    EsdfBlock* block = esdf->allocateBlock(tsdf_block->index(), &fresh);
+    const uint64_t count = tsdf_block->changeCount();
+    if (fresh) {
+      block->tsdf = tsdf_block.get();
+      block->tsdf_change_count = count;
+      added.push_back(block);
+    } else if (block->tsdf != tsdf_block.get()) {
+      return restage(tsdf, esdf);  // a block was removed and another allocated there
+    } else if (block->tsdf_change_count != count) {
+      block->tsdf_change_count = count;
+      changed.push_back(block);
+    }
+  }
+  if (esdf->numBlocks() != tsdf.numBlocks()) return restage(tsdf, esdf);
+  // New blocks first take the waves of their neighbours' sites (before any of them is read,
+  // so only established sites are pushed), then every new or changed block is read.
+  for (EsdfBlock* block : added) seedFromNeighbours(esdf, block);
+  for (EsdfBlock* block : added) readBlock(esdf, block, &stats);
+  for (EsdfBlock* block : changed) readBlock(esdf, block, &stats);
+  stats.esdf_blocks_added = added.size();
+  stats.tsdf_blocks_read = added.size() + changed.size();
+  return stats;
+}
+
+EsdfUpdateStats EsdfIntegrator::restage(const TsdfLayer& tsdf, EsdfLayer* esdf) {
+  esdf->clear();
+  queue_ = DistanceBucketQueue<Entry>(max_key_);
+  EsdfUpdateStats stats = stage(tsdf, esdf);
+  stats.rebuilt = true;
+  return stats;
+}
+
+EsdfUpdateStats EsdfIntegrator::update(const TsdfLayer& tsdf, EsdfLayer* esdf) {
+  EsdfUpdateStats stats = stage(tsdf, esdf);
+  finish(esdf, &stats);
+  return stats;
+}
+
+EsdfUpdateStats EsdfIntegrator::rebuild(const TsdfLayer& tsdf, EsdfLayer* esdf) {
+  EsdfUpdateStats stats = restage(tsdf, esdf);
+  finish(esdf, &stats);
+  return stats;
+}
+
+}  // namespace cblox

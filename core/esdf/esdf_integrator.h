@@ -1,0 +1,125 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/esdf/esdf_config.h"
+#include "core/esdf/esdf_layer.h"
+#include "core/esdf/distance_bucket_queue.h"
+#include "core/tsdf/tsdf_layer.h"
+
+namespace cblox {
+
+/// What one EsdfIntegrator call did.
+struct EsdfUpdateStats {
+  size_t tsdf_blocks_read = 0;    ///< TSDF blocks whose voxels were read (new or changed)
+  size_t esdf_blocks_added = 0;   ///< distance-field blocks allocated
+  size_t sites_added = 0;         ///< voxels that became (or changed as) obstacles
+  size_t sites_removed = 0;       ///< obstacle voxels that stopped being obstacles
+  size_t voxels_popped = 0;       ///< wavefront steps
+  bool rebuilt = false;           ///< the whole field was recomputed
+};
+
+/// Computes a subvolume's Euclidean signed distance field (EsdfLayer) from its TSDF layer,
+/// in the subvolume's own frame, and keeps it up to date incrementally.
+///
+/// The field, per voxel of every allocated TSDF block:
+///   - state: unknown when the TSDF weight is 0 or below min_weight; occupied when observed
+///     with TSDF distance <= 0; free otherwise.
+///   - sites: observed voxels whose TSDF distance is below one voxel size: every occupied
+///     voxel and the free side's voxels next to the surface, so that every surface point has
+///     a site within half a voxel diagonal (also at convex corners and edges, where the
+///     nearest occupied voxel centre can be a voxel away). Sites answer their TSDF distance
+///     (negative inside obstacles). Occupied voxels are sites whatever their value: a
+///     projective TSDF seen at a grazing angle has no voxel within one voxel of zero.
+///   - every other voxel (free or unknown) carries a site s that minimises
+///     |x - s| + max(tsdf(s), -voxel) as far as the wavefront knows, where |x - s| is the
+///     distance between voxel centres; it answers that value with s's current TSDF value
+///     (esdf_query.h), at least 0, capped at max_distance_m. Through a free-side site the
+///     formula is an upper bound of the true distance (triangle inequality), through an
+///     occupied one it may undershoot; the minimum over the sites near the surface is within
+///     a fraction of a voxel of the truth on exact TSDFs (the analytic tests bound it).
+///   The sites are carried by a 26-connected brushfire ordered by that distance (quantised to
+///   1/8 voxel), after Lau, Sprunk and Burgard, "Efficient grid-based spatial representations
+///   for robot navigation in dynamic environments" (RAS 2013): lower waves spread new sites,
+///   raise waves clear voxels whose site stopped being one before the lower wave refills
+///   them. Surfaces in space no TSDF block covers are not seen.
+///
+/// Incremental contract: update() reads only TSDF blocks that are new or whose
+/// Block::changeCount() moved since the last call, so integrators must mark changed blocks
+/// (setUpdated(true)). When a TSDF block the field was computed from is gone, update() falls
+/// back to rebuild(). A caller that removes and re-creates blocks between calls calls
+/// rebuild() itself.
+///
+/// Thread safety: one call at a time per integrator; the TSDF layer must not be written and
+/// the EsdfLayer must not be read during a call.
+class EsdfIntegrator {
+ public:
+  /// Throws std::invalid_argument with EsdfConfig::validate()'s message when invalid.
+  explicit EsdfIntegrator(const EsdfConfig& config);
+
+  const EsdfConfig& config() const { return config_; }
+
+  /// Brings `esdf` up to date with `tsdf` (see the class comment). Throws
+  /// std::invalid_argument when the two layers' geometries differ, when esdf's
+  /// maxDistance() is not config().max_distance_m, or when max_distance_m spans more than
+  /// 30000 voxels (sites are 16-bit offsets).
+  EsdfUpdateStats update(const TsdfLayer& tsdf, EsdfLayer* esdf);
+  /// Recomputes `esdf` from scratch.
+  EsdfUpdateStats rebuild(const TsdfLayer& tsdf, EsdfLayer* esdf);
+
+  /// update() in two steps, so that a caller can release the TSDF layer's lock in between:
+  /// stage() reads the new and changed TSDF blocks (the layer must not be written during it)
+  /// and queues the waves; finish() runs them without reading the TSDF. Between the two,
+  /// `esdf` must not be read or changed, nor this integrator used otherwise. Same exceptions
+  /// as update() (from stage()).
+  EsdfUpdateStats stage(const TsdfLayer& tsdf, EsdfLayer* esdf);
+  void finish(EsdfLayer* esdf, EsdfUpdateStats* stats);
+
+ private:
+  struct Entry {
+    EsdfBlock* block;
+    int linear;
+  };
+  struct VoxelRef {
+    EsdfBlock* block = nullptr;
+    GridIndex local = GridIndex::Zero();  ///< inside `block`
+    int linear = 0;
+    EsdfVoxel* voxel() const { return &block->voxels[static_cast<size_t>(linear)]; }
+  };
+
+  void prepare(const EsdfLayer& esdf);
+  // Clears `esdf` and stages it whole.
+  EsdfUpdateStats restage(const TsdfLayer& tsdf, EsdfLayer* esdf);
+  /// The voxel at `local` + `delta` (local may leave the block), or an empty ref.
+  VoxelRef neighbour(EsdfLayer* esdf, EsdfBlock* block, const GridIndex& local,
+                     const GridIndex& delta) const;
+  /// Reads one TSDF block into its distance-field block: states, sites added and removed.
+  void readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStats* stats);
+  /// Pushes the sited voxels of `block`'s neighbours that touch it (it is new).
+  void seedFromNeighbours(EsdfLayer* esdf, EsdfBlock* block);
+  /// The site at `local` + `offset` (from `block`), or null when that voxel is no site.
+  const EsdfVoxel* siteAt(const EsdfLayer& esdf, const EsdfBlock& block, const GridIndex& local,
+                          const Eigen::Vector3i& offset) const;
+  /// A site's TSDF distance as the distance through it counts it: at least -one voxel (a
+  /// surface voxel's centre lies within one voxel of the surface; a deeper occupied voxel is
+  /// never nearer to a point outside than the surface voxels in front of it).
+  float siteDistance(float tsdf_distance) const { return std::max(tsdf_distance, -voxel_size_); }
+  /// The queue key of a distance: 1/8 voxel steps, clamped to the queue's range.
+  uint32_t keyOf(float distance) const;
+
+  EsdfConfig config_;
+  float voxel_size_ = 0.0f;
+  int voxels_per_side_ = 0;
+  int voxels_per_side_log2_ = 0;
+  float max_reach_ = 0.0f;  // farthest distance a wave carries a site, metres
+  uint32_t max_key_ = 0;
+  std::vector<GridIndex> neighbours_;  // the 26 offsets
+  std::vector<int> neighbour_linear_;  // the same as linear index steps inside a block
+  std::vector<float> centre_distance_;  // metres, by squared offset length in voxels
+  float centre_distance_voxel_ = 0.0f;
+  DistanceBucketQueue<Entry> queue_{0};
+};
+
+}  // namespace cblox

@@ -1,0 +1,76 @@
+#include "core/esdf/esdf_query.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace cblox {
+
+bool voxelDistance(const EsdfLayer& layer, const GlobalVoxelIndex& index, VoxelState* state,
+                   float* distance) {
+  const EsdfVoxel* v = layer.getVoxel(index);
+  if (v == nullptr) return false;
+  *state = v->state;
+  if (v->isSite()) {
+    *distance = std::min(v->own_distance, layer.maxDistance());
+    return true;
+  }
+  float d = layer.maxDistance();
+  if (v->hasSite()) {
+    const Eigen::Vector3i offset(v->site[0], v->site[1], v->site[2]);
+    const EsdfVoxel* site = layer.getVoxel(index + offset);
+    if (site != nullptr && site->isSite()) {
+      // The site's TSDF distance counts down to -one voxel (EsdfIntegrator::siteDistance).
+      const float site_distance = std::max(site->own_distance, -layer.voxelSize());
+      d = std::max(0.0f, offset.cast<float>().norm() * layer.voxelSize() + site_distance);
+    }
+  }
+  *distance = std::min(d, layer.maxDistance());
+  return true;
+}
+
+DistanceSample queryNearest(const EsdfLayer& layer, const Eigen::Vector3f& point) {
+  DistanceSample sample;
+  if (!point.allFinite()) return sample;
+  VoxelState state = VoxelState::kUnknown;
+  float distance = 0.0f;
+  if (!voxelDistance(layer, layer.globalVoxelIndexFromPoint(point), &state, &distance)) {
+    return sample;
+  }
+  sample.state = state;
+  if (state != VoxelState::kUnknown) sample.distance = distance;
+  return sample;
+}
+
+DistanceSample queryInterpolated(const EsdfLayer& layer, const Eigen::Vector3f& point) {
+  if (!point.allFinite()) return DistanceSample{};
+  // Voxel centres sit at (i + 0.5) * h: the cell of centres around `point` starts at base.
+  const Eigen::Vector3f scaled = point / layer.voxelSize() - Eigen::Vector3f::Constant(0.5f);
+  const GlobalVoxelIndex base = gridIndexFromPoint(scaled, 1.0f);
+  const Eigen::Vector3f t = scaled - base.cast<float>();
+  float c[8];
+  for (int corner = 0; corner < 8; ++corner) {
+    const GlobalVoxelIndex index = base + GlobalVoxelIndex(corner & 1, (corner >> 1) & 1,
+                                                           (corner >> 2) & 1);
+    VoxelState state = VoxelState::kUnknown;
+    if (!voxelDistance(layer, index, &state, &c[corner]) || state == VoxelState::kUnknown) {
+      return queryNearest(layer, point);
+    }
+  }
+  // c[x + 2y + 4z]; interpolate along x, then y, then z.
+  const float x00 = c[0] + t.x() * (c[1] - c[0]), x10 = c[2] + t.x() * (c[3] - c[2]);
+  const float x01 = c[4] + t.x() * (c[5] - c[4]), x11 = c[6] + t.x() * (c[7] - c[6]);
+  const float y0 = x00 + t.y() * (x10 - x00), y1 = x01 + t.y() * (x11 - x01);
+  DistanceSample sample;
+  sample.distance = y0 + t.z() * (y1 - y0);
+  sample.state = sample.distance <= 0.0f ? VoxelState::kOccupied : VoxelState::kFree;
+  const float inv_h = 1.0f / layer.voxelSize();
+  const float dx0 = (1 - t.y()) * (c[1] - c[0]) + t.y() * (c[3] - c[2]);
+  const float dx1 = (1 - t.y()) * (c[5] - c[4]) + t.y() * (c[7] - c[6]);
+  sample.gradient.x() = ((1 - t.z()) * dx0 + t.z() * dx1) * inv_h;
+  sample.gradient.y() = ((1 - t.z()) * (x10 - x00) + t.z() * (x11 - x01)) * inv_h;
+  sample.gradient.z() = (y1 - y0) * inv_h;
+  sample.has_gradient = true;
+  return sample;
+}
+
+}  // namespace cblox

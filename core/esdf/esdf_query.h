@@ -1,0 +1,44 @@
+#pragma once
+
+#include <limits>
+
+#include <Eigen/Core>
+
+#include "core/esdf/esdf_layer.h"
+#include "core/esdf/esdf_voxel.h"
+
+namespace cblox {
+
+/// A distance-field answer at one point of a subvolume's frame.
+///   state: unknown (never observed, or outside every block), free or occupied.
+///   distance: metres to the nearest obstacle surface; negative inside obstacles; capped at
+///     the layer's maxDistance() ("at least this far"). NaN when state is unknown: unknown
+///     space has no distance, whatever obstacles are known around it.
+///   gradient: d distance / d position (about unit length, pointing away from the nearest
+///     obstacle), only when has_gradient; NaN otherwise.
+struct DistanceSample {
+  VoxelState state = VoxelState::kUnknown;
+  float distance = std::numeric_limits<float>::quiet_NaN();
+  Eigen::Vector3f gradient = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  bool has_gradient = false;
+};
+
+/// The field's value at one voxel: sites (occupied voxels and the free side's near-surface
+/// voxels) their TSDF distance; other voxels max(0, |site| * voxel_size + max(the site's
+/// current TSDF distance, -voxel_size)), or maxDistance() without a valid site; capped at
+/// maxDistance() (see EsdfVoxel). Unknown voxels get the same value (the distance to the
+/// nearest obstacle known). False, with nothing written, when the voxel's block is absent.
+/// Thread-safe against other readers.
+bool voxelDistance(const EsdfLayer& layer, const GlobalVoxelIndex& index, VoxelState* state,
+                   float* distance);
+
+/// The answer of the voxel that contains `point`; no gradient.
+DistanceSample queryNearest(const EsdfLayer& layer, const Eigen::Vector3f& point);
+
+/// Trilinear interpolation of the eight voxel centres around `point`, with the analytic
+/// gradient, when all eight are observed (free or occupied); state is then occupied where
+/// the interpolated distance is <= 0, free elsewhere. When any of the eight is unknown or
+/// absent, the answer is queryNearest's (no gradient).
+DistanceSample queryInterpolated(const EsdfLayer& layer, const Eigen::Vector3f& point);
+
+}  // namespace cblox

@@ -1,0 +1,46 @@
+#pragma once
+
+#include <cstdint>
+
+namespace cblox {
+
+/// What a voxel of the map says about its space. Unknown is an answer of its own: a voxel
+/// that was never observed (TSDF weight below EsdfConfig::min_weight) is neither free nor
+/// an obstacle, whatever distance it holds.
+enum class VoxelState : uint8_t {
+  kUnknown = 0,
+  kFree = 1,
+  kOccupied = 2,
+};
+
+/// "unknown", "free" or "occupied". Thread-safe.
+const char* voxelStateName(VoxelState state);
+
+/// One voxel of a distance field, 12 bytes. The distance a free or unknown voxel answers is
+/// not stored whole: it is computed on query through its site from the site's current TSDF
+/// value (esdf_query.h), so that a site whose value moves needs no wave to refresh the
+/// voxels that depend on it.
+///   own_distance: sites (kSite: observed with TSDF distance below one voxel: every occupied
+///     voxel and the free side's voxels next to the surface): their TSDF distance. Other voxels with a
+///     site: the distance through it when it was assigned (the wavefront's bookkeeping).
+///     Voxels without a site: the layer's max distance.
+///   site: offset in voxels from this voxel to the surface voxel nearest to it as far as the
+///     wavefront knows; meaningful only with kHasSite. Surface voxels are their own site
+///     (offset 0).
+/// Not thread-safe: the owning EsdfLayer's user synchronises.
+struct EsdfVoxel {
+  static constexpr uint8_t kHasSite = 1;  ///< site points at a surface voxel
+  static constexpr uint8_t kRaise = 2;    ///< on the raise wave (its site vanished)
+  static constexpr uint8_t kSite = 4;     ///< this voxel is a surface voxel (a site)
+
+  float own_distance = 0.0f;
+  int16_t site[3] = {0, 0, 0};
+  VoxelState state = VoxelState::kUnknown;
+  uint8_t flags = 0;
+
+  bool hasSite() const { return (flags & kHasSite) != 0; }
+  bool isSite() const { return (flags & kSite) != 0; }
+};
+static_assert(sizeof(EsdfVoxel) == 12, "EsdfVoxel must stay 12 bytes");
+
+}  // namespace cblox

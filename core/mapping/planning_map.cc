@@ -1,0 +1,225 @@
+#include "core/mapping/planning_map.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <set>
+#include <stdexcept>
+#include <utility>
+
+#include "core/esdf/esdf_query.h"
+
+namespace cblox {
+
+PlanningMap::PlanningMap(const EsdfConfig& config) : config_(config), integrator_(config) {}
+
+std::shared_ptr<PlanningMap::Field> PlanningMap::fieldFor(const Submap& submap) {
+  std::lock_guard<std::mutex> lock(index_mutex_);
+  IndexEntry& entry = index_[submap.id()];
+  if (!entry.field) {
+    entry.id = submap.id();
+    entry.field = std::make_shared<Field>(submap.layerConfig(), config_.max_distance_m);
+    const Transformationd T_G_M = submap.T_G_M();
+    entry.T_M_G = T_G_M.inverse();
+    entry.R_G_M = T_G_M.rotationMatrix();
+  }
+  return entry.field;
+}
+
+void PlanningMap::updateField(const Submap& submap, const TsdfLayer& layer,
+                              std::unique_lock<std::mutex>* layer_lock, Field* field) {
+  std::unique_lock<std::shared_mutex> field_lock(field->mutex);
+  EsdfUpdateStats stats = integrator_.stage(layer, &field->layer);
+  field->revision = submap.revision();  // stable while the layer is not written
+  if (layer_lock != nullptr) layer_lock->unlock();
+  integrator_.finish(&field->layer, &stats);
+  const size_t bytes = field->dropped ? 0 : field->layer.memoryBytes();
+  if (bytes >= field->counted_bytes) {
+    memory_bytes_.fetch_add(bytes - field->counted_bytes, std::memory_order_relaxed);
+  } else {
+    memory_bytes_.fetch_sub(field->counted_bytes - bytes, std::memory_order_relaxed);
+  }
+  field->counted_bytes = bytes;
+  Eigen::AlignedBox3f box;
+  const float block_size = layer.blockSize();
+  for (const auto& [key, block] : field->layer.blocks()) {
+    const Eigen::Vector3f lo = block->index.cast<float>() * block_size;
+    box.extend(lo);
+    box.extend(lo + Eigen::Vector3f::Constant(block_size));
+  }
+  updates_.fetch_add(1, std::memory_order_relaxed);
+  if (stats.rebuilt) rebuilds_.fetch_add(1, std::memory_order_relaxed);
+  std::lock_guard<std::mutex> lock(index_mutex_);
+  const auto it = index_.find(submap.id());
+  if (it != index_.end() && it->second.field.get() == field) it->second.box_M = box;
+}
+
+void PlanningMap::refresh(const SubmapCollection& collection, Scope scope) {
+  const std::vector<std::shared_ptr<Submap>> submaps = collection.submaps();
+  std::set<SubmapId> present;
+  for (const std::shared_ptr<Submap>& submap : submaps) present.insert(submap->id());
+  std::vector<std::shared_ptr<Field>> dropped;
+  {
+    std::lock_guard<std::mutex> lock(index_mutex_);
+    for (auto it = index_.begin(); it != index_.end();) {
+      if (present.count(it->first) == 0) {
+        dropped.push_back(it->second.field);
+        it = index_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+  }
+  for (const std::shared_ptr<Field>& field : dropped) {
+    // Queries that took it before the erase may still sample it; its bytes leave now.
+    std::unique_lock<std::shared_mutex> field_lock(field->mutex);
+    field->dropped = true;
+    memory_bytes_.fetch_sub(field->counted_bytes, std::memory_order_relaxed);
+    field->counted_bytes = 0;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  bool updated = false;
+  for (const std::shared_ptr<Submap>& submap : submaps) {
+    if (scope == Scope::kFinished && submap->isActive()) continue;
+    const std::shared_ptr<Field> field = fieldFor(*submap);
+    uint64_t revision = 0;
+    bool fresh = false;
+    {
+      std::shared_lock<std::shared_mutex> field_lock(field->mutex);
+      revision = field->revision;
+      fresh = field->layer.numBlocks() == 0;
+    }
+    if (!fresh && revision == submap->revision()) continue;
+    updated = true;
+    if (submap->isActive()) {
+      std::unique_lock<std::mutex> layer_lock = submap->lockLayer();
+      if (submap->isActive()) {
+        updateField(*submap, submap->layer(), &layer_lock, field.get());
+        continue;
+      }
+    }
+    // Finished (possibly just now): its layer belongs to this thread.
+    updateField(*submap, submap->layer(), nullptr, field.get());
+  }
+  if (updated) {
+    refresh_ms_.add(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count());
+  }
+  setPoses(collection.poseSnapshot());
+}
+
+void PlanningMap::setPoses(const std::vector<SubmapPose>& poses) {
+  std::lock_guard<std::mutex> lock(index_mutex_);
+  for (const SubmapPose& pose : poses) {
+    const auto it = index_.find(pose.id);
+    if (it == index_.end()) continue;
+    it->second.T_M_G = pose.T_G_M.inverse();
+    it->second.R_G_M = pose.T_G_M.rotationMatrix();
+  }
+}
+
+std::vector<PlanningMap::IndexEntry> PlanningMap::indexSnapshot() const {
+  std::vector<IndexEntry> entries;
+  std::lock_guard<std::mutex> lock(index_mutex_);
+  entries.reserve(index_.size());
+  for (const auto& [id, entry] : index_) entries.push_back(entry);
+  return entries;
+}
+
+DistanceAnswer PlanningMap::sample(const std::vector<IndexEntry>& index,
+                                   const Eigen::Vector3d& p_G) {
+  DistanceAnswer answer;
+  if (!p_G.allFinite()) return answer;
+  for (const IndexEntry& entry : index) {
+    const Eigen::Vector3f p_M = (entry.T_M_G * p_G).cast<float>();
+    if (entry.box_M.isEmpty() || !entry.box_M.contains(p_M)) continue;
+    DistanceSample s;
+    {
+      std::shared_lock<std::shared_mutex> lock(entry.field->mutex);
+      s = queryInterpolated(entry.field->layer, p_M);
+    }
+    if (s.state == VoxelState::kUnknown) continue;
+    // Occupied wins over free; among equals the nearest obstacle wins.
+    const bool better =
+        answer.state == VoxelState::kUnknown ||
+        (s.state == VoxelState::kOccupied && answer.state != VoxelState::kOccupied) ||
+        (s.state == answer.state && static_cast<double>(s.distance) < answer.distance);
+    if (!better) continue;
+    answer.state = s.state;
+    answer.distance = s.distance;
+    answer.has_gradient = s.has_gradient;
+    answer.gradient = s.has_gradient ? Eigen::Vector3d(entry.R_G_M * s.gradient.cast<double>())
+                                     : Eigen::Vector3d::Constant(
+                                           std::numeric_limits<double>::quiet_NaN());
+    answer.submap = static_cast<int64_t>(entry.id);
+  }
+  return answer;
+}
+
+DistanceAnswer PlanningMap::query(const Eigen::Vector3d& p_G) const {
+  return sample(indexSnapshot(), p_G);
+}
+
+void PlanningMap::queryBatch(std::span<const Eigen::Vector3d> points_G,
+                             std::vector<DistanceAnswer>* answers) const {
+  const std::vector<IndexEntry> index = indexSnapshot();
+  answers->resize(points_G.size());
+  for (size_t i = 0; i < points_G.size(); ++i) (*answers)[i] = sample(index, points_G[i]);
+}
+
+bool PlanningMap::localGrid(const Eigen::Vector3d& min_G, const Eigen::Vector3d& max_G,
+                            double resolution, LocalGrid* grid, std::string* error) const {
+  if (!min_G.allFinite() || !max_G.allFinite()) {
+    *error = "the box's corners must be finite";
+    return false;
+  }
+  if (!((max_G - min_G).minCoeff() > 0.0)) {
+    *error = "the box's maximum corner must be above its minimum on every axis";
+    return false;
+  }
+  if (!std::isfinite(resolution) || !(resolution > 0.0)) {
+    *error = "the resolution must be finite and > 0";
+    return false;
+  }
+  // Counted in double before any integer conversion, so that a huge box cannot overflow.
+  const Eigen::Vector3d cells = ((max_G - min_G) / resolution).array().ceil();
+  if (cells.prod() > static_cast<double>(kMaxGridCells)) {
+    *error = "the box has " + std::to_string(cells.prod()) + " cells at this resolution, more than " +
+             std::to_string(kMaxGridCells);
+    return false;
+  }
+  grid->origin = min_G;
+  grid->resolution = resolution;
+  grid->size = cells.cast<int>();
+  const size_t n = static_cast<size_t>(cells.prod());
+  grid->state.assign(n, VoxelState::kUnknown);
+  grid->distance.assign(n, std::numeric_limits<float>::quiet_NaN());
+  const std::vector<IndexEntry> index = indexSnapshot();
+  for (int k = 0; k < grid->size.z(); ++k) {
+    for (int j = 0; j < grid->size.y(); ++j) {
+      for (int i = 0; i < grid->size.x(); ++i) {
+        const DistanceAnswer a = sample(index, grid->cellCenter(i, j, k));
+        const size_t c = grid->index(i, j, k);
+        grid->state[c] = a.state;
+        grid->distance[c] = static_cast<float>(a.distance);
+      }
+    }
+  }
+  return true;
+}
+
+PlanningMapStats PlanningMap::stats() const {
+  PlanningMapStats stats;
+  for (const IndexEntry& entry : indexSnapshot()) {
+    std::shared_lock<std::shared_mutex> lock(entry.field->mutex);
+    ++stats.fields;
+    stats.blocks += entry.field->layer.numBlocks();
+  }
+  stats.memory_bytes = memoryBytes();
+  stats.updates = updates_.load(std::memory_order_relaxed);
+  stats.rebuilds = rebuilds_.load(std::memory_order_relaxed);
+  return stats;
+}
+
+}  // namespace cblox

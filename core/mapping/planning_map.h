@@ -1,0 +1,194 @@
+#pragma once
+
+// The map for a planner: one distance field per subvolume (core/esdf), each in its
+// subvolume's own frame M, answered in the global frame G through the subvolumes' current
+// poses. A loop closure that moves subvolumes moves their fields with them: no field is
+// recomputed for a pose change.
+
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "core/common/timing_window.h"
+#include "core/esdf/esdf_config.h"
+#include "core/esdf/esdf_integrator.h"
+#include "core/esdf/esdf_layer.h"
+#include "core/esdf/esdf_voxel.h"
+#include "core/geometry/se3.h"
+#include "core/submap/submap.h"
+#include "core/submap/submap_collection.h"
+
+namespace cblox {
+
+/// The planning map's answer at one point of G.
+///   state: occupied when some subvolume's field says occupied there; else free when some
+///     subvolume observed the point free; else unknown (no subvolume observed it).
+///   distance: metres to the nearest obstacle surface that the subvolumes observing the point
+///     know: the smallest of their answers (negative inside an obstacle), capped at
+///     max_distance_m. NaN when unknown.
+///   gradient: of the answering subvolume's field, rotated into G (about unit length,
+///     pointing away from the obstacle); only with has_gradient.
+///   submap: the subvolume whose field gave the distance; -1 when unknown.
+struct DistanceAnswer {
+  VoxelState state = VoxelState::kUnknown;
+  double distance = std::numeric_limits<double>::quiet_NaN();
+  Eigen::Vector3d gradient = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  bool has_gradient = false;
+  int64_t submap = -1;
+};
+
+/// A dense copy of the planning map over an axis-aligned box of G (PlanningMap::localGrid),
+/// for planners that keep their own. Cell (i, j, k) has its centre at
+/// origin + (i + 0.5, j + 0.5, k + 0.5) * resolution; cells are stored x fastest, then y, z.
+struct LocalGrid {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< minimum corner, G
+  double resolution = 0.0;                           ///< cell edge, metres
+  Eigen::Vector3i size = Eigen::Vector3i::Zero();    ///< cells per axis
+  std::vector<VoxelState> state;                     ///< per cell
+  std::vector<float> distance;                       ///< per cell; NaN where unknown
+
+  size_t index(int i, int j, int k) const {
+    return static_cast<size_t>(i) +
+           static_cast<size_t>(size.x()) * (static_cast<size_t>(j) +
+                                            static_cast<size_t>(size.y()) * static_cast<size_t>(k));
+  }
+  Eigen::Vector3d cellCenter(int i, int j, int k) const {
+    return origin + (Eigen::Vector3d(i, j, k) + Eigen::Vector3d::Constant(0.5)) * resolution;
+  }
+};
+
+/// Counters and sizes of the planning map. Plain value type.
+struct PlanningMapStats {
+  size_t fields = 0;        ///< subvolumes with a distance field
+  size_t blocks = 0;        ///< distance-field blocks over all fields
+  size_t memory_bytes = 0;  ///< bytes the fields hold
+  uint64_t updates = 0;     ///< field updates (incremental or rebuilt)
+  uint64_t rebuilds = 0;    ///< of those, whole-field rebuilds
+};
+
+/// The distance fields of a SubmapCollection's subvolumes, and the queries over them.
+///
+/// Who calls what (the mapper's threads; any single-threaded user may call everything):
+/// - refresh(): one thread at a time, the owner of finished layers (the mapper's
+///   fusion/export worker: finished subvolumes every refresh_period_s and after a fusion,
+///   all of them after a load and on Mapper::syncPlanningMap).
+/// - setPoses(): after a pose batch (the mapper's maintenance thread).
+/// - query(), queryBatch(), localGrid(), stats(), memoryBytes(): any thread, any time.
+/// A query holds each field's shared lock only while sampling it; refresh holds a field's
+/// exclusive lock while computing it, so a query waits at most for one field's update and
+/// never sees half of one. refresh(kAll) holds an active subvolume's layer lock (blocking
+/// integration) only while it reads the blocks that changed, not while the waves run.
+/// Lock order: subvolume layer lock -> field lock -> index mutex.
+class PlanningMap {
+ public:
+  /// Throws std::invalid_argument with EsdfConfig::validate()'s message when invalid.
+  explicit PlanningMap(const EsdfConfig& config);
+  PlanningMap(const PlanningMap&) = delete;
+  PlanningMap& operator=(const PlanningMap&) = delete;
+
+  const EsdfConfig& config() const { return config_; }
+
+  /// Which subvolumes refresh() computes.
+  enum class Scope {
+    kFinished,  ///< finished ones only: never touches a layer integration is writing
+    kAll,       ///< the active one too, reading its changed blocks under Submap::lockLayer()
+  };
+  /// Makes the fields follow `collection`: fields of subvolumes no longer in it are dropped;
+  /// a subvolume in `scope` without a field, or whose Submap::revision() moved since its
+  /// field was computed, has its field updated from the TSDF blocks that changed
+  /// (EsdfIntegrator), a finished one reading its layer without a lock (call on the thread
+  /// that owns finished layers); every field takes its subvolume's current pose. Its
+  /// duration goes into refreshMs().
+  void refresh(const SubmapCollection& collection, Scope scope);
+  /// The subvolumes' current poses (ids without a field are ignored).
+  void setPoses(const std::vector<SubmapPose>& poses);
+
+  /// The answer at `p_G` (see DistanceAnswer): every field whose blocks' bounding box holds
+  /// the point is sampled with trilinear interpolation (esdf_query.h).
+  DistanceAnswer query(const Eigen::Vector3d& p_G) const;
+  /// query() for each point, into `answers` (resized), with one snapshot of the poses for
+  /// the whole batch.
+  void queryBatch(std::span<const Eigen::Vector3d> points_G,
+                  std::vector<DistanceAnswer>* answers) const;
+  /// The names a planner looks for: the same answer as query() (distance and gradient are
+  /// always computed together), and whether some subvolume observed the point.
+  DistanceAnswer distanceAndGradient(const Eigen::Vector3d& p_G) const { return query(p_G); }
+  bool isObserved(const Eigen::Vector3d& p_G) const {
+    return query(p_G).state != VoxelState::kUnknown;
+  }
+
+  /// At most this many cells in one localGrid().
+  static constexpr size_t kMaxGridCells = size_t{1} << 22;
+  /// Samples the box [min_G, max_G] at cell centres `resolution` apart (query() per cell,
+  /// one pose snapshot for the whole grid) into *grid. Refused (false, *error says why,
+  /// nothing allocated) when a bound is not finite, max_G is not above min_G on every axis,
+  /// resolution is not finite and > 0, or the box has more than kMaxGridCells cells.
+  bool localGrid(const Eigen::Vector3d& min_G, const Eigen::Vector3d& max_G, double resolution,
+                 LocalGrid* grid, std::string* error) const;
+
+  PlanningMapStats stats() const;
+  /// Durations of the refresh() calls that updated a field, ms.
+  const TimingWindow& refreshMs() const { return refresh_ms_; }
+  /// Bytes the fields hold. O(1).
+  size_t memoryBytes() const { return memory_bytes_.load(std::memory_order_relaxed); }
+  /// Bytes the fields will hold once they follow a collection of `tsdf_blocks` blocks of
+  /// `layer`'s geometry (one field block per TSDF block), or memoryBytes() when more: what
+  /// a memory cap counts, so that the fields' lag behind integration cannot overrun it.
+  size_t projectedBytes(size_t tsdf_blocks, const LayerConfig& layer) const {
+    const size_t per_block =
+        sizeof(EsdfBlock) + static_cast<size_t>(layer.voxels_per_side) *
+                                static_cast<size_t>(layer.voxels_per_side) *
+                                static_cast<size_t>(layer.voxels_per_side) * sizeof(EsdfVoxel);
+    return std::max(memoryBytes(), tsdf_blocks * per_block);
+  }
+
+ private:
+  struct Field {
+    Field(const LayerConfig& geometry, float max_distance_m) : layer(geometry, max_distance_m) {}
+    mutable std::shared_mutex mutex;  // guards layer and revision
+    EsdfLayer layer;
+    uint64_t revision = 0;          // Submap::revision() when last computed
+    size_t counted_bytes = 0;       // this field's share of memory_bytes_
+    bool dropped = false;           // its subvolume left the collection
+  };
+  /// One field as the queries see it: its pose and the bounding box of its blocks in M.
+  struct IndexEntry {
+    SubmapId id = 0;
+    std::shared_ptr<Field> field;
+    Transformationd T_M_G;
+    Eigen::Matrix3d R_G_M = Eigen::Matrix3d::Identity();
+    Eigen::AlignedBox3f box_M;  // empty until the field has a block
+  };
+
+  std::shared_ptr<Field> fieldFor(const Submap& submap);
+  // Computes one field: stages it from `layer`, releases `layer_lock` (when it holds one),
+  // finishes it. Takes the field lock, then the index mutex.
+  void updateField(const Submap& submap, const TsdfLayer& layer,
+                   std::unique_lock<std::mutex>* layer_lock, Field* field);
+  std::vector<IndexEntry> indexSnapshot() const;
+  static DistanceAnswer sample(const std::vector<IndexEntry>& index, const Eigen::Vector3d& p_G);
+
+  const EsdfConfig config_;
+  EsdfIntegrator integrator_;  // refresh()'s
+  TimingWindow refresh_ms_{200};
+
+  mutable std::mutex index_mutex_;
+  std::map<SubmapId, IndexEntry> index_;
+
+  std::atomic<size_t> memory_bytes_{0};
+  std::atomic<uint64_t> updates_{0}, rebuilds_{0};
+};
+
+}  // namespace cblox

@@ -1,0 +1,286 @@
+#include "core/esdf/esdf_integrator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/esdf/esdf_query.h"
+#include "test/esdf/esdf_test_scenes.h"
+
+namespace cblox {
+namespace {
+
+using esdf_test::Sdf;
+
+constexpr float kVoxel = 0.05f;
+constexpr float kTruncation = 0.15f;
+
+LayerConfig geometry() {
+  LayerConfig config;
+  config.voxel_size = kVoxel;
+  config.voxels_per_side = 8;
+  return config;
+}
+
+EsdfConfig fieldConfig(float max_distance = 1.0f) {
+  EsdfConfig config;
+  config.max_distance_m = max_distance;
+  return config;
+}
+
+struct Errors {
+  std::vector<float> voxels;  // |field - truth| / voxel size, free voxels nearer than the cap
+  float quantile(double q) const {
+    if (voxels.empty()) return 0.0f;
+    std::vector<float> sorted = voxels;
+    std::sort(sorted.begin(), sorted.end());
+    return sorted[static_cast<size_t>(q * static_cast<double>(sorted.size() - 1))];
+  }
+  float max() const { return voxels.empty() ? 0.0f : *std::max_element(voxels.begin(), voxels.end()); }
+};
+
+/// Compares every observed voxel of `esdf` with the exact signed distance: occupied voxels
+/// must hold their TSDF value, free voxels within the cap are collected as errors, free voxels
+/// beyond it must say the cap.
+Errors compare(const EsdfLayer& esdf, const Sdf& sdf) {
+  Errors errors;
+  for (const auto& [key, block] : esdf.blocks()) {
+    for (int i = 0; i < esdf.voxelsPerBlock(); ++i) {
+      const GridIndex local(i & 7, (i >> 3) & 7, i >> 6);
+      const GlobalVoxelIndex global = block->index * 8 + local;
+      VoxelState state;
+      float distance;
+      EXPECT_TRUE(voxelDistance(esdf, global, &state, &distance));
+      if (state != VoxelState::kFree) continue;
+      const float truth = sdf(esdf.globalVoxelCenter(global));
+      if (truth < esdf.maxDistance() - kVoxel) {
+        errors.voxels.push_back(std::abs(distance - truth) / kVoxel);
+      } else if (truth > esdf.maxDistance() + 2 * kVoxel) {
+        EXPECT_EQ(distance, esdf.maxDistance());
+      }
+    }
+  }
+  return errors;
+}
+
+TEST(EsdfIntegratorTest, APlaneGivesExactDistancesUpToTheCap) {
+  TsdfLayer tsdf(geometry());
+  const Sdf plane = esdf_test::planeX(0.31f);
+  esdf_test::writeTsdf(&tsdf, plane, {-0.4f, -0.4f, -0.4f}, {1.6f, 0.4f, 0.4f}, kTruncation);
+  EsdfLayer esdf(geometry(), 1.0f);
+  EsdfIntegrator integrator(fieldConfig());
+  const EsdfUpdateStats stats = integrator.update(tsdf, &esdf);
+  EXPECT_EQ(stats.esdf_blocks_added, tsdf.numBlocks());
+  EXPECT_EQ(stats.tsdf_blocks_read, tsdf.numBlocks());
+  EXPECT_FALSE(stats.rebuilt);
+  EXPECT_EQ(esdf.numBlocks(), tsdf.numBlocks());
+  // The nearest site of a free voxel lies straight along x: |x - s| + tsdf(s) = x - 0.31.
+  const Errors errors = compare(esdf, plane);
+  ASSERT_GT(errors.voxels.size(), 5000u);
+  EXPECT_LT(errors.max(), 1e-4f);
+  // Occupied voxels hold their TSDF value; deep interior voxels are unknown.
+  VoxelState state;
+  float distance;
+  ASSERT_TRUE(voxelDistance(esdf, GlobalVoxelIndex(5, 0, 0), &state, &distance));  // x=0.275
+  EXPECT_EQ(state, VoxelState::kOccupied);
+  EXPECT_FLOAT_EQ(distance, 0.275f - 0.31f);
+  ASSERT_TRUE(voxelDistance(esdf, GlobalVoxelIndex(-3, 0, 0), &state, &distance));  // x=-0.125
+  EXPECT_EQ(state, VoxelState::kUnknown);
+}
+
+TEST(EsdfIntegratorTest, ABallAndABoxStayWithinAFractionOfAVoxel) {
+  const Sdf ball = esdf_test::ball({0.512f, 0.487f, 0.503f}, 0.33f);
+  const Sdf box = esdf_test::box({-0.27f, -0.33f, -0.21f}, {0.13f, 0.02f, 0.24f});
+  for (const Sdf& shape : {ball, box}) {
+    TsdfLayer tsdf(geometry());
+    esdf_test::writeTsdf(&tsdf, shape, {-0.9f, -0.9f, -0.9f}, {1.5f, 1.5f, 1.5f}, kTruncation);
+    EsdfLayer esdf(geometry(), 1.0f);
+    EsdfIntegrator integrator(fieldConfig());
+    integrator.update(tsdf, &esdf);
+    const Errors errors = compare(esdf, shape);
+    ASSERT_GT(errors.voxels.size(), 10000u);
+    // Sites on both sides of the surface put one within half a voxel diagonal of every
+    // surface point; the brushfire carries each voxel the best site its neighbours offer.
+    EXPECT_LT(errors.quantile(0.5), 0.1f);
+    EXPECT_LT(errors.quantile(0.99), 0.35f);
+    EXPECT_LT(errors.max(), 0.5f);
+  }
+}
+
+TEST(EsdfIntegratorTest, SurfaceVoxelsOnBothSidesAnswerTheirTsdfDistance) {
+  TsdfLayer tsdf(geometry());
+  const Sdf ball = esdf_test::ball({0.512f, 0.487f, 0.503f}, 0.33f);
+  esdf_test::writeTsdf(&tsdf, ball, {-0.5f, -0.5f, -0.5f}, {1.5f, 1.5f, 1.5f}, kTruncation);
+  EsdfLayer esdf(geometry(), 1.0f);
+  EsdfIntegrator(fieldConfig()).update(tsdf, &esdf);
+  // Within one voxel of the surface, on either side, a voxel is a site and answers its own
+  // TSDF value: exact for this exact TSDF. Deeper inside, occupied voxels answer theirs too.
+  int sites = 0, deep = 0;
+  for (const auto& [key, block] : esdf.blocks()) {
+    for (int i = 0; i < esdf.voxelsPerBlock(); ++i) {
+      const GlobalVoxelIndex global = block->index * 8 + GridIndex(i & 7, (i >> 3) & 7, i >> 6);
+      VoxelState state;
+      float distance;
+      ASSERT_TRUE(voxelDistance(esdf, global, &state, &distance));
+      const float truth = ball(esdf.globalVoxelCenter(global));
+      if (std::abs(truth) < kVoxel) {
+        EXPECT_TRUE(block->voxels[static_cast<size_t>(i)].isSite());
+        EXPECT_EQ(state, truth <= 0.0f ? VoxelState::kOccupied : VoxelState::kFree);
+        EXPECT_NEAR(distance, truth, 1e-6f);
+        ++sites;
+      } else if (truth < 0.0f && truth >= -kTruncation) {
+        EXPECT_EQ(state, VoxelState::kOccupied);
+        EXPECT_NEAR(distance, truth, 1e-6f);
+        ++deep;
+      }
+    }
+  }
+  EXPECT_GT(sites, 500);
+  EXPECT_GT(deep, 500);
+}
+
+/// Per-voxel comparison of an incrementally updated field with a rebuilt one: the same
+/// states everywhere, distances within `tolerance` voxels.
+void expectSameField(const EsdfLayer& incremental, const EsdfLayer& rebuilt, float tolerance) {
+  ASSERT_EQ(incremental.numBlocks(), rebuilt.numBlocks());
+  int compared = 0;
+  for (const auto& [key, block] : rebuilt.blocks()) {
+    for (int i = 0; i < rebuilt.voxelsPerBlock(); ++i) {
+      const GlobalVoxelIndex global = block->index * 8 + GridIndex(i & 7, (i >> 3) & 7, i >> 6);
+      VoxelState s1, s2;
+      float d1, d2;
+      ASSERT_TRUE(voxelDistance(incremental, global, &s1, &d1));
+      ASSERT_TRUE(voxelDistance(rebuilt, global, &s2, &d2));
+      ASSERT_EQ(s1, s2);
+      ASSERT_NEAR(d1, d2, tolerance * kVoxel) << global.transpose();
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 0);
+}
+
+TEST(EsdfIntegratorTest, AMovedObstacleRaisesAndLowersLikeARebuild) {
+  const Sdf wall = esdf_test::planeX(-0.6f);
+  const Sdf before = esdf_test::unite(wall, esdf_test::ball({0.2f, 0.1f, 0.0f}, 0.25f));
+  const Sdf after = esdf_test::unite(wall, esdf_test::ball({0.55f, -0.1f, 0.05f}, 0.2f));
+  const Eigen::Vector3f lo(-0.8f, -0.8f, -0.8f), hi(1.2f, 0.8f, 0.8f);
+  TsdfLayer tsdf(geometry());
+  esdf_test::writeTsdf(&tsdf, before, lo, hi, kTruncation);
+  EsdfLayer esdf(geometry(), 1.0f);
+  EsdfIntegrator integrator(fieldConfig());
+  integrator.update(tsdf, &esdf);
+
+  esdf_test::writeTsdf(&tsdf, after, lo, hi, kTruncation);
+  const EsdfUpdateStats stats = integrator.update(tsdf, &esdf);
+  EXPECT_FALSE(stats.rebuilt);
+  EXPECT_GT(stats.sites_removed, 0u);
+  EXPECT_GT(stats.sites_added, 0u);
+  EXPECT_LT(stats.tsdf_blocks_read, tsdf.numBlocks());  // the wall's far blocks did not change
+
+  EsdfLayer rebuilt(geometry(), 1.0f);
+  EsdfIntegrator(fieldConfig()).rebuild(tsdf, &rebuilt);
+  // Both carry sites by the same brushfire, reached in different orders: a voxel between two
+  // almost equally near sites may take either.
+  expectSameField(esdf, rebuilt, 0.1f);
+  const Errors errors = compare(esdf, after);
+  EXPECT_LT(errors.quantile(0.5), 0.1f);
+  EXPECT_LT(errors.max(), 0.7f);
+}
+
+TEST(EsdfIntegratorTest, AVanishedObstacleLeavesNoDistanceBehind) {
+  const Eigen::Vector3f lo(-0.6f, -0.6f, -0.6f), hi(0.6f, 0.6f, 0.6f);
+  TsdfLayer tsdf(geometry());
+  esdf_test::writeTsdf(&tsdf, esdf_test::ball({0.0f, 0.0f, 0.0f}, 0.2f), lo, hi, kTruncation);
+  EsdfLayer esdf(geometry(), 1.0f);
+  EsdfIntegrator integrator(fieldConfig());
+  integrator.update(tsdf, &esdf);
+  esdf_test::writeTsdf(&tsdf, esdf_test::empty(), lo, hi, kTruncation);
+  integrator.update(tsdf, &esdf);
+  // Every voxel is now observed free with no obstacle anywhere: the cap, exactly.
+  for (const auto& [key, block] : esdf.blocks()) {
+    for (int i = 0; i < esdf.voxelsPerBlock(); ++i) {
+      const EsdfVoxel& v = block->voxels[static_cast<size_t>(i)];
+      ASSERT_EQ(v.state, VoxelState::kFree);
+      ASSERT_FALSE(v.hasSite());
+      ASSERT_EQ(v.flags, 0);
+    }
+  }
+  EXPECT_EQ(queryNearest(esdf, {0.01f, 0.02f, 0.03f}).distance, 1.0f);
+}
+
+TEST(EsdfIntegratorTest, BlocksArrivingOneByOneGiveTheRebuiltField) {
+  const Sdf scene = esdf_test::unite(esdf_test::planeX(-0.5f),
+                                     esdf_test::box({0.1f, -0.2f, -0.1f}, {0.3f, 0.35f, 0.2f}));
+  TsdfLayer tsdf(geometry());
+  EsdfLayer esdf(geometry(), 1.0f);
+  EsdfIntegrator integrator(fieldConfig());
+  // Slabs along x, as a camera moving along the room would add them.
+  for (float x = -0.7f; x < 1.1f; x += 0.3f) {
+    esdf_test::writeTsdf(&tsdf, scene, {x, -0.5f, -0.5f}, {x + 0.29f, 0.5f, 0.5f}, kTruncation);
+    const EsdfUpdateStats stats = integrator.update(tsdf, &esdf);
+    EXPECT_FALSE(stats.rebuilt);
+  }
+  EsdfLayer rebuilt(geometry(), 1.0f);
+  EsdfIntegrator(fieldConfig()).rebuild(tsdf, &rebuilt);
+  expectSameField(esdf, rebuilt, 0.1f);
+  EXPECT_LT(compare(esdf, scene).max(), 0.7f);
+}
+
+TEST(EsdfIntegratorTest, AnUnchangedLayerIsNotReadAgain) {
+  TsdfLayer tsdf(geometry());
+  esdf_test::writeTsdf(&tsdf, esdf_test::ball({0.1f, 0.0f, 0.0f}, 0.2f), {-0.4f, -0.4f, -0.4f},
+                       {0.4f, 0.4f, 0.4f}, kTruncation);
+  EsdfLayer esdf(geometry(), 1.0f);
+  EsdfIntegrator integrator(fieldConfig());
+  integrator.update(tsdf, &esdf);
+  const EsdfUpdateStats again = integrator.update(tsdf, &esdf);
+  EXPECT_EQ(again.tsdf_blocks_read, 0u);
+  EXPECT_EQ(again.voxels_popped, 0u);
+  EXPECT_FALSE(again.rebuilt);
+  // One block marked changed (as an integrator does) is read again, and only it.
+  tsdf.blocks().begin()->second->setUpdated(true);
+  EXPECT_EQ(integrator.update(tsdf, &esdf).tsdf_blocks_read, 1u);
+}
+
+TEST(EsdfIntegratorTest, ARemovedTsdfBlockRebuildsTheField) {
+  TsdfLayer tsdf(geometry());
+  const Sdf ball = esdf_test::ball({0.1f, 0.0f, 0.0f}, 0.2f);
+  esdf_test::writeTsdf(&tsdf, ball, {-0.4f, -0.4f, -0.4f}, {0.4f, 0.4f, 0.4f}, kTruncation);
+  EsdfLayer esdf(geometry(), 1.0f);
+  EsdfIntegrator integrator(fieldConfig());
+  integrator.update(tsdf, &esdf);
+  ASSERT_TRUE(tsdf.removeBlock(BlockIndex(0, 0, 0)));
+  const EsdfUpdateStats stats = integrator.update(tsdf, &esdf);
+  EXPECT_TRUE(stats.rebuilt);
+  EXPECT_EQ(esdf.numBlocks(), tsdf.numBlocks());
+  EXPECT_EQ(esdf.getBlock(BlockIndex(0, 0, 0)), nullptr);
+  EXPECT_EQ(queryNearest(esdf, {0.1f, 0.1f, 0.1f}).state, VoxelState::kUnknown);
+}
+
+TEST(EsdfIntegratorTest, RefusesBadSettingsAndMismatchedLayers) {
+  EsdfConfig bad = fieldConfig();
+  bad.max_distance_m = 0.0f;
+  EXPECT_THROW(EsdfIntegrator{bad}, std::invalid_argument);
+  bad = fieldConfig();
+  bad.min_weight = std::nanf("");
+  EXPECT_THROW(EsdfIntegrator{bad}, std::invalid_argument);
+  EXPECT_THROW(EsdfLayer(geometry(), -1.0f), std::invalid_argument);
+
+  TsdfLayer tsdf(geometry());
+  EsdfIntegrator integrator(fieldConfig());
+  LayerConfig other = geometry();
+  other.voxel_size = 0.1f;
+  EsdfLayer wrong_geometry(other, 1.0f);
+  EXPECT_THROW(integrator.update(tsdf, &wrong_geometry), std::invalid_argument);
+  EsdfLayer wrong_cap(geometry(), 2.0f);
+  EXPECT_THROW(integrator.update(tsdf, &wrong_cap), std::invalid_argument);
+  EsdfIntegrator too_far(fieldConfig(2000.0f));
+  EsdfLayer far_layer(geometry(), 2000.0f);
+  EXPECT_THROW(too_far.update(tsdf, &far_layer), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace cblox

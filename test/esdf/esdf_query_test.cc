@@ -1,0 +1,108 @@
+#include "core/esdf/esdf_query.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "core/esdf/esdf_integrator.h"
+#include "test/esdf/esdf_test_scenes.h"
+
+namespace cblox {
+namespace {
+
+constexpr float kVoxel = 0.05f;
+
+LayerConfig geometry() {
+  LayerConfig config;
+  config.voxel_size = kVoxel;
+  config.voxels_per_side = 8;
+  return config;
+}
+
+class EsdfQueryTest : public ::testing::Test {
+ protected:
+  // A wall x < 0.31 observed over [-0.4, 1.6] x [-0.4, 0.4]^2; its interior deeper than the
+  // truncation is unobserved.
+  void SetUp() override {
+    esdf_test::writeTsdf(&tsdf_, esdf_test::planeX(0.31f), {-0.4f, -0.4f, -0.4f},
+                         {1.6f, 0.4f, 0.4f}, 0.15f);
+    EsdfConfig config;
+    config.max_distance_m = 1.0f;
+    EsdfIntegrator(config).update(tsdf_, &esdf_);
+  }
+  TsdfLayer tsdf_{geometry()};
+  EsdfLayer esdf_{geometry(), 1.0f};
+};
+
+TEST_F(EsdfQueryTest, InterpolationIsExactOnAPlaneWithAUnitGradient) {
+  for (const float x : {0.3361f, 0.52f, 0.777f, 1.1234f}) {
+    const Eigen::Vector3f p(x, 0.0123f, -0.071f);
+    const DistanceSample s = queryInterpolated(esdf_, p);
+    ASSERT_EQ(s.state, VoxelState::kFree) << x;
+    ASSERT_TRUE(s.has_gradient);
+    EXPECT_NEAR(s.distance, x - 0.31f, 1e-5f);
+    EXPECT_NEAR(s.gradient.x(), 1.0f, 1e-4f);
+    EXPECT_NEAR(s.gradient.y(), 0.0f, 1e-4f);
+    EXPECT_NEAR(s.gradient.z(), 0.0f, 1e-4f);
+  }
+  // Across the surface the TSDF values inside continue the same line: negative, occupied.
+  const DistanceSample inside = queryInterpolated(esdf_, {0.28f, 0.0f, 0.0f});
+  EXPECT_EQ(inside.state, VoxelState::kOccupied);
+  EXPECT_NEAR(inside.distance, -0.03f, 1e-5f);
+}
+
+TEST_F(EsdfQueryTest, NearestAnswersTheVoxelThatHoldsThePoint) {
+  const DistanceSample s = queryNearest(esdf_, {0.52f, 0.0f, 0.0f});  // centre 0.525
+  EXPECT_EQ(s.state, VoxelState::kFree);
+  EXPECT_NEAR(s.distance, 0.525f - 0.31f, 1e-5f);
+  EXPECT_FALSE(s.has_gradient);
+  EXPECT_TRUE(std::isnan(s.gradient.x()));
+  // Beyond the cap: exactly the cap ("at least this far").
+  EXPECT_EQ(queryNearest(esdf_, {1.5f, 0.0f, 0.0f}).distance, 1.0f);
+}
+
+TEST_F(EsdfQueryTest, UnknownSpaceIsAnAnswerWithoutADistance) {
+  // Deep inside the wall (never observed) and outside every block.
+  for (const Eigen::Vector3f& p : {Eigen::Vector3f(-0.2f, 0.0f, 0.0f),
+                                   Eigen::Vector3f(5.0f, 5.0f, 5.0f)}) {
+    for (const DistanceSample& s : {queryNearest(esdf_, p), queryInterpolated(esdf_, p)}) {
+      EXPECT_EQ(s.state, VoxelState::kUnknown);
+      EXPECT_TRUE(std::isnan(s.distance));
+      EXPECT_FALSE(s.has_gradient);
+    }
+  }
+  // Interpolation next to unknown space falls back to the nearest voxel, without gradient.
+  const DistanceSample edge = queryInterpolated(esdf_, {0.16f, 0.0f, 0.0f});
+  EXPECT_FALSE(edge.has_gradient);
+  EXPECT_EQ(edge.state, VoxelState::kOccupied);
+  EXPECT_NEAR(edge.distance, 0.175f - 0.31f, 1e-5f);
+  // Non-finite points are unknown, not a crash.
+  EXPECT_EQ(queryInterpolated(esdf_, {NAN, 0.0f, 0.0f}).state, VoxelState::kUnknown);
+  EXPECT_EQ(queryNearest(esdf_, {INFINITY, 0.0f, 0.0f}).state, VoxelState::kUnknown);
+}
+
+TEST(EsdfVoxelTest, StatesHaveNames) {
+  EXPECT_STREQ(voxelStateName(VoxelState::kUnknown), "unknown");
+  EXPECT_STREQ(voxelStateName(VoxelState::kFree), "free");
+  EXPECT_STREQ(voxelStateName(VoxelState::kOccupied), "occupied");
+}
+
+TEST(EsdfLayerTest, MemoryIsCountedPerBlock) {
+  EsdfLayer layer(geometry(), 2.0f);
+  const size_t empty = layer.memoryBytes();
+  layer.allocateBlock(BlockIndex(1, 2, 3));
+  layer.allocateBlock(BlockIndex(-1, 0, 0));
+  EXPECT_GE(layer.memoryBytes(), empty + 2 * layer.bytesPerBlock());
+  EXPECT_EQ(layer.bytesPerBlock(), sizeof(EsdfBlock) + 512 * sizeof(EsdfVoxel));
+  // A new block is unknown at the cap, without a site.
+  const EsdfVoxel& v = layer.getBlock(BlockIndex(1, 2, 3))->voxels[7];
+  EXPECT_EQ(v.state, VoxelState::kUnknown);
+  EXPECT_EQ(v.own_distance, 2.0f);
+  EXPECT_FALSE(v.hasSite());
+  EXPECT_TRUE(layer.removeBlock(BlockIndex(1, 2, 3)));
+  EXPECT_FALSE(layer.removeBlock(BlockIndex(1, 2, 3)));
+  EXPECT_EQ(layer.numBlocks(), 1u);
+}
+
+}  // namespace
+}  // namespace cblox

@@ -11,6 +11,10 @@
 #                                [--laps N] [--rate HZ] [--frames N] [--out DIR] [--name NAME]
 #                                [--poses tracker|ground_truth]   (default tracker)
 #                                [--mapper-config FILE]   (default config/mapper.yaml)
+#                                [--slice Z]  (planning on: after the mesh, write the
+#                                 distance field's slice at height Z, NAME_slice.png)
+#                                [--query "X Y Z ..."]  (planning on: print the planning
+#                                 map's answer at these points of G, cblox-ctl distance)
 #                                [--tracker-config FILE]  (default config/tracker.yaml)
 #                                [--capture-config FILE]  (default config/capture.yaml; e.g.
 #                                 config/examples/sim_stereo_depth.yaml: depth from SGBM)
@@ -23,6 +27,7 @@ cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 scene=room trajectory=orbit laps=1 rate=20 frames=0 out=out name="" mapper_config=config/mapper.yaml
 poses=tracker tracker_config=config/tracker.yaml capture_config=config/capture.yaml source=""
+slice="" query=""
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --scene) scene=$2; shift 2 ;;
@@ -33,6 +38,8 @@ while [[ $# -gt 0 ]]; do
     --out) out=$2; shift 2 ;;
     --name) name=$2; shift 2 ;;
     --mapper-config) mapper_config=$2; shift 2 ;;
+    --slice) slice=$2; shift 2 ;;
+    --query) query=$2; shift 2 ;;
     --tracker-config) tracker_config=$2; shift 2 ;;
     --capture-config) capture_config=$2; shift 2 ;;
     --source) source=$2; shift 2 ;;
@@ -53,7 +60,7 @@ if [[ "${CBLOX_IN_NETNS:-}" != "1" ]]; then
   CBLOX_IN_NETNS=1 exec scripts/netns-run.sh "$0" --scene "$scene" --trajectory "$trajectory" --laps "$laps" \
     --rate "$rate" --frames "$frames" --out "$out" --name "$name" \
     --mapper-config "$mapper_config" --tracker-config "$tracker_config" --poses "$poses" \
-    --capture-config "$capture_config" ${source:+--source "$source"}
+    --capture-config "$capture_config" ${source:+--source "$source"} ${slice:+--slice "$slice"} ${query:+--query "$query"}
 fi
 # A scene of the simulator (exact ground truth), or a dataset given with --source.
 sim=true
@@ -66,7 +73,7 @@ if $sim; then initial_pose=(--initial-pose-from-gt); fi
 
 url="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
 "$bin/cblox-mapper" --config "$mapper_config" --pose-source "$poses" --output-dir "$out" \
-  --lcm-url "$url" > "$out/${name}_mapper.log" 2>&1 &
+  --lcm-url "$url" ${slice:+--planning} ${query:+--planning} > "$out/${name}_mapper.log" 2>&1 &
 mapper=$!
 tracker=""
 if [[ "$poses" == tracker ]]; then
@@ -83,6 +90,14 @@ echo "pipeline: capture $source at $rate Hz ->" \
 sleep 2  # let the tracker and the mapper finish the last frames
 "$bin/cblox-ctl" --lcm-url "$url" --timeout 30 status
 "$bin/cblox-ctl" --lcm-url "$url" --timeout 120 export-mesh "$name.ply"
+if [[ -n $slice ]]; then
+  "$bin/cblox-ctl" --lcm-url "$url" --timeout 120 esdf-slice --z "$slice" --out "${name}_slice.png"
+fi
+if [[ -n $query ]]; then
+  echo "pipeline: the planning map at $query:"
+  # shellcheck disable=SC2086  # the points are words
+  "$bin/cblox-ctl" --lcm-url "$url" --timeout 30 distance $query
+fi
 # CPU share and peak memory of each process over the run (from /proc, before it exits).
 hz=$(getconf CLK_TCK)
 wall=$(( ($(date +%s%N) - start_ns) / 1000000 ))

@@ -27,12 +27,18 @@ cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCBLOX_BUILD_VOCABULARY=OFF -DCBLOX_VOCABULARY_FILE="$PWD/$RELEASE_DIR/vocabulary/cblox_orb.vocab" \
   >/dev/null
 cmake --build "$BUILD_DIR" --target test_integrator test_mesh test_submap test_mapper test_tracking \
-  test_stereo_depth_worker test_tracker_node -j"$(nproc)"
+  test_stereo_depth_worker test_tracker_node test_planning_map test_planning_service \
+  test_planner_example -j"$(nproc)"
 export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/scripts/tsan.supp"
 "$BUILD_DIR/test/integrator/test_integrator" --gtest_brief=1
 "$BUILD_DIR/test/mesh/test_mesh" --gtest_brief=1
 "$BUILD_DIR/test/submap/test_submap" --gtest_brief=1
 "$BUILD_DIR/test/mapping/test_mapper" --gtest_brief=1
+# The planning map's fields refreshed beside queries, its query thread, and a Mapper with
+# planning on (the worker's and the cblox-esdf thread's refreshes beside integration).
+"$BUILD_DIR/test/mapping/test_planning_map" --gtest_brief=1
+"$BUILD_DIR/test/mapping/test_planning_service" --gtest_brief=1
+"$BUILD_DIR/test/mapping/test_planner_example" --gtest_brief=1
 "$BUILD_DIR/test/tracking/test_tracking" --gtest_brief=1 \
   --gtest_filter='RgbdTrackingTest.*:SparseMapTest.*:KeyframeTriangulationTest.*'
 "$BUILD_DIR/test/daemon/test_stereo_depth_worker" --gtest_brief=1

@@ -15,6 +15,14 @@ inline std::string fixed(double value, int decimals) {
   return text;
 }
 
+/// `value` with `digits` significant digits ("%.*g"), e.g. significant(1e15, 3) = "1e+15",
+/// significant(4194304, 3) = "4.19e+06": counts too large to read exactly.
+inline std::string significant(double value, int digits) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.*g", digits, value);
+  return text;
+}
+
 /// Seconds on the steady clock since `start`.
 inline double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

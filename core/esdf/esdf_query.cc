@@ -5,19 +5,46 @@
 
 namespace cblox {
 
-bool voxelDistance(const EsdfLayer& layer, const GlobalVoxelIndex& index, VoxelState* state,
-                   float* distance) {
-  const EsdfVoxel* v = layer.getVoxel(index);
-  if (v == nullptr) return false;
+namespace {
+
+/// The voxel at `index` and its block. `hint` (may be null) is a block near it: when the
+/// voxel's block is `hint` or adjacent to it, it is found through hint's neighbour pointers
+/// (null there means absent), otherwise by a hash lookup.
+struct VoxelRef {
+  const EsdfBlock* block = nullptr;
+  const EsdfVoxel* voxel = nullptr;
+};
+
+VoxelRef locate(const EsdfLayer& layer, const EsdfBlock* hint, const GlobalVoxelIndex& index) {
+  BlockIndex block_index;
+  GridIndex local;
+  splitGlobalVoxelIndex(index, layer.voxelsPerSideLog2(), &block_index, &local);
+  const EsdfBlock* block = nullptr;
+  if (hint != nullptr) {
+    const BlockIndex d = block_index - hint->index;
+    block = (d.array().abs() <= 1).all()
+                ? hint->neighbours[static_cast<size_t>(EsdfBlock::neighbourSlot(d.x(), d.y(), d.z()))]
+                : layer.getBlock(block_index);
+  } else {
+    block = layer.getBlock(block_index);
+  }
+  if (block == nullptr) return {};
+  return {block, &block->voxels[static_cast<size_t>(layer.linearIndex(local))]};
+}
+
+/// voxelDistance() of the voxel `ref` at `index`: its site is looked up from ref's block.
+void distanceOf(const EsdfLayer& layer, const VoxelRef& ref, const GlobalVoxelIndex& index,
+                VoxelState* state, float* distance) {
+  const EsdfVoxel* v = ref.voxel;
   *state = v->state;
   if (v->isSite()) {
     *distance = std::min(v->own_distance, layer.maxDistance());
-    return true;
+    return;
   }
   float d = layer.maxDistance();
   if (v->hasSite()) {
     const Eigen::Vector3i offset(v->site[0], v->site[1], v->site[2]);
-    const EsdfVoxel* site = layer.getVoxel(index + offset);
+    const EsdfVoxel* site = locate(layer, ref.block, index + offset).voxel;
     if (site != nullptr && site->isSite()) {
       // The site's TSDF distance counts down to -one voxel (EsdfIntegrator::siteDistance).
       const float site_distance = std::max(site->own_distance, -layer.voxelSize());
@@ -25,6 +52,15 @@ bool voxelDistance(const EsdfLayer& layer, const GlobalVoxelIndex& index, VoxelS
     }
   }
   *distance = std::min(d, layer.maxDistance());
+}
+
+}  // namespace
+
+bool voxelDistance(const EsdfLayer& layer, const GlobalVoxelIndex& index, VoxelState* state,
+                   float* distance) {
+  const VoxelRef ref = locate(layer, nullptr, index);
+  if (ref.voxel == nullptr) return false;
+  distanceOf(layer, ref, index, state, distance);
   return true;
 }
 
@@ -48,13 +84,16 @@ DistanceSample queryInterpolated(const EsdfLayer& layer, const Eigen::Vector3f& 
   const GlobalVoxelIndex base = gridIndexFromPoint(scaled, 1.0f);
   const Eigen::Vector3f t = scaled - base.cast<float>();
   float c[8];
+  // One hash lookup for the base corner's block; the other corners and most sites are in it
+  // or next to it.
+  const EsdfBlock* hint = locate(layer, nullptr, base).block;
   for (int corner = 0; corner < 8; ++corner) {
     const GlobalVoxelIndex index = base + GlobalVoxelIndex(corner & 1, (corner >> 1) & 1,
                                                            (corner >> 2) & 1);
+    const VoxelRef ref = locate(layer, hint, index);
     VoxelState state = VoxelState::kUnknown;
-    if (!voxelDistance(layer, index, &state, &c[corner]) || state == VoxelState::kUnknown) {
-      return queryNearest(layer, point);
-    }
+    if (ref.voxel != nullptr) distanceOf(layer, ref, index, &state, &c[corner]);
+    if (ref.voxel == nullptr || state == VoxelState::kUnknown) return queryNearest(layer, point);
   }
   // c[x + 2y + 4z]; interpolate along x, then y, then z.
   const float x00 = c[0] + t.x() * (c[1] - c[0]), x10 = c[2] + t.x() * (c[3] - c[2]);

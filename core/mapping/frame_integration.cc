@@ -275,6 +275,7 @@ void FrameIntegration::processFrame(PendingFrame pending, const Transformationd&
       refusal_.remember(lock.layer());
     }
     const IntegrationStats stats = frame_integrator_->integrate(T_M_D, frame.depth, camera, color);
+    trajectory_.add(active->id(), T_M_D.translation().cast<double>());
     const size_t refused =
         cap == MemoryCapState::kFull ? refusal_.removeNewBlocks(&lock.layer()) : 0;
     lock.unlock();  // refreshes the submap's bytes: the next frame's stage sees this one

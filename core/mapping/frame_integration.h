@@ -26,6 +26,7 @@
 #include "core/mapping/memory_cap.h"
 #include "core/mapping/planning_map.h"
 #include "core/mapping/pose_buffer.h"
+#include "core/mapping/trajectory_log.h"
 #include "core/submap/submap_collection.h"
 #include "core/submap/submap_creation_policy.h"
 
@@ -99,6 +100,8 @@ class FrameIntegration {
   /// poseAdded() after each.
   PoseBuffer& poses() { return poses_; }
   const PoseBuffer& poses() const { return poses_; }
+  /// The integrated frames' camera positions, per subvolume (thread-safe).
+  const TrajectoryLog& trajectory() const { return trajectory_; }
   void poseAdded() { pending_.notify(); }
 
   /// No frame waiting or in hand.
@@ -148,6 +151,7 @@ class FrameIntegration {
   const ProblemSink problems_;
 
   PoseBuffer poses_;
+  TrajectoryLog trajectory_;
   InTray<PendingFrame> pending_;
   TimingWindow integration_ms_;
   const PlanningMap* planning_ = nullptr;

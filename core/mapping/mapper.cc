@@ -10,22 +10,19 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "core/common/utime_ns.h"
 #include "core/common/text_format.h"
+#include "core/io/text_fields.h"
 #include "core/mapping/map_epoch_key.h"
 #include "core/mapping/map_persistence.h"
 #include "core/mapping/output_path.h"
+#include "core/mapping/planning_export.h"
 #include "core/persistence/map_store.h"
 
 namespace cblox {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-int64_t wallUtimeNow() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 }  // namespace
 
@@ -101,6 +98,7 @@ Mapper::Mapper(const MapperConfig& config, LogSink log)
           [this](InputProblem problem, const std::string& message, uint64_t n) {
             count(problem, message, n);
           }) {
+  map_epoch_.store(wallUtime(), std::memory_order_release);
   if (planning_) {
     integration_.setPlanningMap(planning_.get());
     maintenance_.setPosesMovedCallback(
@@ -118,11 +116,15 @@ Mapper::Mapper(const MapperConfig& config, LogSink log)
     }
   }
   if (planning_) {
-    // Finished subvolumes only: the worker runs at idle priority and must not hold the layer
-    // lock the integrator waits for.
+    // Finished subvolumes on the worker (it owns their layers); the active one on a thread at
+    // the integrator's priority: the worker runs at idle priority and must not hold the
+    // layer lock the integrator waits for.
     worker_.addPeriodicTask(config_.planning.refresh_period_s, [this] {
       planning_->refresh(collection_, PlanningMap::Scope::kFinished);
     });
+    active_field_ = std::make_unique<ActiveFieldRefresher>(
+        planning_.get(), &collection_, config_.planning.refresh_period_s,
+        config_.integrator_niceness);
   }
 }
 
@@ -147,6 +149,7 @@ bool Mapper::start(std::string* error) {
   integration_.start();
   maintenance_.start();
   worker_.start();
+  if (active_field_) active_field_->start();
   return true;
 }
 
@@ -154,6 +157,7 @@ void Mapper::stop() {
   std::lock_guard<std::mutex> lock(lifecycle_mutex_);
   if (!started_ || stopped_) return;
   stopped_ = true;
+  if (active_field_) active_field_->stop();
   worker_.stop();  // the export in hand finishes; queued ones are answered "mapper stopping"
   // The integrator first: in ground-truth mode it may wait for maintenance to apply a
   // keyframe. Maintenance then applies what is still queued, so the map's frames are final.
@@ -322,10 +326,12 @@ void Mapper::onCommand(const MapperCommand& command, ReplyCallback reply) {
     if (reply) reply(statusReply(command));
     return;
   }
+  const bool planning_export =
+      command.name == "export_distance_grid" || command.name == "export_distance_slice";
   if (command.name != "export_mesh" && command.name != "export_submap_meshes" &&
-      command.name != "save_map" && command.name != "load_map") {
+      command.name != "save_map" && command.name != "load_map" && !planning_export) {
     fail("unknown command (known: status, export_mesh, export_submap_meshes, save_map, "
-         "load_map)");
+         "load_map, export_distance_grid, export_distance_slice)");
     return;
   }
   const auto path = command.args.find("path");
@@ -348,6 +354,10 @@ void Mapper::onCommand(const MapperCommand& command, ReplyCallback reply) {
     fail(error);
     return;
   }
+  if (planning_export) {
+    submitPlanningExport(command, &reply, fail);
+    return;
+  }
   if (command.name == "save_map") {
     // On the worker: no fusion changes finished layers while they are written.
     const std::string dir = path->second;
@@ -361,6 +371,59 @@ void Mapper::onCommand(const MapperCommand& command, ReplyCallback reply) {
     return;
   }
   worker_.submitExport(command, std::move(reply));
+}
+
+void Mapper::submitPlanningExport(const MapperCommand& command, ReplyCallback* reply,
+                                  const std::function<void(const std::string&)>& fail) {
+  if (!planning_) {
+    fail("the mapper keeps no distance field (planning.enabled is false in its configuration)");
+    return;
+  }
+  // numbers(key, count, what): the argument's numbers, or nullopt after fail().
+  const auto numbers = [&](const char* key, size_t count,
+                           const char* what) -> std::optional<std::vector<double>> {
+    const auto it = command.args.find(key);
+    std::string error = "missing";
+    std::optional<std::vector<double>> values;
+    if (it != command.args.end()) values = parseNumbers(it->second, count, &error);
+    if (!values) fail(std::string("argument '") + key + "' (" + what + "): " + error);
+    return values;
+  };
+  // resolution: optional, the voxel size by default.
+  double resolution = config_.layer.voxel_size;
+  if (command.args.count("resolution") > 0) {
+    const std::optional<std::vector<double>> r = numbers("resolution", 1, "metres, > 0");
+    if (!r) return;
+    if (!((*r)[0] > 0.0)) {
+      fail("argument 'resolution': must be > 0");
+      return;
+    }
+    resolution = (*r)[0];
+  }
+  const std::string path = command.args.at("path");
+  if (command.name == "export_distance_grid") {
+    const std::optional<std::vector<double>> b = numbers("box", 6, "x0,y0,z0,x1,y1,z1 in metres");
+    if (!b) return;
+    const Eigen::Vector3d min_G((*b)[0], (*b)[1], (*b)[2]), max_G((*b)[3], (*b)[4], (*b)[5]);
+    worker_.submitJob(
+        command,
+        [this, min_G, max_G, resolution, path] {
+          planning_->refresh(collection_, PlanningMap::Scope::kAll);
+          return exportDistanceGrid(*planning_, min_G, max_G, resolution, output_dir_, path);
+        },
+        std::move(*reply));
+    return;
+  }
+  const std::optional<std::vector<double>> zs = numbers("z", 1, "the slice's height in metres");
+  if (!zs) return;
+  const double z_G = (*zs)[0];
+  worker_.submitJob(
+      command,
+      [this, z_G, resolution, path] {
+        planning_->refresh(collection_, PlanningMap::Scope::kAll);
+        return exportDistanceSlice(*planning_, z_G, resolution, trajectoryG(), output_dir_, path);
+      },
+      std::move(*reply));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -417,6 +480,8 @@ MapperReply Mapper::loadMap(const std::string& dir) {
       checkpointer_->adoptLoaded(*manifest, collection_);
     }
   }
+  // A new map: a larger epoch than any before (the clock may stand still or step back).
+  map_epoch_.store(std::max(map_epoch_.load() + 1, wallUtime()), std::memory_order_release);
   // The loaded subvolumes' distance fields (on the worker, or before start()).
   if (planning_) planning_->refresh(collection_, PlanningMap::Scope::kAll);
   const double seconds = secondsSince(start);
@@ -458,10 +523,17 @@ bool Mapper::syncPlanningMap(std::chrono::milliseconds timeout) {
         planning_->refresh(collection_, PlanningMap::Scope::kAll);
         MapperReply reply;
         reply.ok = true;
+        reply.message = "every distance field follows the map";
         return reply;
       },
       [done](const MapperReply& reply) { done->set_value(reply.ok); });
   return result.wait_for(timeout) == std::future_status::ready && result.get();
+}
+
+std::optional<TimedPose> Mapper::newestPose() const { return integration_.poses().newestTracked(); }
+
+std::vector<Eigen::Vector3d> Mapper::trajectoryG() const {
+  return integration_.trajectory().positionsG(collection_.poseSnapshot());
 }
 
 std::optional<MapperReply> Mapper::resumeFromCheckpoint() {
@@ -502,7 +574,7 @@ void Mapper::runCheckpoint() {
   const bool first = checkpoints_written_.fetch_add(1, std::memory_order_relaxed) == 0;
   last_checkpoint_ms_.store(static_cast<float>(report->milliseconds), std::memory_order_relaxed);
   // checkpoint() returned: the manifest is renamed into place and the directory synced.
-  last_checkpoint_utime_.store(wallUtimeNow(), std::memory_order_relaxed);
+  last_checkpoint_utime_.store(wallUtime(), std::memory_order_relaxed);
   checkpoint_generation_.store(report->generation, std::memory_order_release);
   if (first || !last_checkpoint_error_.empty()) {
     log(std::string(first ? "first checkpoint" : "checkpoints written again") + " into " +
@@ -677,7 +749,7 @@ MapperReply Mapper::statusReply(const MapperCommand& command) const {
       "last_checkpoint_age_s",
       s.last_checkpoint_utime == 0
           ? std::string("-")
-          : fixed(static_cast<double>(wallUtimeNow() - s.last_checkpoint_utime) * 1e-6, 1));
+          : fixed(static_cast<double>(wallUtime() - s.last_checkpoint_utime) * 1e-6, 1));
   for (size_t i = 0; i < kNumInputProblems; ++i) {
     if (s.problems[i] > 0) {
       reply.values.emplace_back(

@@ -41,6 +41,7 @@
 #include "core/mapping/mapper_command.h"
 #include "core/mapping/mapper_config.h"
 #include "core/mapping/mapper_problems.h"
+#include "core/mapping/active_field_refresher.h"
 #include "core/mapping/planning_map.h"
 #include "core/mapping/pose_buffer.h"
 #include "core/mesh/mesh_integrator.h"
@@ -254,9 +255,8 @@ class Mapper {
   const MapperConfig& config() const { return config_; }
   /// The planning map: distances, gradients and free/unknown space over the subvolumes,
   /// in G (planning_map.h; its queries are thread-safe). Null when config().planning is off.
-  /// Finished subvolumes' fields follow the map every planning.refresh_period_s on the
-  /// worker; the active subvolume's field is computed when it is finished (or on
-  /// syncPlanningMap).
+  /// Every planning.refresh_period_s the finished subvolumes' fields follow the map on the
+  /// worker, and the active subvolume's on a thread of its own at the integrator's priority.
   const PlanningMap* planningMap() const { return planning_.get(); }
   /// Makes the planning map follow the map now, the active subvolume included (on the
   /// worker, after the commands queued before; on the calling thread before start()), and
@@ -264,9 +264,25 @@ class Mapper {
   /// the frames integrated so far in the answers. False when it did not happen within
   /// `timeout`, or the mapper is stopping. True at once when planning is off. Thread-safe.
   bool syncPlanningMap(std::chrono::milliseconds timeout);
+  /// The map's epoch: a value that changes whenever the map is replaced (it is the wall
+  /// time in us at construction, and moves to a new, larger value when a map is loaded or
+  /// resumed); pose corrections do not change it. Compare for equality only. Thread-safe.
+  int64_t mapEpoch() const { return map_epoch_.load(std::memory_order_acquire); }
+  /// The newest tracked camera pose received (T_G_C with its time stamp), or nullopt.
+  /// Thread-safe.
+  std::optional<TimedPose> newestPose() const;
+  /// The integrated frames' camera positions in G, oldest first, through the subvolumes'
+  /// current poses (so a loop closure moves them as it moves the map); bounded and thinned
+  /// (TrajectoryLog). Thread-safe.
+  std::vector<Eigen::Vector3d> trajectoryG() const;
 
  private:
   MapperReply statusReply(const MapperCommand& command) const;
+  // export_distance_grid / export_distance_slice: arguments checked here (a refusal goes
+  // through `fail`, which answers through *reply), the file written on the worker after the
+  // fields follow the map (the active subvolume's too; *reply moves there).
+  void submitPlanningExport(const MapperCommand& command, ReplyCallback* reply,
+                            const std::function<void(const std::string&)>& fail);
   static std::string notEmptyMessage(size_t num_submaps);
 
   // The periodic checkpoint (worker thread only): counts, logs a failure once per distinct
@@ -294,6 +310,7 @@ class Mapper {
   std::mutex depth_order_mutex_;
   int64_t last_depth_utime_ = INT64_MIN;
 
+  std::atomic<int64_t> map_epoch_{0};
   bool started_ = false, stopped_ = false;
   std::mutex lifecycle_mutex_;
 
@@ -311,6 +328,7 @@ class Mapper {
   // planning.refresh_period_s, after fusions and loads), poses set by maintenance_, bytes
   // counted by integration_'s memory cap.
   std::unique_ptr<PlanningMap> planning_;
+  std::unique_ptr<ActiveFieldRefresher> active_field_;  // with planning_: the active field
   // Exports and accepted fusions, on its own low-priority thread; reports fusions to
   // maintenance_.
   FusionExportWorker worker_;

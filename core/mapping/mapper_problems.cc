@@ -46,6 +46,8 @@ const char* inputProblemName(InputProblem problem) {
       return "covariance_reply_invalid";
     case InputProblem::kCommandInvalid:
       return "command_invalid";
+    case InputProblem::kDistanceRequestInvalid:
+      return "distance_request_invalid";
     case InputProblem::kCount:
       break;
   }

@@ -33,6 +33,7 @@ enum class InputProblem : int {
   kMaintenanceDropped,      ///< keyframe / batch dropped because the queue was full
   kCovarianceReplyInvalid,  ///< covariance reply failed to decode or has a bad entry
   kCommandInvalid,          ///< unknown command, missing or bad argument, path outside
+  kDistanceRequestInvalid,  ///< distance request failed to decode or has too many points
   kCount
 };
 inline constexpr size_t kNumInputProblems = static_cast<size_t>(InputProblem::kCount);

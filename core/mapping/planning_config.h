@@ -1,11 +1,32 @@
 #pragma once
 
-#include <cmath>
+#include <cstddef>
 #include <string>
+
+#include <Eigen/Core>
 
 #include "core/esdf/esdf_config.h"
 
 namespace cblox {
+
+/// Settings of the PlanningService (PlanningConfig::service). Plain value type.
+struct PlanningServiceConfig {
+  /// Most points one request may carry (the LCM type's MAX_POINTS); more: kTooManyPoints.
+  size_t max_points = 4096;
+  /// Requests waiting for the worker; one more is answered kBusy at once. >= 1.
+  size_t queue_capacity = 16;
+  /// A local grid around the vehicle's newest pose every this many seconds; 0 = none.
+  /// Finite, >= 0.
+  double grid_period_s = 1.0;
+  /// The grid's box edge lengths, metres, centred on the vehicle (each finite, > 0).
+  Eigen::Vector3d grid_size_m = Eigen::Vector3d(6.0, 6.0, 2.0);
+  /// The grid's cell edge, metres (finite, > 0). The box must hold at most
+  /// PlanningMap::kMaxGridCells cells.
+  double grid_resolution_m = 0.1;
+
+  /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
+  std::string validate() const;
+};
 
 /// Settings of the mapper's planning map (MapperConfig::planning, planning_map.h). Plain
 /// value type.
@@ -20,15 +41,11 @@ struct PlanningConfig {
   /// (PlanningMap::refresh); finite and > 0.
   double refresh_period_s = 0.5;
 
+  /// The distance service for other processes (planning_service.h).
+  PlanningServiceConfig service;
+
   /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
-  std::string validate() const {
-    if (const std::string e = esdf.validate(); !e.empty()) return "planning." + e;
-    if (!std::isfinite(refresh_period_s) || !(refresh_period_s > 0.0)) {
-      return "planning.refresh_period_s must be finite and > 0, got " +
-             std::to_string(refresh_period_s);
-    }
-    return {};
-  }
+  std::string validate() const;
 };
 
 }  // namespace cblox

@@ -7,11 +7,13 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/common/text_format.h"
 #include "core/esdf/esdf_query.h"
 
 namespace cblox {
 
-PlanningMap::PlanningMap(const EsdfConfig& config) : config_(config), integrator_(config) {}
+PlanningMap::PlanningMap(const EsdfConfig& config)
+    : config_(config), integrator_(config), active_integrator_(config) {}
 
 std::shared_ptr<PlanningMap::Field> PlanningMap::fieldFor(const Submap& submap) {
   std::lock_guard<std::mutex> lock(index_mutex_);
@@ -27,12 +29,13 @@ std::shared_ptr<PlanningMap::Field> PlanningMap::fieldFor(const Submap& submap) 
 }
 
 void PlanningMap::updateField(const Submap& submap, const TsdfLayer& layer,
-                              std::unique_lock<std::mutex>* layer_lock, Field* field) {
+                              std::unique_lock<std::mutex>* layer_lock, EsdfIntegrator* integrator,
+                              Field* field) {
   std::unique_lock<std::shared_mutex> field_lock(field->mutex);
-  EsdfUpdateStats stats = integrator_.stage(layer, &field->layer);
+  EsdfUpdateStats stats = integrator->stage(layer, &field->layer);
   field->revision = submap.revision();  // stable while the layer is not written
   if (layer_lock != nullptr) layer_lock->unlock();
-  integrator_.finish(&field->layer, &stats);
+  integrator->finish(&field->layer, &stats);
   const size_t bytes = field->dropped ? 0 : field->layer.memoryBytes();
   if (bytes >= field->counted_bytes) {
     memory_bytes_.fetch_add(bytes - field->counted_bytes, std::memory_order_relaxed);
@@ -81,25 +84,52 @@ void PlanningMap::refresh(const SubmapCollection& collection, Scope scope) {
   bool updated = false;
   for (const std::shared_ptr<Submap>& submap : submaps) {
     if (scope == Scope::kFinished && submap->isActive()) continue;
-    const std::shared_ptr<Field> field = fieldFor(*submap);
-    uint64_t revision = 0;
-    bool fresh = false;
+    updated = refreshOne(*submap, &integrator_) || updated;
+  }
+  if (updated) {
+    refresh_ms_.add(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count());
+  }
+  setPoses(collection.poseSnapshot());
+}
+
+bool PlanningMap::refreshOne(const Submap& submap, EsdfIntegrator* integrator) {
+  const std::shared_ptr<Field> field = fieldFor(submap);
+  {
+    std::shared_lock<std::shared_mutex> field_lock(field->mutex);
+    if (field->layer.numBlocks() > 0 && field->revision == submap.revision()) return false;
+  }
+  if (submap.isActive()) {
+    std::unique_lock<std::mutex> layer_lock = submap.lockLayer();
+    if (submap.isActive()) {
+      updateField(submap, submap.layer(), &layer_lock, integrator, field.get());
+      return true;
+    }
+  }
+  // Finished (possibly just now): its layer belongs to this thread.
+  updateField(submap, submap.layer(), nullptr, integrator, field.get());
+  return true;
+}
+
+void PlanningMap::refreshActive(const SubmapCollection& collection) {
+  const std::shared_ptr<Submap> active = collection.activeSubmap();
+  if (!active) return;
+  const auto start = std::chrono::steady_clock::now();
+  bool updated = false;
+  {
+    std::lock_guard<std::mutex> lock(active_integrator_mutex_);
+    // Finished meanwhile: the owner of finished layers refreshes it.
+    if (!active->isActive()) return;
+    const std::shared_ptr<Field> field = fieldFor(*active);
     {
       std::shared_lock<std::shared_mutex> field_lock(field->mutex);
-      revision = field->revision;
-      fresh = field->layer.numBlocks() == 0;
+      if (field->layer.numBlocks() > 0 && field->revision == active->revision()) return;
     }
-    if (!fresh && revision == submap->revision()) continue;
+    std::unique_lock<std::mutex> layer_lock = active->lockLayer();
+    if (!active->isActive()) return;
+    updateField(*active, active->layer(), &layer_lock, &active_integrator_, field.get());
     updated = true;
-    if (submap->isActive()) {
-      std::unique_lock<std::mutex> layer_lock = submap->lockLayer();
-      if (submap->isActive()) {
-        updateField(*submap, submap->layer(), &layer_lock, field.get());
-        continue;
-      }
-    }
-    // Finished (possibly just now): its layer belongs to this thread.
-    updateField(*submap, submap->layer(), nullptr, field.get());
   }
   if (updated) {
     refresh_ms_.add(
@@ -125,6 +155,28 @@ std::vector<PlanningMap::IndexEntry> PlanningMap::indexSnapshot() const {
   entries.reserve(index_.size());
   for (const auto& [id, entry] : index_) entries.push_back(entry);
   return entries;
+}
+
+Eigen::AlignedBox3d PlanningMap::boundsG() const {
+  Eigen::AlignedBox3d bounds;  // empty
+  for (const IndexEntry& entry : indexSnapshot()) {
+    if (entry.box_M.isEmpty()) continue;
+    const Transformationd T_G_M = entry.T_M_G.inverse();
+    std::shared_lock<std::shared_mutex> field_lock(entry.field->mutex);
+    const double block_size =
+        static_cast<double>(entry.field->layer.voxelSize()) * entry.field->layer.voxelsPerSide();
+    // Each block's centre, grown by its half diagonal: tight for a subvolume frame rotated
+    // against G, where the box of the blocks' box would be much larger.
+    const double reach = 0.5 * std::sqrt(3.0) * block_size;
+    for (const auto& [key, block] : entry.field->layer.blocks()) {
+      const Eigen::Vector3d centre_M =
+          (block->index.cast<double>() + Eigen::Vector3d::Constant(0.5)) * block_size;
+      const Eigen::Vector3d centre_G = T_G_M * centre_M;
+      bounds.extend(centre_G - Eigen::Vector3d::Constant(reach));
+      bounds.extend(centre_G + Eigen::Vector3d::Constant(reach));
+    }
+  }
+  return bounds;
 }
 
 DistanceAnswer PlanningMap::sample(const std::vector<IndexEntry>& index,
@@ -183,9 +235,12 @@ bool PlanningMap::localGrid(const Eigen::Vector3d& min_G, const Eigen::Vector3d&
     return false;
   }
   // Counted in double before any integer conversion, so that a huge box cannot overflow.
-  const Eigen::Vector3d cells = ((max_G - min_G) / resolution).array().ceil();
+  // A side within 1e-6 of a whole number of cells is that many: [0.2, 0.8] at 0.1 is 6
+  // cells, not the 7 that rounding 6.000000000000001 up would make.
+  const Eigen::Vector3d cells =
+      ((max_G - min_G) / resolution - Eigen::Vector3d::Constant(1e-6)).array().ceil().max(1.0);
   if (cells.prod() > static_cast<double>(kMaxGridCells)) {
-    *error = "the box has " + std::to_string(cells.prod()) + " cells at this resolution, more than " +
+    *error = "the box has " + significant(cells.prod(), 3) + " cells at this resolution, more than " +
              std::to_string(kMaxGridCells);
     return false;
   }

@@ -84,6 +84,7 @@ struct PlanningMapStats {
 /// - refresh(): one thread at a time, the owner of finished layers (the mapper's
 ///   fusion/export worker: finished subvolumes every refresh_period_s and after a fusion,
 ///   all of them after a load and on Mapper::syncPlanningMap).
+/// - refreshActive(): the active subvolume, from a thread at the integrator's priority.
 /// - setPoses(): after a pose batch (the mapper's maintenance thread).
 /// - query(), queryBatch(), localGrid(), stats(), memoryBytes(): any thread, any time.
 /// A query holds each field's shared lock only while sampling it; refresh holds a field's
@@ -112,6 +113,14 @@ class PlanningMap {
   /// that owns finished layers); every field takes its subvolume's current pose. Its
   /// duration goes into refreshMs().
   void refresh(const SubmapCollection& collection, Scope scope);
+  /// The active subvolume's field only, as refresh(kAll) computes it: its changed blocks are
+  /// read under Submap::lockLayer() (integration waits meanwhile), the waves run after the
+  /// lock is released. For a thread of its own at the integrator's priority (the mapper's
+  /// "cblox-esdf"), so that the planner sees the space being mapped now, not once the
+  /// subvolume is finished; never at idle priority, where holding the layer lock would
+  /// stall integration. Safe beside refresh() on another thread (each has its own
+  /// integrator; a field's lock orders their updates).
+  void refreshActive(const SubmapCollection& collection);
   /// The subvolumes' current poses (ids without a field are ignored).
   void setPoses(const std::vector<SubmapPose>& poses);
 
@@ -132,11 +141,17 @@ class PlanningMap {
   /// At most this many cells in one localGrid().
   static constexpr size_t kMaxGridCells = size_t{1} << 22;
   /// Samples the box [min_G, max_G] at cell centres `resolution` apart (query() per cell,
-  /// one pose snapshot for the whole grid) into *grid. Refused (false, *error says why,
+  /// one pose snapshot for the whole grid) into *grid: ceil(side / resolution) cells per
+  /// axis, a side within 1e-6 cells of a whole number counting as that number. Refused (false, *error says why,
   /// nothing allocated) when a bound is not finite, max_G is not above min_G on every axis,
   /// resolution is not finite and > 0, or the box has more than kMaxGridCells cells.
   bool localGrid(const Eigen::Vector3d& min_G, const Eigen::Vector3d& max_G, double resolution,
                  LocalGrid* grid, std::string* error) const;
+
+  /// An axis-aligned box of G that holds every field's blocks at the subvolumes' current
+  /// poses (each block's bounding sphere), or an empty box when no field has a block. Takes
+  /// each field's shared lock in turn; O(blocks).
+  Eigen::AlignedBox3d boundsG() const;
 
   PlanningMapStats stats() const;
   /// Durations of the refresh() calls that updated a field, ms.
@@ -173,15 +188,20 @@ class PlanningMap {
   };
 
   std::shared_ptr<Field> fieldFor(const Submap& submap);
-  // Computes one field: stages it from `layer`, releases `layer_lock` (when it holds one),
-  // finishes it. Takes the field lock, then the index mutex.
+  // Computes one field with `integrator`: stages it from `layer`, releases `layer_lock`
+  // (when it holds one), finishes it. Takes the field lock, then the index mutex.
   void updateField(const Submap& submap, const TsdfLayer& layer,
-                   std::unique_lock<std::mutex>* layer_lock, Field* field);
+                   std::unique_lock<std::mutex>* layer_lock, EsdfIntegrator* integrator,
+                   Field* field);
+  // refresh()'s step for one subvolume: true when its field was updated.
+  bool refreshOne(const Submap& submap, EsdfIntegrator* integrator);
   std::vector<IndexEntry> indexSnapshot() const;
   static DistanceAnswer sample(const std::vector<IndexEntry>& index, const Eigen::Vector3d& p_G);
 
   const EsdfConfig config_;
   EsdfIntegrator integrator_;  // refresh()'s
+  std::mutex active_integrator_mutex_;  // one refreshActive() at a time
+  EsdfIntegrator active_integrator_;    // refreshActive()'s
   TimingWindow refresh_ms_{200};
 
   mutable std::mutex index_mutex_;

@@ -82,6 +82,14 @@ int64_t PoseBuffer::newestUtime() const {
   return poses_.empty() ? std::numeric_limits<int64_t>::min() : poses_.back().utime;
 }
 
+std::optional<TimedPose> PoseBuffer::newestTracked() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (auto it = poses_.rbegin(); it != poses_.rend(); ++it) {
+    if (it->tracking_ok) return *it;
+  }
+  return std::nullopt;
+}
+
 void PoseBuffer::clear() {
   std::lock_guard<std::mutex> lock(mutex_);
   poses_.clear();

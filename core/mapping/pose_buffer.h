@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <deque>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "core/geometry/se3.h"
@@ -80,6 +81,8 @@ class PoseBuffer {
   size_t size() const;
   /// Time stamp of the newest pose, or INT64_MIN when empty.
   int64_t newestUtime() const;
+  /// The newest pose that is tracked (tracking_ok), or nullopt when there is none.
+  std::optional<TimedPose> newestTracked() const;
   void clear();
 
   static const char* name(Lookup result);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/common/utime_ns.h"  // wallUtime()
 #include "daemon/common/systemd_notify.h"
 #include "daemon/common/yaml_config.h"
 
@@ -25,13 +26,6 @@ inline void installStopHandlers() {
   const auto handler = [](int) { g_stop_requested = true; };
   std::signal(SIGINT, handler);
   std::signal(SIGTERM, handler);
-}
-
-/// Wall-clock time in microseconds since the Unix epoch (LCM message time stamps).
-inline int64_t wallUtime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
 }
 
 /// Runs a process's body and turns what escapes it into the exit statuses every cblox

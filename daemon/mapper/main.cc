@@ -48,6 +48,7 @@ struct Args {
   DaemonOptions daemon;
   std::optional<std::string> pose_source, output_dir, load_map;
   std::optional<std::string> checkpoint_dir;  ///< --checkpoint-dir DIR over checkpoint.dir
+  bool planning = false;                      ///< --planning: planning.enabled over the file
 };
 
 MapperProcessConfig buildConfig(const Args& args) {
@@ -55,6 +56,7 @@ MapperProcessConfig buildConfig(const Args& args) {
   if (args.pose_source) config.mapper.pose_source = parsePoseSource(*args.pose_source);
   if (args.output_dir) config.mapper.output_dir = *args.output_dir;
   if (args.checkpoint_dir) config.mapper.checkpoint.dir = *args.checkpoint_dir;
+  if (args.planning) config.mapper.planning.enabled = true;
   if (const std::string e = config.validate(); !e.empty()) throw ConfigError(e);
   return config;
 }
@@ -187,6 +189,9 @@ int main(int argc, char** argv) {
                  "checkpoint directory of the map (over checkpoint.dir; the systemd unit\n"
                  "gives /var/lib/cblox/checkpoint/mapper)")
       ->type_name("DIR");
+  app.add_flag("--planning", args.planning,
+               "keep distance fields and answer planners (planning.enabled: true, over the\n"
+               "configuration file)");
   if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;
   return cblox::runProcess("cblox-mapper", [&] { return cblox::run(args); });
 }

@@ -1,6 +1,11 @@
 #include "daemon/mapper/mapper_config_loader.h"
 
 #include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "daemon/common/input_silence.h"
 #include "daemon/common/yaml_config.h"
@@ -123,7 +128,8 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   requireKnownKeys(
       channels, "channels",
       {"depth", "ground_truth_pose", "frame_pose", "keyframe", "keyframe_poses", "command",
-       "command_reply", "map_status", "heartbeat", "covariance_request", "covariance_reply"});
+       "command_reply", "map_status", "heartbeat", "covariance_request", "covariance_reply",
+       "distance_request", "distance_reply", "local_grid"});
   if (!isAbsent(channels)) {
     readOptional(channels, "channels", "depth", &config.depth_channel);
     readOptional(channels, "channels", "ground_truth_pose", &config.ground_truth_channel);
@@ -136,6 +142,9 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
     readOptional(channels, "channels", "heartbeat", &config.heartbeat_channel);
     readOptional(channels, "channels", "covariance_request", &config.covariance_request_channel);
     readOptional(channels, "channels", "covariance_reply", &config.covariance_reply_channel);
+    readOptional(channels, "channels", "distance_request", &config.distance_request_channel);
+    readOptional(channels, "channels", "distance_reply", &config.distance_reply_channel);
+    readOptional(channels, "channels", "local_grid", &config.local_grid_channel);
   }
 
   m.layer = loadMapperLayer(root["layer"], m.layer);
@@ -217,12 +226,35 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
 
   const YAML::Node planning = root["planning"];
   requireKnownKeys(planning, "planning",
-                   {"enabled", "max_distance_m", "min_weight", "refresh_period_s"});
+                   {"enabled", "max_distance_m", "min_weight", "refresh_period_s",
+                    "query_queue_capacity", "local_grid_period_s", "local_grid_size_m",
+                    "local_grid_resolution_m"});
   if (!isAbsent(planning)) {
     readOptional(planning, "planning", "enabled", &m.planning.enabled);
     readOptional(planning, "planning", "max_distance_m", &m.planning.esdf.max_distance_m);
     readOptional(planning, "planning", "min_weight", &m.planning.esdf.min_weight);
     readOptional(planning, "planning", "refresh_period_s", &m.planning.refresh_period_s);
+    PlanningServiceConfig& service = m.planning.service;
+    if (planning["query_queue_capacity"]) {
+      int64_t capacity = 0;
+      readOptional(planning, "planning", "query_queue_capacity", &capacity);
+      if (capacity < 1 || capacity > 1024) {
+        throw ConfigError("planning.query_queue_capacity: must be in [1, 1024], got " +
+                          std::to_string(capacity));
+      }
+      service.queue_capacity = static_cast<size_t>(capacity);
+    }
+    readOptional(planning, "planning", "local_grid_period_s", &service.grid_period_s);
+    readOptional(planning, "planning", "local_grid_resolution_m", &service.grid_resolution_m);
+    if (planning["local_grid_size_m"]) {
+      std::vector<double> size;
+      readOptional(planning, "planning", "local_grid_size_m", &size);
+      if (size.size() != 3) {
+        throw ConfigError("planning.local_grid_size_m: needs 3 numbers (x, y, z edge "
+                          "lengths in metres)");
+      }
+      service.grid_size_m = Eigen::Vector3d(size[0], size[1], size[2]);
+    }
   }
 
   if (const std::string e = config.validate(); !e.empty()) throw ConfigError(top + ": " + e);

@@ -55,6 +55,8 @@ void MapperNode::subscribe() {
   guard_.subscribe<command_t>(
       config_.command_channel, [this](const command_t& m, const std::string& c) { onCommand(m, c); },
       refusedAs(InputProblem::kCommandInvalid));
+  planning_ = std::make_unique<PlanningNode>(config_, lcm_, mapper_);
+  planning_->subscribe(&guard_);
 }
 
 void MapperNode::publishStatus(const MapperStatus& s) {
@@ -112,6 +114,7 @@ void MapperNode::publishHeartbeat(const MapperStatus& s, const char* state) {
     hb.add(std::string("rejected_") + inputProblemName(static_cast<InputProblem>(i)),
            s.problems[i]);
   }
+  if (planning_) planning_->addTo(&hb);
   guard_.addTo(&hb);
   const heartbeat_t msg = hb.build();
   std::lock_guard<std::mutex> lock(publish_mutex_);

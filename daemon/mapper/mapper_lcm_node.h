@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cstddef>
 #include <map>
+#include <memory>
 #include <vector>
 #include <mutex>
 #include <string>
@@ -25,6 +26,7 @@
 #include "core/mapping/mapper.h"
 #include "daemon/common/message_guard.h"
 #include "daemon/mapper/mapper_process_config.h"
+#include "daemon/mapper/planning_node.h"
 
 namespace cblox {
 
@@ -41,7 +43,8 @@ class MapperNode {
       : config_(config), lcm_(lcm), mapper_(mapper), guard_(lcm) {}
 
   /// Subscribes the channels of the configured pose source and sets the Mapper's covariance
-  /// requester (tracker mode).
+  /// requester (tracker mode); starts the planner interface (planning_node.h) and subscribes
+  /// its request channel.
   void subscribe();
   void publishStatus(const MapperStatus& s);
   void publishHeartbeat(const MapperStatus& s, const char* state);
@@ -73,6 +76,7 @@ class MapperNode {
   // Per covariance request in flight: which pairs were of an earlier epoch (sent as -1).
   static constexpr size_t kMaxRequestsRemembered = 64;
   std::map<int64_t, std::vector<bool>> older_epoch_pairs_;
+  std::unique_ptr<PlanningNode> planning_;  // from subscribe()
 };
 
 }  // namespace cblox

@@ -27,6 +27,9 @@ struct MapperProcessConfig {
   std::string heartbeat_channel = "CBLOX_HEARTBEAT";
   std::string covariance_request_channel = "CBLOX_COV_REQUEST";  ///< tracker mode
   std::string covariance_reply_channel = "CBLOX_COV_REPLY";      ///< tracker mode
+  std::string distance_request_channel = "CBLOX_DISTANCE_REQUEST";  ///< planners ask
+  std::string distance_reply_channel = "CBLOX_DISTANCE_REPLY";      ///< the mapper answers
+  std::string local_grid_channel = "CBLOX_LOCAL_GRID";              ///< planning.local_grid_*
   /// CBLOX_MAP_STATUS and CBLOX_HEARTBEAT period, seconds (> 0).
   double status_period_s = 1.0;
   /// Progress lines on stdout every this many seconds (> 0).

@@ -9,6 +9,9 @@
 //   cblox-ctl --timeout 30 --lcm-url "udpm://239.255.76.67:7667?ttl=0" export-mesh map.ply
 //   cblox-ctl status --all                      # every process: pid, state, rates, CPU, ...
 //   cblox-ctl status --all --listen 3 --expect tracker,mapper
+//   cblox-ctl distance 1.0 0.5 1.2 [X Y Z ...]   # the planning map at points of G
+//   cblox-ctl grid --box -2,-2,0,2,2,2 --resolution 0.1 --out grid.ply
+//   cblox-ctl esdf-slice --z 1.0 --out slice.png
 //
 // Paths are relative to the mapper's configured output directory (the mapper rejects
 // absolute paths outside it and any ".."); load-map's is any map directory the mapper can read.
@@ -16,6 +19,11 @@
 // and prints one row per process heard (and per expected process not heard), then the map.
 // Every message is decoded through the wire check (lcmtypes/wire_check.h): a malformed
 // message is counted and ignored, never trusted.
+// `distance` sends one distance_request_t on CBLOX_DISTANCE_REQUEST and prints the
+// distance_reply_t: per point its state (free / occupied / unknown), distance and gradient.
+// `grid` and `esdf-slice` are mapper commands (export_distance_grid, export_distance_slice)
+// that write the file inside the mapper's output directory, as export-mesh does; they and
+// `distance` need a mapper with planning.enabled.
 // Exit status: 0 the command succeeded (status --all: every expected process is alive),
 // 1 the mapper answered with a failure, 2 usage error, 3 no reply within the timeout (is
 // cblox-mapper running, on the same LCM URL?), 4 status --all: an expected process was not
@@ -24,6 +32,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <chrono>
 #include <cstdio>
 #include <map>
@@ -34,6 +44,8 @@
 
 #include <cblox/command_reply_t.hpp>
 #include <cblox/command_t.hpp>
+#include <cblox/distance_reply_t.hpp>
+#include <cblox/distance_request_t.hpp>
 #include <cblox/heartbeat_t.hpp>
 #include <cblox/map_status_t.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -124,6 +136,90 @@ int runCommand(lcm::LCM& lcm, cblox::command_t command, const std::string& chann
     std::printf("  %s: %s\n", r.value_keys[i].c_str(), r.values[i].c_str());
   }
   return r.ok ? kExitOk : kExitFailed;
+}
+
+// ---------------------------------------------------------------------------------------
+// distance: one request to the planning map.
+
+struct DistanceReplyWait {
+  std::optional<cblox::distance_reply_t> reply;
+  int64_t expected_id = 0;
+  uint64_t refused = 0;  // replies that did not pass the wire check
+  void onReply(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    cblox::distance_reply_t msg;
+    if (!cblox::decodeChecked(rbuf->data, rbuf->data_size, &msg).ok()) {
+      ++refused;
+      return;
+    }
+    if (msg.request_id == expected_id) reply = std::move(msg);
+  }
+};
+
+const char* distanceStateName(int8_t state) {
+  switch (state) {
+    case cblox::distance_reply_t::FREE:
+      return "free";
+    case cblox::distance_reply_t::OCCUPIED:
+      return "occupied";
+    case cblox::distance_reply_t::UNKNOWN:
+      return "unknown";
+    case cblox::distance_reply_t::INVALID_POINT:
+      return "invalid point";
+    default:
+      return "?";
+  }
+}
+
+int runDistance(lcm::LCM& lcm, const std::vector<double>& xyz, const std::string& channel,
+                const std::string& reply_channel, double timeout_s) {
+  cblox::distance_request_t request;
+  request.utime = nowUtime();
+  request.request_id = (static_cast<int64_t>(::getpid()) << 32) ^ (request.utime & 0xFFFFFFFF);
+  request.map_epoch = 0;
+  for (size_t i = 0; i + 2 < xyz.size(); i += 3) request.points.push_back({xyz[i], xyz[i + 1], xyz[i + 2]});
+  request.num_points = static_cast<int32_t>(request.points.size());
+  DistanceReplyWait wait;
+  wait.expected_id = request.request_id;
+  lcm.subscribe(reply_channel, &DistanceReplyWait::onReply, &wait);
+  if (lcm.publish(channel, &request) != 0) {
+    std::fprintf(stderr, "cblox-ctl: cannot publish on %s\n", channel.c_str());
+    return kExitUsage;
+  }
+  if (!listen(lcm, timeout_s, [&] { return wait.reply.has_value(); })) {
+    std::fprintf(stderr, "cblox-ctl: LCM receive failed\n");
+    return kExitUsage;
+  }
+  if (!wait.reply) {
+    std::fprintf(stderr,
+                 "cblox-ctl: no distance reply on %s within %.1f s (is cblox-mapper running on "
+                 "the same LCM URL?)\n",
+                 reply_channel.c_str(), timeout_s);
+    return kExitNoReply;
+  }
+  const cblox::distance_reply_t& r = *wait.reply;
+  const bool answered = r.status == cblox::distance_reply_t::STATUS_OK ||
+                        r.status == cblox::distance_reply_t::STATUS_EPOCH_CHANGED;
+  std::printf("%s (map epoch %lld)%s%s\n", answered ? "ok" : "failed",
+              static_cast<long long>(r.map_epoch), r.message.empty() ? "" : ": ",
+              r.message.c_str());
+  const size_t n = std::min({static_cast<size_t>(std::max(r.num_points, 0)), r.state.size(),
+                             r.distance.size(), r.gradient.size(), request.points.size()});
+  for (size_t k = 0; k < n; ++k) {
+    const std::vector<double>& p = request.points[k];
+    std::printf("  (%.3f, %.3f, %.3f): %s", p[0], p[1], p[2], distanceStateName(r.state[k]));
+    if (std::isfinite(r.distance[k])) {
+      const bool capped = r.state[k] == cblox::distance_reply_t::FREE &&
+                          r.distance[k] >= r.max_distance_m;
+      std::printf(", distance %s%.3f m", capped ? ">= " : "", static_cast<double>(r.distance[k]));
+    }
+    const std::vector<float>& g = r.gradient[k];
+    if (g.size() == 3 && std::isfinite(g[0])) {
+      std::printf(", gradient (%.3f, %.3f, %.3f)", static_cast<double>(g[0]),
+                  static_cast<double>(g[1]), static_cast<double>(g[2]));
+    }
+    std::printf("\n");
+  }
+  return answered ? kExitOk : kExitFailed;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -382,7 +478,11 @@ int main(int argc, char** argv) {
   double timeout_s = 10.0, listen_s = 1.5;
   bool all = false;
   std::string expect = "capture,tracker,mapper";
-  std::string verb, path;
+  std::string verb, path, out, box;
+  std::vector<std::string> operands;
+  std::string distance_channel = "CBLOX_DISTANCE_REQUEST",
+              distance_reply_channel = "CBLOX_DISTANCE_REPLY";
+  double z = std::nan(""), resolution = 0.0;
   CLI::App app{
       "cblox-ctl: sends one command to the mapper over LCM and prints its reply, or (status\n"
       "--all) summarises the health of every cblox process from their heartbeats.",
@@ -392,13 +492,33 @@ int main(int argc, char** argv) {
                  "(heartbeats for --listen seconds) and the map; export-mesh PATH: write the\n"
                  "global mesh (PLY); export-submap-meshes DIR: one mesh per subvolume,\n"
                  "coloured by subvolume; save-map DIR: save the map (a map directory);\n"
-                 "load-map DIR: load a saved map into a mapper whose map is empty")
+                 "load-map DIR: load a saved map into a mapper whose map is empty;\n"
+                 "distance X Y Z [X Y Z ...]: the planning map's state, distance and gradient\n"
+                 "at points of G; grid --box x0,y0,z0,x1,y1,z1 --out FILE: the distance field\n"
+                 "over a box as a PLY point cloud (observed cells, coloured by distance);\n"
+                 "esdf-slice --z H --out FILE: a PNG slice of the distance field at height H")
       ->required()
       ->type_name("COMMAND");
-  CLI::Option* path_option =
-      app.add_option("path", path,
-                     "PATH or DIR, relative to the mapper's output directory (load-map: any)")
-          ->type_name("ARG");
+  CLI::Option* operand_option =
+      app.add_option("args", operands,
+                     "PATH or DIR, relative to the mapper's output directory (load-map: any);\n"
+                     "distance: X Y Z of each point, metres")
+          ->type_name("ARG")
+          ->allow_extra_args();
+  CLI::Option* out_option =
+      app.add_option("--out", out, "grid, esdf-slice: the file, in the mapper's output directory")
+          ->type_name("FILE");
+  CLI::Option* box_option =
+      app.add_option("--box", box, "grid: x0,y0,z0,x1,y1,z1 (metres, G)")->type_name("BOX");
+  CLI::Option* z_option = app.add_option("--z", z, "esdf-slice: height of the slice, metres");
+  CLI::Option* resolution_option =
+      app.add_option("--resolution", resolution,
+                     "grid, esdf-slice: cell edge, metres (default: the map's voxel size)")
+          ->check(cblox::finiteNumber(cblox::NumberBound::kPositive));
+  app.add_option("--distance-channel", distance_channel, "distance: request channel")
+      ->capture_default_str();
+  app.add_option("--distance-reply-channel", distance_reply_channel, "distance: reply channel")
+      ->capture_default_str();
   app.add_option("--lcm-url", url, "LCM URL (default: LCM's default)")->type_name("URL");
   app.add_option("--timeout", timeout_s, "seconds to wait for the mapper's reply")
       ->check(cblox::finiteNumber(cblox::NumberBound::kPositive))
@@ -429,8 +549,45 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "cblox-ctl: --all, --listen and --expect go with 'status --all'\n");
     return kExitUsage;
   }
+  const bool is_grid = verb == "grid", is_slice = verb == "esdf-slice";
+  if ((out_option->count() > 0 || resolution_option->count() > 0) && !is_grid && !is_slice) {
+    std::fprintf(stderr, "cblox-ctl: --out and --resolution go with 'grid' and 'esdf-slice'\n");
+    return kExitUsage;
+  }
+  if (is_grid && box_option->count() == 0) {
+    std::fprintf(stderr, "cblox-ctl: grid needs --box x0,y0,z0,x1,y1,z1\n");
+    return kExitUsage;
+  }
+  if ((box_option->count() > 0 && !is_grid) || (z_option->count() > 0 && !is_slice)) {
+    std::fprintf(stderr, "cblox-ctl: --box goes with 'grid', --z with 'esdf-slice'\n");
+    return kExitUsage;
+  }
+  std::vector<double> xyz;
+  if (verb == "distance") {
+    for (const std::string& operand : operands) {
+      char* end = nullptr;
+      const double v = std::strtod(operand.c_str(), &end);
+      if (operand.empty() || *end != '\0' || !std::isfinite(v)) {
+        std::fprintf(stderr, "cblox-ctl: distance: '%s' is not a finite number\n",
+                     operand.c_str());
+        return kExitUsage;
+      }
+      xyz.push_back(v);
+    }
+    if (xyz.empty() || xyz.size() % 3 != 0 ||
+        xyz.size() / 3 > static_cast<size_t>(cblox::distance_request_t::MAX_POINTS)) {
+      std::fprintf(stderr, "cblox-ctl: distance needs X Y Z for each of 1 to %d points\n",
+                   cblox::distance_request_t::MAX_POINTS);
+      return kExitUsage;
+    }
+  }
   cblox::command_t command;
-  const bool has_path = path_option->count() > 0;
+  const bool has_path = operand_option->count() > 0 && operands.size() == 1;
+  if (has_path) path = operands.front();
+  if (operand_option->count() > 0 && operands.size() != 1 && verb != "distance") {
+    std::fprintf(stderr, "cblox-ctl: '%s' takes one PATH or DIR\n", verb.c_str());
+    return kExitUsage;
+  }
   if (verb == "status" && !has_path) {
     command.name = "status";
   } else if (verb == "export-mesh" && has_path) {
@@ -449,6 +606,28 @@ int main(int argc, char** argv) {
     command.name = "load_map";
     command.arg_keys = {"path"};
     command.arg_values = {path};
+  } else if (verb == "distance") {
+    // a distance_request_t, not a command
+  } else if ((is_grid || is_slice) && !has_path && out_option->count() > 0 &&
+             (is_grid || z_option->count() > 0)) {
+    command.name = is_grid ? "export_distance_grid" : "export_distance_slice";
+    command.arg_keys = {"path"};
+    command.arg_values = {out};
+    if (is_grid) {
+      command.arg_keys.push_back("box");
+      command.arg_values.push_back(box);
+    } else {
+      char text[64];
+      std::snprintf(text, sizeof text, "%.17g", z);
+      command.arg_keys.push_back("z");
+      command.arg_values.push_back(text);
+    }
+    if (resolution_option->count() > 0) {
+      char text[64];
+      std::snprintf(text, sizeof text, "%.17g", resolution);
+      command.arg_keys.push_back("resolution");
+      command.arg_values.push_back(text);
+    }
   } else {
     std::fprintf(stderr, "cblox-ctl: unknown command or wrong arguments: '%s' (see --help)\n",
                  verb.c_str());
@@ -462,6 +641,9 @@ int main(int argc, char** argv) {
   }
   if (status_all) {
     return runStatusAll(lcm, heartbeat_channel, map_status_channel, listen_s, splitList(expect));
+  }
+  if (verb == "distance") {
+    return runDistance(lcm, xyz, distance_channel, distance_reply_channel, timeout_s);
   }
   return runCommand(lcm, command, channel, reply_channel, timeout_s);
 }

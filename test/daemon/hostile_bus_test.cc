@@ -23,6 +23,7 @@
 #include <cblox/command_reply_t.hpp>
 #include <cblox/command_t.hpp>
 #include <cblox/covariance_reply_t.hpp>
+#include <cblox/distance_request_t.hpp>
 #include <cblox/covariance_request_t.hpp>
 #include <cblox/heartbeat_t.hpp>
 #include <gtest/gtest.h>
@@ -167,6 +168,11 @@ TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
   command.arg_keys = {"k"};
   command.arg_values = {"v"};
   valid["CBLOX_CMD"] = encode(command);
+  distance_request_t distance{};
+  distance.request_id = 3;
+  distance.num_points = 2;
+  distance.points = {{0.5, 0.5, 0.5}, {1.0, 0.0, 1.0}};
+  valid["CBLOX_DISTANCE_REQUEST"] = encode(distance);
 
   std::mt19937 rng(5);
   size_t sent = 0;
@@ -219,6 +225,7 @@ TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
   EXPECT_GT(counter(m, "messages_refused_fingerprint_mismatch"), 0);
   EXPECT_GT(counter(m, "rejected_depth_undecodable"), 0);
   EXPECT_GT(counter(m, "rejected_command_invalid"), 0);
+  EXPECT_GT(counter(m, "rejected_distance_request_invalid"), 0);
   EXPECT_GT(counter(t, "messages_refused_length_out_of_bounds"), 0);
   EXPECT_GT(counter(t, "messages_refused_truncated"), 0);
   EXPECT_GT(counter(t, "frames_rejected"), 0);

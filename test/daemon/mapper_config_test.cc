@@ -27,6 +27,9 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(shipped.heartbeat_channel, defaults.heartbeat_channel);
   EXPECT_EQ(shipped.covariance_request_channel, defaults.covariance_request_channel);
   EXPECT_EQ(shipped.covariance_reply_channel, defaults.covariance_reply_channel);
+  EXPECT_EQ(shipped.distance_request_channel, defaults.distance_request_channel);
+  EXPECT_EQ(shipped.distance_reply_channel, defaults.distance_reply_channel);
+  EXPECT_EQ(shipped.local_grid_channel, defaults.local_grid_channel);
   EXPECT_EQ(a.layer.voxel_size, b.layer.voxel_size);
   EXPECT_EQ(a.layer.voxels_per_side, b.layer.voxels_per_side);
   EXPECT_EQ(a.integrator_type, b.integrator_type);
@@ -88,6 +91,14 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.memory_cap.near_only_fraction, b.memory_cap.near_only_fraction);
   EXPECT_EQ(a.memory_cap.near_distance_m, b.memory_cap.near_distance_m);
   EXPECT_TRUE(b.memory_cap.enabled());  // shipped on: never an OOM kill
+  EXPECT_EQ(a.planning.enabled, b.planning.enabled);
+  EXPECT_EQ(a.planning.esdf.max_distance_m, b.planning.esdf.max_distance_m);
+  EXPECT_EQ(a.planning.esdf.min_weight, b.planning.esdf.min_weight);
+  EXPECT_EQ(a.planning.refresh_period_s, b.planning.refresh_period_s);
+  EXPECT_EQ(a.planning.service.queue_capacity, b.planning.service.queue_capacity);
+  EXPECT_EQ(a.planning.service.grid_period_s, b.planning.service.grid_period_s);
+  EXPECT_EQ(a.planning.service.grid_size_m, b.planning.service.grid_size_m);
+  EXPECT_EQ(a.planning.service.grid_resolution_m, b.planning.service.grid_resolution_m);
   EXPECT_TRUE(defaults.validate().empty()) << defaults.validate();
 }
 
@@ -187,6 +198,26 @@ TEST(MapperConfigTest, ReadsOverrides) {
   EXPECT_EQ(config.covariance_reply_channel, "REP");
 }
 
+TEST(MapperConfigTest, ReadsThePlanningSectionAndItsChannels) {
+  const MapperProcessConfig config = loadMapperConfig(YAML::Load(
+      "planning: {enabled: true, max_distance_m: 1.5, min_weight: 0.01, refresh_period_s: 2,\n"
+      "  query_queue_capacity: 4, local_grid_period_s: 0.5, local_grid_size_m: [4, 5, 1.5],\n"
+      "  local_grid_resolution_m: 0.2}\n"
+      "channels: {distance_request: DQ, distance_reply: DR, local_grid: LG}\n"));
+  const PlanningConfig& p = config.mapper.planning;
+  EXPECT_TRUE(p.enabled);
+  EXPECT_EQ(p.esdf.max_distance_m, 1.5f);
+  EXPECT_EQ(p.esdf.min_weight, 0.01f);
+  EXPECT_EQ(p.refresh_period_s, 2.0);
+  EXPECT_EQ(p.service.queue_capacity, 4U);
+  EXPECT_EQ(p.service.grid_period_s, 0.5);
+  EXPECT_EQ(p.service.grid_size_m, Eigen::Vector3d(4.0, 5.0, 1.5));
+  EXPECT_EQ(p.service.grid_resolution_m, 0.2);
+  EXPECT_EQ(config.distance_request_channel, "DQ");
+  EXPECT_EQ(config.distance_reply_channel, "DR");
+  EXPECT_EQ(config.local_grid_channel, "LG");
+}
+
 TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
   struct Case {
     const char* yaml;
@@ -228,6 +259,14 @@ TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"checkpoint: {period_s: .inf}\n", "checkpoint.period_s"},
       {"checkpoint: {interval_s: 5}\n", "interval_s"},
       {"checkpoint: {resume: maybe}\n", "checkpoint.resume"},
+      {"planning: {max_distance_m: 0}\n", "planning."},
+      {"planning: {query_queue_capacity: -1}\n", "planning.query_queue_capacity"},
+      {"planning: {query_queue_capacity: 100000}\n", "planning.query_queue_capacity"},
+      {"planning: {local_grid_period_s: -1}\n", "grid_period_s"},
+      {"planning: {local_grid_size_m: [1, 2]}\n", "planning.local_grid_size_m"},
+      {"planning: {local_grid_size_m: [100, 100, 100]}\n", "cells"},
+      {"planning: {local_grid_resolution_m: 0}\n", "grid_resolution_m"},
+      {"channels: {distance_requests: X}\n", "distance_requests"},
   };
   for (const Case& c : cases) {
     try {

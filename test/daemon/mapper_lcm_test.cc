@@ -50,36 +50,9 @@ struct Received {
 };
 
 pid_t spawn(const std::vector<std::string>& args) { return test::spawnProcess(args); }
-
-/// Pumps LCM until `pid` exits or the deadline passes; returns its exit status or nullopt.
-std::optional<int> waitWhilePumping(lcm::LCM* lcm, pid_t pid, Clock::time_point deadline) {
-  int status = 0;
-  while (Clock::now() < deadline) {
-    lcm->handleTimeout(50);
-    if (waitpid(pid, &status, WNOHANG) == pid) {
-      return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    }
-  }
-  return std::nullopt;
-}
-
-void pumpFor(lcm::LCM* lcm, std::chrono::milliseconds duration) {
-  const auto until = Clock::now() + duration;
-  while (Clock::now() < until) lcm->handleTimeout(20);
-}
-
-/// Runs a tool to completion while pumping LCM; exit status or -1 on timeout (killed).
-int runTool(lcm::LCM* lcm, const std::vector<std::string>& args, std::chrono::seconds timeout) {
-  const pid_t pid = spawn(args);
-  if (pid <= 0) return -1;
-  const std::optional<int> status = waitWhilePumping(lcm, pid, Clock::now() + timeout);
-  if (!status) {
-    kill(pid, SIGKILL);
-    waitpid(pid, nullptr, 0);
-    return -1;
-  }
-  return *status;
-}
+using test::pumpFor;
+using test::runTool;
+using test::waitWhilePumping;
 
 TEST(MapperLcmTest, CaptureMapperCtlEndToEndOnTheSimulatedRoom) {
   test::TempDir dir("mapper_lcm");

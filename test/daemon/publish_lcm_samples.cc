@@ -57,6 +57,9 @@ std::vector<Sample> Samples() {
       Make("CBLOX_CMD_REPLY", "command_reply_t", &t::MakeCommandReply),
       Make("CBLOX_MAP_STATUS", "map_status_t", &t::MakeMapStatus),
       Make("CBLOX_HEARTBEAT", "heartbeat_t", &t::MakeHeartbeat),
+      Make("CBLOX_DISTANCE_REQUEST", "distance_request_t", &t::MakeDistanceRequest),
+      Make("CBLOX_DISTANCE_REPLY", "distance_reply_t", &t::MakeDistanceReply),
+      Make("CBLOX_LOCAL_GRID", "local_grid_t", &t::MakeLocalGrid),
   };
 }
 

@@ -17,6 +17,9 @@
 #include <cblox/covariance_pair_t.hpp>
 #include <cblox/covariance_reply_t.hpp>
 #include <cblox/covariance_request_t.hpp>
+#include <cblox/distance_reply_t.hpp>
+#include <cblox/distance_request_t.hpp>
+#include <cblox/local_grid_t.hpp>
 #include <cblox/heartbeat_t.hpp>
 #include <cblox/map_status_t.hpp>
 

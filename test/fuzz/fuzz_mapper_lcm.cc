@@ -1,6 +1,7 @@
 // Fuzz target: cblox-mapper's LCM side (MapperNode, daemon/mapper/mapper_lcm_node.h) with a
 // running Mapper, over the in-process bus (memq_bus.h). The first byte of the input chooses
-// the pose source (ground truth or tracker: their subscriptions differ) and the channel; the
+// the pose source (ground truth or tracker: their subscriptions differ; the tracker-mode mapper
+// also keeps distance fields and publishes local grids) and the channel; the
 // rest is published there and handled as cblox-mapper handles a message: message guard,
 // conversion, Mapper call (integration, maintenance, commands), then the target waits until
 // the mapper is idle. The two mappers live for the whole run, so inputs build on each other.
@@ -44,6 +45,15 @@ struct MapperUnderTest {
     // (5-15 us per voxel sample under the sanitizers), took minutes late in a run; at 4 MiB
     // exports still held the target at about 100 executions per second.
     config.mapper.memory_cap.cap_mb = 1;
+    // The planner interface on the tracker-mode mapper (fields, queries, local grids); the
+    // other keeps it off (requests answered NO_PLANNING_MAP).
+    if (pose_source == PoseSource::kTracker) {
+      config.mapper.planning.enabled = true;
+      config.mapper.planning.refresh_period_s = 0.05;
+      config.mapper.planning.service.grid_period_s = 0.05;
+      config.mapper.planning.service.grid_size_m = Eigen::Vector3d(2.0, 2.0, 1.0);
+      config.mapper.planning.service.grid_resolution_m = 0.1;
+    }
     mapper = std::make_unique<Mapper>(config.mapper, [](const std::string&) {});
     std::string error;
     FUZZ_CHECK(mapper->start(&error), error);
@@ -57,6 +67,7 @@ struct MapperUnderTest {
       channels.insert(channels.end(), {config.frame_pose_channel, config.keyframe_channel,
                                        config.covariance_reply_channel});
     }
+    channels.push_back(config.distance_request_channel);  // last: the seeds' indices hold
   }
 };
 

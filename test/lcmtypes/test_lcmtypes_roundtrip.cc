@@ -12,11 +12,14 @@
 #include <cblox/covariance_reply_t.hpp>
 #include <cblox/covariance_request_t.hpp>
 #include <cblox/depth_frame_t.hpp>
+#include <cblox/distance_reply_t.hpp>
+#include <cblox/distance_request_t.hpp>
 #include <cblox/frame_pose_t.hpp>
 #include <cblox/heartbeat_t.hpp>
 #include <cblox/image_t.hpp>
 #include <cblox/keyframe_pose_batch_t.hpp>
 #include <cblox/keyframe_t.hpp>
+#include <cblox/local_grid_t.hpp>
 #include <cblox/map_status_t.hpp>
 #include <cblox/pose_stamped_t.hpp>
 #include <cblox/pose_t.hpp>
@@ -267,6 +270,43 @@ TEST(lcmtypes_roundtrip, CovarianceRequestT) {
   EXPECT_EQ(d.keyframe_j, (std::vector<int64_t>{40, 41}));
 }
 
+TEST(lcmtypes_roundtrip, DistanceRequestT) {
+  const cblox::distance_request_t m = MakeDistanceRequest();
+  const cblox::distance_request_t d = RoundTrip(m);
+  EXPECT_EQ(d.request_id, m.request_id);
+  EXPECT_EQ(d.map_epoch, m.map_epoch);
+  ASSERT_EQ(d.num_points, 3);
+  ASSERT_EQ(d.points.size(), 3U);
+  EXPECT_EQ(d.points[0], (std::vector<double>{0.5, -1.25, 0.75}));
+  EXPECT_EQ(d.points[2], (std::vector<double>{-3.5, 4.0, 0.25}));
+  // 8 fingerprint + 3 x 8 + 4 + 3 x 3 x 8 bytes.
+  EXPECT_EQ(m.getEncodedSize(), 8 + 24 + 4 + 72);
+  EXPECT_EQ(cblox::distance_request_t::MAX_POINTS, 4096);
+}
+
+TEST(lcmtypes_roundtrip, DistanceReplyT) {
+  const cblox::distance_reply_t m = MakeDistanceReply();
+  const cblox::distance_reply_t d = RoundTrip(m);
+  EXPECT_EQ(d.request_id, m.request_id);
+  EXPECT_EQ(d.status, cblox::distance_reply_t::STATUS_OK);
+  EXPECT_EQ(d.max_distance_m, 2.0f);
+  ASSERT_EQ(d.num_points, 3);
+  EXPECT_EQ(d.state, (std::vector<int8_t>{1, 2, 0}));
+  EXPECT_EQ(d.distance, (std::vector<float>{0.625f, -0.03125f, 0.0f}));
+  EXPECT_EQ(d.gradient[1], (std::vector<float>{1.0f, 0.0f, 0.0f}));
+}
+
+TEST(lcmtypes_roundtrip, LocalGridT) {
+  const cblox::local_grid_t m = MakeLocalGrid();
+  const cblox::local_grid_t d = RoundTrip(m);
+  EXPECT_EQ(d.origin[2], -0.5);
+  EXPECT_EQ(d.resolution, 0.25);
+  EXPECT_EQ(d.size[0], 2);
+  EXPECT_EQ(d.encoding, cblox::local_grid_t::ENCODING_RAW);
+  EXPECT_EQ(d.raw_size, 6);
+  EXPECT_EQ(d.data, m.data);
+}
+
 TEST(lcmtypes_roundtrip, CovariancePairT) {
   const cblox::covariance_pair_t m = MakeCovariancePair(5, 6, false);
   const cblox::covariance_pair_t d = RoundTrip(m);
@@ -402,12 +442,15 @@ std::vector<TypeOps> AllTypes() {
           MakeOps(MakeCommand()),
           MakeOps(MakeCommandReply()),
           MakeOps(MakeMapStatus()),
-          MakeOps(MakeHeartbeat())};
+          MakeOps(MakeHeartbeat()),
+          MakeOps(MakeDistanceRequest()),
+          MakeOps(MakeDistanceReply()),
+          MakeOps(MakeLocalGrid())};
 }
 
 TEST(lcmtypes_errors, FingerprintsAreUnique) {
   const std::vector<TypeOps> types = AllTypes();
-  ASSERT_EQ(types.size(), 16U);
+  ASSERT_EQ(types.size(), 19U);
   std::set<int64_t> hashes;
   for (const TypeOps& t : types) hashes.insert(t.hash);
   EXPECT_EQ(hashes.size(), types.size());

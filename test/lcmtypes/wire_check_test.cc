@@ -17,6 +17,9 @@
 #include <cblox/covariance_pair_t.hpp>
 #include <cblox/covariance_reply_t.hpp>
 #include <cblox/covariance_request_t.hpp>
+#include <cblox/distance_reply_t.hpp>
+#include <cblox/distance_request_t.hpp>
+#include <cblox/local_grid_t.hpp>
 #include <cblox/depth_frame_t.hpp>
 #include <cblox/frame_pose_t.hpp>
 #include <cblox/heartbeat_t.hpp>
@@ -160,6 +163,13 @@ cblox::command_t filled(Tag<cblox::command_t>) { return samples::MakeCommand(); 
 cblox::command_reply_t filled(Tag<cblox::command_reply_t>) { return samples::MakeCommandReply(); }
 cblox::map_status_t filled(Tag<cblox::map_status_t>) { return samples::MakeMapStatus(); }
 cblox::heartbeat_t filled(Tag<cblox::heartbeat_t>) { return samples::MakeHeartbeat(); }
+cblox::distance_request_t filled(Tag<cblox::distance_request_t>) {
+  return samples::MakeDistanceRequest();
+}
+cblox::distance_reply_t filled(Tag<cblox::distance_reply_t>) {
+  return samples::MakeDistanceReply();
+}
+cblox::local_grid_t filled(Tag<cblox::local_grid_t>) { return samples::MakeLocalGrid(); }
 
 // ---------------------------------------------------------------------------------------
 // One case per schema type.
@@ -232,7 +242,7 @@ TEST(lcm_wire, TheCasesAreExactlyTheSchemaTypes) {
   namespace ws = cblox::wire_schema;
   const std::vector<TypeCase> cases = allCases();
   ASSERT_EQ(cases.size(), ws::kStructs.size());
-  EXPECT_EQ(cases.size(), 16U);  // lcmtypes/*.lcm; update with the folder
+  EXPECT_EQ(cases.size(), 19U);  // lcmtypes/*.lcm; update with the folder
   std::set<int64_t> hashes;
   for (size_t i = 0; i < cases.size(); ++i) {
     EXPECT_EQ(cases[i].name, ws::kStructs[i].name);

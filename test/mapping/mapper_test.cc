@@ -12,11 +12,14 @@
 #include <fstream>
 #include <future>
 #include <limits>
+#include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <set>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -87,15 +90,24 @@ void keyframeAt(Mapper* mapper, int64_t* utime, int64_t key, double x, double y 
   ASSERT_TRUE(mapper->waitUntilIdle(milliseconds(10000)));
 }
 
+MapperReply runCommand(Mapper* mapper, const MapperCommand& command);
+
 MapperReply runCommand(Mapper* mapper, const std::string& name, const std::string& path = "") {
   MapperCommand command;
   command.id = 42;
   command.name = name;
   if (!path.empty()) command.args["path"] = path;
-  std::promise<MapperReply> promise;
-  mapper->onCommand(command, [&](const MapperReply& r) { promise.set_value(r); });
-  auto future = promise.get_future();
-  EXPECT_EQ(future.wait_for(std::chrono::seconds(60)), std::future_status::ready);
+  return runCommand(mapper, command);
+}
+
+MapperReply runCommand(Mapper* mapper, const MapperCommand& command) {
+  auto promise = std::make_shared<std::promise<MapperReply>>();
+  auto future = promise->get_future();
+  mapper->onCommand(command, [promise](const MapperReply& r) { promise->set_value(r); });
+  if (future.wait_for(std::chrono::seconds(60)) != std::future_status::ready) {
+    ADD_FAILURE() << "no reply to '" << command.name << "' within 60 s";
+    return MapperReply{};
+  }
   return future.get();
 }
 
@@ -1512,6 +1524,74 @@ TEST(MapperTest, CheckpointResumeRefusalsAndFailures) {
   EXPECT_EQ(failing.status().checkpoints_written, 0u);
   EXPECT_EQ(log.countContaining("checkpoint into " + blocked.string() + " failed"), 1u);
   EXPECT_EQ(failing.status().frames_integrated, 6u);
+}
+
+TEST(MapperTest, PlanningExportsCheckTheirArgumentsAndFollowTheMap) {
+  test::TempDir dir("mapper_planning");
+  MapperConfig config = testConfig(dir.path());
+  const auto command = [](const char* name, std::map<std::string, std::string> args) {
+    MapperCommand c;
+    c.id = 7;
+    c.name = name;
+    c.args = std::move(args);
+    return c;
+  };
+  {
+    Mapper off(config);
+    std::string error;
+    ASSERT_TRUE(off.start(&error)) << error;
+    const MapperReply r = runCommand(&off, command("export_distance_slice", {{"path", "s.png"},
+                                                                            {"z", "1"}}));
+    EXPECT_FALSE(r.ok);
+    EXPECT_NE(r.message.find("planning.enabled"), std::string::npos) << r.message;
+    off.stop();
+  }
+  config.planning.enabled = true;
+  Mapper mapper(config);
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  const int64_t epoch = mapper.mapEpoch();
+  EXPECT_GT(epoch, 0);
+  feed(&mapper, 0, 8);
+  // The slice needs no sync: the command brings every field up to date first, the active
+  // subvolume's too.
+  const MapperReply slice = runCommand(
+      &mapper, command("export_distance_slice", {{"path", "slice.png"}, {"z", "1.0"}}));
+  ASSERT_TRUE(slice.ok) << slice.message;
+  EXPECT_TRUE(std::filesystem::exists(dir.file("slice.png")));
+  EXPECT_NE(slice.value("occupied"), "0");
+  EXPECT_FALSE(mapper.trajectoryG().empty());
+  const MapperReply grid = runCommand(
+      &mapper, command("export_distance_grid",
+                       {{"path", "grid.ply"}, {"box", "-1,-1,0.5,1,1,1.5"}, {"resolution", "0.1"}}));
+  ASSERT_TRUE(grid.ok) << grid.message;
+  EXPECT_EQ(grid.value("cells"), "4000");
+  // Bad arguments are refused with their name, and counted.
+  const uint64_t invalid = mapper.status().problem(InputProblem::kCommandInvalid);
+  for (const auto& [c, what] : std::vector<std::pair<MapperCommand, std::string>>{
+           {command("export_distance_slice", {{"path", "s.png"}}), "'z'"},
+           {command("export_distance_slice", {{"path", "s.png"}, {"z", "high"}}), "'z'"},
+           {command("export_distance_slice", {{"path", "s.png"}, {"z", "nan"}}), "'z'"},
+           {command("export_distance_grid", {{"path", "g.ply"}, {"box", "1,2,3"}}), "'box'"},
+           {command("export_distance_grid", {{"path", "g.ply"}, {"box", "0,0,0,1,1,1"},
+                                             {"resolution", "0"}}),
+            "'resolution'"},
+           {command("export_distance_grid", {{"path", "../g.ply"}, {"box", "0,0,0,1,1,1"}}),
+            ""},
+       }) {
+    const MapperReply r = runCommand(&mapper, c);
+    EXPECT_FALSE(r.ok) << c.name;
+    EXPECT_NE(r.message.find(what), std::string::npos) << r.message;
+  }
+  // A box too large for one grid is refused by the worker, with the reason.
+  const MapperReply huge = runCommand(
+      &mapper, command("export_distance_grid",
+                       {{"path", "g.ply"}, {"box", "0,0,0,1000,1000,1000"}, {"resolution", "0.01"}}));
+  EXPECT_FALSE(huge.ok);
+  EXPECT_NE(huge.message.find("cells"), std::string::npos) << huge.message;
+  EXPECT_EQ(mapper.status().problem(InputProblem::kCommandInvalid), invalid + 6);
+  EXPECT_EQ(mapper.mapEpoch(), epoch);  // mapping does not change the epoch
+  mapper.stop();
 }
 
 }  // namespace

@@ -154,6 +154,35 @@ TEST_F(PlanningMapTest, FollowsChangedAndRemovedSubvolumes) {
   EXPECT_EQ(planning_.query({1.5, 3.02, 0.03}).state, VoxelState::kUnknown);
 }
 
+TEST_F(PlanningMapTest, TheActiveSubvolumesFieldFollowsItsLayerAlone) {
+  // refreshActive computes subvolume 1 (active) only, and only when its layer changed.
+  ASSERT_TRUE(ball_->isActive());
+  planning_.refreshActive(collection_);
+  EXPECT_EQ(planning_.stats().fields, 1u);
+  EXPECT_EQ(planning_.query({0.72, 0.0, 0.0}).state, VoxelState::kUnknown);  // the wall's
+  const DistanceAnswer near_ball = planning_.query({1.5, 3.02, 0.03});
+  ASSERT_EQ(near_ball.state, VoxelState::kFree);
+  const uint64_t updates = planning_.stats().updates;
+  planning_.refreshActive(collection_);
+  EXPECT_EQ(planning_.stats().updates, updates);
+  // The ball grows (integration writes the active layer and bumps its revision).
+  {
+    Submap::WriteLock lock = ball_->lockForIntegration();
+    ASSERT_TRUE(lock);
+    esdf_test::writeTsdf(&lock.layer(), esdf_test::ball(Eigen::Vector3f(1.0f, 0.0f, 0.0f), 0.3f),
+                         lo_, hi_, kTruncation);
+  }
+  planning_.refreshActive(collection_);
+  EXPECT_EQ(planning_.stats().updates, updates + 1);
+  const double truth = (Eigen::Vector3d(1.5, 0.02, 0.03) - Eigen::Vector3d(1, 0, 0)).norm() - 0.3;
+  EXPECT_NEAR(planning_.query({1.5, 3.02, 0.03}).distance, truth, kVoxel);
+  // Once finished, it is the worker's: refreshActive leaves it.
+  collection_.finishActiveSubmap();
+  esdf_test::writeTsdf(ball_->mutableLayer(), esdf_test::empty(), lo_, hi_, kTruncation);
+  planning_.refreshActive(collection_);
+  EXPECT_EQ(planning_.stats().updates, updates + 1);
+}
+
 TEST_F(PlanningMapTest, ALocalGridHoldsTheAnswersAtItsCellCentres) {
   planning_.refresh(collection_, PlanningMap::Scope::kAll);
   LocalGrid grid;

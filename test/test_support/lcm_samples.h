@@ -13,11 +13,14 @@
 #include <cblox/covariance_reply_t.hpp>
 #include <cblox/covariance_request_t.hpp>
 #include <cblox/depth_frame_t.hpp>
+#include <cblox/distance_reply_t.hpp>
+#include <cblox/distance_request_t.hpp>
 #include <cblox/frame_pose_t.hpp>
 #include <cblox/heartbeat_t.hpp>
 #include <cblox/image_t.hpp>
 #include <cblox/keyframe_pose_batch_t.hpp>
 #include <cblox/keyframe_t.hpp>
+#include <cblox/local_grid_t.hpp>
 #include <cblox/map_status_t.hpp>
 #include <cblox/pose_stamped_t.hpp>
 #include <cblox/pose_t.hpp>
@@ -26,6 +29,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace cblox::test {
 
@@ -233,6 +238,60 @@ inline cblox::heartbeat_t MakeHeartbeat() {
   m.counter_names = {"frames_in", "frames_out"};
   m.counter_values = {1'000'000'000'000, -1};
   m.num_counters = static_cast<int32_t>(m.counter_names.size());
+  return m;
+}
+
+/// A distance request for `points` (x, y, z each).
+inline cblox::distance_request_t MakeDistanceRequest(int64_t id, int64_t epoch,
+                                                     std::vector<std::vector<double>> points) {
+  cblox::distance_request_t m{};
+  m.utime = 1'700'000'000'000'014;
+  m.request_id = id;
+  m.map_epoch = epoch;
+  m.points = std::move(points);
+  m.num_points = static_cast<int32_t>(m.points.size());
+  return m;
+}
+
+inline cblox::distance_request_t MakeDistanceRequest() {
+  return MakeDistanceRequest((int64_t{4242} << 32) | 7, 1'700'000'000'000'000,
+                             {{0.5, -1.25, 0.75}, {2.0, 0.0, 1.5}, {-3.5, 4.0, 0.25}});
+}
+
+inline cblox::distance_reply_t MakeDistanceReply() {
+  cblox::distance_reply_t m{};
+  m.utime = 1'700'000'000'000'015;
+  m.request_id = (int64_t{4242} << 32) | 7;
+  m.map_epoch = 1'700'000'000'000'000;
+  m.status = cblox::distance_reply_t::STATUS_OK;
+  m.message = "";
+  m.max_distance_m = 2.0f;
+  m.state = {cblox::distance_reply_t::FREE, cblox::distance_reply_t::OCCUPIED,
+             cblox::distance_reply_t::UNKNOWN};
+  m.distance = {0.625f, -0.03125f, 0.0f};
+  m.gradient = {{0.0f, 0.0f, 1.0f}, {1.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}};
+  m.num_points = static_cast<int32_t>(m.state.size());
+  return m;
+}
+
+inline cblox::local_grid_t MakeLocalGrid() {
+  cblox::local_grid_t m{};
+  m.utime = 1'700'000'000'000'016;
+  m.map_epoch = 1'700'000'000'000'000;
+  m.pose_utime = 1'700'000'000'000'012;
+  m.origin[0] = -4.0;
+  m.origin[1] = -4.0;
+  m.origin[2] = -0.5;
+  m.resolution = 0.25;
+  m.size[0] = 2;
+  m.size[1] = 1;
+  m.size[2] = 1;
+  m.max_distance_m = 2.0f;
+  m.encoding = cblox::local_grid_t::ENCODING_RAW;
+  // Two cells: free at 0.5 m, unknown (little-endian int16 500 and -32768).
+  m.data = {cblox::local_grid_t::FREE, cblox::local_grid_t::UNKNOWN, 0xF4, 0x01, 0x00, 0x80};
+  m.raw_size = static_cast<int32_t>(m.data.size());
+  m.num_bytes = m.raw_size;
   return m;
 }
 

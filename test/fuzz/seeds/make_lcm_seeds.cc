@@ -8,16 +8,19 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include <cblox/command_t.hpp>
 #include <cblox/covariance_reply_t.hpp>
 #include <cblox/covariance_request_t.hpp>
+#include <cblox/distance_request_t.hpp>
 #include <cblox/heartbeat_t.hpp>
 #include <cblox/map_status_t.hpp>
 
 #include "daemon/common/heartbeat.h"
+#include "test/test_support/lcm_samples.h"
 #include "daemon/common/lcm_messages.h"
 
 namespace cblox {
@@ -189,6 +192,12 @@ int main(int argc, char** argv) {
       encode(HeartbeatBuilder("cblox-tracker", "ok").add("frames", uint64_t{3}).build());
   map_status_t map_status;
   map_status.num_subvolumes = 2;
+  const Bytes distance_request =
+      encode(test::MakeDistanceRequest(1, 0, {{0.5, 0.25, 1.0}, {1.0, 2.0, 0.5}, {0.0, 0.0, 0.0}}));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  const Bytes distance_hostile = encode(
+      test::MakeDistanceRequest(2, 77, {{nan, 0.0, 1.0}, {inf, -inf, 0.0}, {1e6, -1e6, 1e6}, {0.1, 0.1, 0.1}}));
 
   // Every type, valid and corrupt.
   const std::filesystem::path decode = root / "fuzz_lcm_decode";
@@ -207,12 +216,13 @@ int main(int argc, char** argv) {
   write(decode / "image", encode(toImageMsg(gray(1), 5, "left")));
   write(decode / "camera_calibration", encode(toCalibrationMsg("c", intrinsics(), pose(1.0))));
   write(decode / "pose", encode(toPoseMsg(pose(2.0))));
+  write(decode / "distance_request", distance_request);
   write(decode / "invalid_truncated_stereo_pair", truncated(stereo));
   write(decode / "invalid_count_keyframe", corruptCount(keyframe, keyframe.size() - 5 * 8 - 4));
 
   // The mapper: first byte = pose source (0x80 tracker) | channel index (fuzz_mapper_lcm.cc:
   // depth, keyframe poses, command, heartbeat, then ground truth | frame pose, keyframe,
-  // covariance reply).
+  // covariance reply, then distance request).
   const std::filesystem::path mapper = root / "fuzz_mapper_lcm";
   write(mapper / "gt_depth_u16", depth_u16, 0x00, true);
   write(mapper / "gt_depth_f32", depth_f32, 0x00, true);
@@ -230,6 +240,12 @@ int main(int argc, char** argv) {
   write(mapper / "tracker_keyframe", keyframe, 0x85, true);
   write(mapper / "tracker_keyframe_poses", keyframe_poses, 0x81, true);
   write(mapper / "tracker_covariance_reply", cov_reply, 0x86, true);
+  write(mapper / "gt_distance_request", distance_request, 0x05, true);
+  write(mapper / "tracker_distance_request", distance_request, 0x87, true);
+  write(mapper / "tracker_distance_hostile", distance_hostile, 0x87, true);
+  // num_points (after the fingerprint, utime, request_id and map_epoch) forged to -1.
+  write(mapper / "invalid_tracker_distance_count", corruptCount(distance_request, 8 + 3 * 8),
+        0x87, true);
   write(mapper / "invalid_gt_depth_truncated", truncated(depth_u16), 0x00, true);
   write(mapper / "invalid_tracker_keyframe_count",
         corruptCount(keyframe, keyframe.size() - 5 * 8 - 4), 0x85, true);

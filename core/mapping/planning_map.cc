@@ -84,17 +84,14 @@ void PlanningMap::refresh(const SubmapCollection& collection, Scope scope) {
   bool updated = false;
   for (const std::shared_ptr<Submap>& submap : submaps) {
     if (scope == Scope::kFinished && submap->isActive()) continue;
-    updated = refreshOne(*submap, &integrator_) || updated;
+    updated = refreshOne(*submap, &integrator_, /*owns_finished=*/true) || updated;
   }
-  if (updated) {
-    refresh_ms_.add(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count());
-  }
+  if (updated) recordRefresh(start);
   setPoses(collection.poseSnapshot());
 }
 
-bool PlanningMap::refreshOne(const Submap& submap, EsdfIntegrator* integrator) {
+bool PlanningMap::refreshOne(const Submap& submap, EsdfIntegrator* integrator,
+                             bool owns_finished) {
   const std::shared_ptr<Field> field = fieldFor(submap);
   {
     std::shared_lock<std::shared_mutex> field_lock(field->mutex);
@@ -107,7 +104,8 @@ bool PlanningMap::refreshOne(const Submap& submap, EsdfIntegrator* integrator) {
       return true;
     }
   }
-  // Finished (possibly just now): its layer belongs to this thread.
+  // Finished (possibly just now): its layer belongs to the thread that owns finished layers.
+  if (!owns_finished) return false;
   updateField(submap, submap.layer(), nullptr, integrator, field.get());
   return true;
 }
@@ -119,24 +117,15 @@ void PlanningMap::refreshActive(const SubmapCollection& collection) {
   bool updated = false;
   {
     std::lock_guard<std::mutex> lock(active_integrator_mutex_);
-    // Finished meanwhile: the owner of finished layers refreshes it.
-    if (!active->isActive()) return;
-    const std::shared_ptr<Field> field = fieldFor(*active);
-    {
-      std::shared_lock<std::shared_mutex> field_lock(field->mutex);
-      if (field->layer.numBlocks() > 0 && field->revision == active->revision()) return;
-    }
-    std::unique_lock<std::mutex> layer_lock = active->lockLayer();
-    if (!active->isActive()) return;
-    updateField(*active, active->layer(), &layer_lock, &active_integrator_, field.get());
-    updated = true;
+    updated = refreshOne(*active, &active_integrator_, /*owns_finished=*/false);
   }
-  if (updated) {
-    refresh_ms_.add(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count());
-  }
+  if (updated) recordRefresh(start);
   setPoses(collection.poseSnapshot());
+}
+
+void PlanningMap::recordRefresh(std::chrono::steady_clock::time_point start) {
+  refresh_ms_.add(
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
 }
 
 void PlanningMap::setPoses(const std::vector<SubmapPose>& poses) {

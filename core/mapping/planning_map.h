@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -193,8 +194,12 @@ class PlanningMap {
   void updateField(const Submap& submap, const TsdfLayer& layer,
                    std::unique_lock<std::mutex>* layer_lock, EsdfIntegrator* integrator,
                    Field* field);
-  // refresh()'s step for one subvolume: true when its field was updated.
-  bool refreshOne(const Submap& submap, EsdfIntegrator* integrator);
+  // One subvolume's field, when its layer changed since: an active subvolume's read under
+  // its layer lock; a finished one's only by the owner of finished layers (`owns_finished`;
+  // otherwise left to it). True when the field was updated.
+  bool refreshOne(const Submap& submap, EsdfIntegrator* integrator, bool owns_finished);
+  // Adds the time since `start` to refreshMs().
+  void recordRefresh(std::chrono::steady_clock::time_point start);
   std::vector<IndexEntry> indexSnapshot() const;
   static DistanceAnswer sample(const std::vector<IndexEntry>& index, const Eigen::Vector3d& p_G);
 

@@ -52,7 +52,6 @@ struct Received {
 pid_t spawn(const std::vector<std::string>& args) { return test::spawnProcess(args); }
 using test::pumpFor;
 using test::runTool;
-using test::waitWhilePumping;
 
 TEST(MapperLcmTest, CaptureMapperCtlEndToEndOnTheSimulatedRoom) {
   test::TempDir dir("mapper_lcm");
@@ -170,14 +169,9 @@ TEST(MapperLcmTest, CaptureMapperCtlEndToEndOnTheSimulatedRoom) {
   EXPECT_NE(test::readFile(dir.file("eval.json")).find("\"median_m\""), std::string::npos);
 
   // Graceful stop on SIGTERM: exit 0, a last heartbeat "stopped".
-  ASSERT_EQ(kill(mapper, SIGTERM), 0);
   const std::optional<int> mapper_status =
-      waitWhilePumping(&lcm, mapper, Clock::now() + std::chrono::seconds(20));
-  if (!mapper_status) {
-    kill(mapper, SIGKILL);
-    waitpid(mapper, nullptr, 0);
-    FAIL() << "cblox-mapper did not stop within 20 s of SIGTERM";
-  }
+      test::terminateWhilePumping(&lcm, mapper, std::chrono::seconds(20));
+  ASSERT_TRUE(mapper_status.has_value()) << "cblox-mapper did not stop within 20 s of SIGTERM";
   EXPECT_EQ(*mapper_status, 0);
   pumpFor(&lcm, std::chrono::milliseconds(300));
   ASSERT_TRUE(received.mapper_heartbeat.has_value());

@@ -4,8 +4,6 @@
 // another epoch), listens to CBLOX_LOCAL_GRID, and runs cblox-ctl distance / grid /
 // esdf-slice. Must run inside a private network namespace (scripts/netns-run.sh).
 
-#include <signal.h>
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <chrono>
@@ -37,7 +35,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using test::runTool;
-using test::waitWhilePumping;
 
 const char* kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
 constexpr int kFrames = 40;
@@ -248,14 +245,9 @@ TEST(PlanningLcmTest, PlannersAskTheMapperOverLcm) {
   EXPECT_GE(counter(*bus.mapper_heartbeat, "rejected_distance_request_invalid"), 1);
   EXPECT_GT(counter(*bus.mapper_heartbeat, "local_grids_published"), 0);
 
-  ASSERT_EQ(kill(mapper, SIGTERM), 0);
   const std::optional<int> stopped =
-      waitWhilePumping(&lcm, mapper, Clock::now() + std::chrono::seconds(20));
-  if (!stopped) {
-    kill(mapper, SIGKILL);
-    waitpid(mapper, nullptr, 0);
-    FAIL() << "cblox-mapper did not stop within 20 s of SIGTERM";
-  }
+      test::terminateWhilePumping(&lcm, mapper, std::chrono::seconds(20));
+  ASSERT_TRUE(stopped.has_value()) << "cblox-mapper did not stop within 20 s of SIGTERM";
   EXPECT_EQ(*stopped, 0);
 }
 

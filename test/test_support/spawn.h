@@ -67,4 +67,18 @@ inline int runTool(lcm::LCM* lcm, const std::vector<std::string>& args,
   return *status;
 }
 
+/// Sends SIGTERM to `pid` and handles `lcm` until it exits: its exit status, or nullopt when
+/// it did not exit within `timeout` (then it is killed with SIGKILL and reaped).
+inline std::optional<int> terminateWhilePumping(lcm::LCM* lcm, pid_t pid,
+                                                std::chrono::seconds timeout) {
+  if (kill(pid, SIGTERM) != 0) return std::nullopt;
+  const std::optional<int> status =
+      waitWhilePumping(lcm, pid, std::chrono::steady_clock::now() + timeout);
+  if (!status) {
+    kill(pid, SIGKILL);
+    waitpid(pid, nullptr, 0);
+  }
+  return status;
+}
+
 }  // namespace cblox::test

@@ -94,16 +94,17 @@ const EsdfVoxel* EsdfIntegrator::siteAt(const EsdfLayer& esdf, const EsdfBlock& 
   const GridIndex n = local + offset;
   const EsdfVoxel* v =
       n.minCoeff() >= 0 && n.maxCoeff() < voxels_per_side_
-          ? &block.voxels[static_cast<size_t>(esdf.linearIndex(n))]
+          ? &block.voxel(esdf.linearIndex(n))
           : esdf.getVoxel(block.index * voxels_per_side_ + n);
   return v != nullptr && v->isSite() ? v : nullptr;
 }
 
 void EsdfIntegrator::readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStats* stats) {
   const Block& tsdf = *block->tsdf;
+  EsdfVoxel* const voxels = block->mutableVoxels();
   for (int linear = 0; linear < esdf->voxelsPerBlock(); ++linear) {
     const TsdfVoxel& t = tsdf.voxel(linear);
-    EsdfVoxel& v = block->voxels[static_cast<size_t>(linear)];
+    EsdfVoxel& v = voxels[linear];
     const bool observed = t.weight > 0.0f && t.weight >= config_.min_weight;
     v.state = !observed           ? VoxelState::kUnknown
               : t.distance <= 0.0f ? VoxelState::kOccupied
@@ -149,7 +150,7 @@ void EsdfIntegrator::seedFromNeighbours(EsdfLayer* esdf, EsdfBlock* block) {
       for (int y = lo.y(); y <= hi.y(); ++y) {
         for (int x = lo.x(); x <= hi.x(); ++x) {
           const int linear = esdf->linearIndex(GridIndex(x, y, z));
-          const EsdfVoxel& v = other->voxels[static_cast<size_t>(linear)];
+          const EsdfVoxel& v = other->voxel(linear);
           if (v.hasSite() && (v.flags & EsdfVoxel::kRaise) == 0) {
             queue_.push(v.isSite() ? 0 : keyOf(v.own_distance), {other, linear});
           }
@@ -166,7 +167,8 @@ void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
   while (!queue_.empty()) {
     queue_.pop(&entry, &key);
     ++stats->voxels_popped;
-    EsdfVoxel& v = entry.block->voxels[static_cast<size_t>(entry.linear)];
+    // Read only: a write to entry.block below may move its voxels (copy-on-write).
+    const EsdfVoxel& v = entry.block->voxel(entry.linear);
     const GridIndex local(entry.linear & mask, (entry.linear >> voxels_per_side_log2_) & mask,
                           entry.linear >> (2 * voxels_per_side_log2_));
     if ((v.flags & EsdfVoxel::kRaise) != 0) {
@@ -175,17 +177,21 @@ void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
       for (const GridIndex& d : neighbours_) {
         const VoxelRef n = neighbour(esdf, entry.block, local, d);
         if (n.block == nullptr) continue;
-        EsdfVoxel& nv = *n.voxel();
+        const EsdfVoxel& nv = n.voxel();
         if (!nv.hasSite()) continue;
         if (nv.isSite()) {
           queue_.push(0, {n.block, n.linear});
           continue;
         }
-        if (siteAt(*esdf, *n.block, n.local, siteOf(nv)) == nullptr) nv.flags = EsdfVoxel::kRaise;
-        queue_.push(keyOf(nv.own_distance), {n.block, n.linear});
+        const float n_distance = nv.own_distance;
+        if (siteAt(*esdf, *n.block, n.local, siteOf(nv)) == nullptr) {
+          n.mutableVoxel().flags = EsdfVoxel::kRaise;
+        }
+        queue_.push(keyOf(n_distance), {n.block, n.linear});
       }
-      v.flags = 0;
-      v.own_distance = config_.max_distance_m;
+      EsdfVoxel& w = entry.block->mutableVoxels()[entry.linear];
+      w.flags = 0;
+      w.own_distance = config_.max_distance_m;
       continue;
     }
     if (!v.hasSite()) continue;
@@ -208,7 +214,7 @@ void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
         n = neighbour(esdf, entry.block, local, d);
         if (n.block == nullptr) continue;
       }
-      EsdfVoxel& nv = *n.voxel();
+      const EsdfVoxel& nv = n.voxel();
       if (nv.isSite() || (nv.flags & EsdfVoxel::kRaise) != 0) continue;
       const Eigen::Vector3i offset = site - d;
       const auto sq = static_cast<size_t>(offset.squaredNorm());
@@ -216,8 +222,9 @@ void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
       const float through = std::max(0.0f, centre_distance_[sq] + site_distance);
       if (through > max_reach_) continue;
       if (nv.hasSite() && through >= nv.own_distance) continue;
-      setSite(&nv, offset);
-      nv.own_distance = through;
+      EsdfVoxel& w = n.mutableVoxel();
+      setSite(&w, offset);
+      w.own_distance = through;
       queue_.push(keyOf(through), {n.block, n.linear});
     }
   }

@@ -86,7 +86,9 @@ class EsdfIntegrator {
     EsdfBlock* block = nullptr;
     GridIndex local = GridIndex::Zero();  ///< inside `block`
     int linear = 0;
-    EsdfVoxel* voxel() const { return &block->voxels[static_cast<size_t>(linear)]; }
+    const EsdfVoxel& voxel() const { return block->voxel(linear); }
+    /// For writing (EsdfBlock::mutableVoxels): re-fetch after any other write to `block`.
+    EsdfVoxel& mutableVoxel() const { return block->mutableVoxels()[linear]; }
   };
 
   void prepare(const EsdfLayer& esdf);

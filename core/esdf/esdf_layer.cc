@@ -1,5 +1,6 @@
 #include "core/esdf/esdf_layer.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -36,9 +37,8 @@ EsdfBlock* EsdfLayer::allocateBlock(const BlockIndex& index, bool* newly_allocat
   if (!slot) {
     slot = std::make_unique<EsdfBlock>(index, voxels_per_block_);
     EsdfBlock* block = slot.get();
-    for (int i = 0; i < voxels_per_block_; ++i) {
-      block->voxels[static_cast<size_t>(i)].own_distance = max_distance_m_;
-    }
+    EsdfVoxel* voxels = block->mutableVoxels();
+    for (int i = 0; i < voxels_per_block_; ++i) voxels[i].own_distance = max_distance_m_;
     link(block, block);
     return block;
   }
@@ -73,7 +73,7 @@ const EsdfVoxel* EsdfLayer::getVoxel(const GlobalVoxelIndex& index) const {
   GridIndex local;
   splitGlobalVoxelIndex(index, voxels_per_side_log2_, &block, &local);
   const EsdfBlock* b = getBlock(block);
-  return b == nullptr ? nullptr : &b->voxels[static_cast<size_t>(linearIndex(local))];
+  return b == nullptr ? nullptr : &b->voxel(linearIndex(local));
 }
 
 EsdfVoxel* EsdfLayer::getVoxel(const GlobalVoxelIndex& index) {
@@ -81,11 +81,42 @@ EsdfVoxel* EsdfLayer::getVoxel(const GlobalVoxelIndex& index) {
   GridIndex local;
   splitGlobalVoxelIndex(index, voxels_per_side_log2_, &block, &local);
   EsdfBlock* b = getBlock(block);
-  return b == nullptr ? nullptr : &b->voxels[static_cast<size_t>(linearIndex(local))];
+  return b == nullptr ? nullptr : &b->mutableVoxels()[linearIndex(local)];
+}
+
+void EsdfBlock::unshare() {
+  std::shared_ptr<EsdfVoxel[]> copy(new EsdfVoxel[static_cast<size_t>(num_voxels_)]);
+  std::copy(voxels_.get(), voxels_.get() + num_voxels_, copy.get());
+  voxels_ = std::move(copy);
+  shared_ = false;
+}
+
+std::shared_ptr<const EsdfLayer> EsdfLayer::snapshot() {
+  auto copy = std::make_shared<EsdfLayer>(config_, max_distance_m_);
+  copy->is_snapshot_ = true;
+  copy->blocks_.reserve(blocks_.size());
+  for (auto& [key, block] : blocks_) {
+    auto& slot = copy->blocks_[key];
+    slot = std::make_unique<EsdfBlock>(*block);  // shares voxels_
+    slot->shared_ = true;
+    slot->copy_ = nullptr;
+    block->shared_ = true;
+    block->copy_ = slot.get();
+  }
+  for (auto& [key, block] : blocks_) {
+    EsdfBlock* target = block->copy_;
+    for (size_t i = 0; i < block->neighbours.size(); ++i) {
+      const EsdfBlock* n = block->neighbours[i];
+      target->neighbours[i] = n == nullptr ? nullptr : n->copy_;
+    }
+  }
+  for (auto& [key, block] : blocks_) block->copy_ = nullptr;
+  return copy;
 }
 
 size_t EsdfLayer::memoryBytes() const {
-  return sizeof(EsdfLayer) + blocks_.size() * bytesPerBlock() +
+  const size_t per_block = is_snapshot_ ? sizeof(EsdfBlock) : bytesPerBlock();
+  return sizeof(EsdfLayer) + blocks_.size() * per_block +
          blocks_.capacity() * (sizeof(BlockMap::value_type) + 1);
 }
 

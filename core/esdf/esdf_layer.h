@@ -17,17 +17,33 @@ namespace cblox {
 
 /// The distance-field voxels of one TSDF block, on the same grid: voxel (i,j,k) of an
 /// EsdfBlock is voxel (i,j,k) of the TSDF block with the same index.
-struct EsdfBlock {
+///
+/// The voxels are copy-on-write: EsdfLayer::snapshot() shares them with a read-only copy
+/// of the layer, and the next mutableVoxels() of a shared block copies them first, so that
+/// the snapshot never sees a write.
+class EsdfBlock {
+ public:
   EsdfBlock(const BlockIndex& block_index, int num_voxels)
-      : index(block_index), voxels(new EsdfVoxel[static_cast<size_t>(num_voxels)]) {
+      : index(block_index),
+        voxels_(new EsdfVoxel[static_cast<size_t>(num_voxels)]),
+        num_voxels_(num_voxels) {
     neighbours.fill(nullptr);
   }
 
   /// Index into `neighbours` of the block at offset (dx, dy, dz), each in {-1, 0, 1}.
   static int neighbourSlot(int dx, int dy, int dz) { return (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1); }
 
+  /// The voxels, x fastest (EsdfLayer::linearIndex).
+  const EsdfVoxel* voxels() const { return voxels_.get(); }
+  const EsdfVoxel& voxel(int linear) const { return voxels_[static_cast<size_t>(linear)]; }
+  /// The voxels for writing: a private copy first when a snapshot shares them. The pointer
+  /// stays valid until the next EsdfLayer::snapshot().
+  EsdfVoxel* mutableVoxels() {
+    if (shared_) [[unlikely]] unshare();
+    return voxels_.get();
+  }
+
   BlockIndex index;
-  std::unique_ptr<EsdfVoxel[]> voxels;
   /// The 26 adjacent blocks of the layer (null where absent; slot 13 is this block), kept
   /// by EsdfLayer::allocateBlock / removeBlock so that wavefronts cross block borders
   /// without a hash lookup.
@@ -35,13 +51,23 @@ struct EsdfBlock {
   /// The TSDF block this block was last computed from, and its Block::changeCount() then.
   const Block* tsdf = nullptr;
   uint64_t tsdf_change_count = 0;
+
+ private:
+  friend class EsdfLayer;
+  void unshare();
+
+  std::shared_ptr<EsdfVoxel[]> voxels_;
+  int num_voxels_ = 0;
+  bool shared_ = false;         // a snapshot holds voxels_
+  EsdfBlock* copy_ = nullptr;   // scratch of EsdfLayer::snapshot(): this block's copy
 };
 
 /// A sparse distance field with the geometry (voxel size, block size, frame) of the TSDF
 /// layer it is computed from: one EsdfBlock per TSDF block.
 ///
 /// Thread safety: const methods may run concurrently with each other; anything else needs
-/// exclusive access (the owner's lock).
+/// exclusive access (the owner's lock). A snapshot() is immutable and shares nothing
+/// writable with its source: readers use it without any lock while the source is updated.
 class EsdfLayer {
  public:
   using BlockMap = absl::flat_hash_map<uint64_t, std::unique_ptr<EsdfBlock>>;
@@ -86,7 +112,13 @@ class EsdfLayer {
            ((local.y() + (local.z() << voxels_per_side_log2_)) << voxels_per_side_log2_);
   }
 
-  /// Bytes held: blocks plus the hash map's slot array. O(1).
+  /// A read-only copy for readers beside the writer of this layer: its blocks share this
+  /// layer's voxels (copied only when this layer writes them next, EsdfBlock::mutableVoxels),
+  /// with their own neighbour links. O(blocks): no voxel is copied here.
+  std::shared_ptr<const EsdfLayer> snapshot();
+
+  /// Bytes held: blocks plus the hash map's slot array; a snapshot counts its blocks'
+  /// records and table but not the voxels it shares (its source counts those). O(1).
   size_t memoryBytes() const;
   /// Bytes one block holds.
   size_t bytesPerBlock() const {
@@ -103,6 +135,7 @@ class EsdfLayer {
   int voxels_per_side_log2_ = 0;
   int voxels_per_block_ = 0;
   float voxel_size_inv_ = 0.0f;
+  bool is_snapshot_ = false;
   BlockMap blocks_;
 };
 

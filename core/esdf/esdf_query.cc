@@ -29,7 +29,7 @@ VoxelRef locate(const EsdfLayer& layer, const EsdfBlock* hint, const GlobalVoxel
     block = layer.getBlock(block_index);
   }
   if (block == nullptr) return {};
-  return {block, &block->voxels[static_cast<size_t>(layer.linearIndex(local))]};
+  return {block, &block->voxel(layer.linearIndex(local))};
 }
 
 /// voxelDistance() of the voxel `ref` at `index`: its site is looked up from ref's block.
@@ -54,6 +54,19 @@ void distanceOf(const EsdfLayer& layer, const VoxelRef& ref, const GlobalVoxelIn
   *distance = std::min(d, layer.maxDistance());
 }
 
+/// queryNearest() of the voxel `index`, found from `hint` (may be null). An unknown voxel's
+/// site is not looked up: its distance is not answered.
+DistanceSample nearestSample(const EsdfLayer& layer, const EsdfBlock* hint,
+                             const GlobalVoxelIndex& index) {
+  DistanceSample sample;
+  const VoxelRef ref = locate(layer, hint, index);
+  if (ref.voxel == nullptr || ref.voxel->state == VoxelState::kUnknown) return sample;
+  float distance = 0.0f;
+  distanceOf(layer, ref, index, &sample.state, &distance);
+  sample.distance = distance;
+  return sample;
+}
+
 }  // namespace
 
 bool voxelDistance(const EsdfLayer& layer, const GlobalVoxelIndex& index, VoxelState* state,
@@ -65,16 +78,8 @@ bool voxelDistance(const EsdfLayer& layer, const GlobalVoxelIndex& index, VoxelS
 }
 
 DistanceSample queryNearest(const EsdfLayer& layer, const Eigen::Vector3f& point) {
-  DistanceSample sample;
-  if (!point.allFinite()) return sample;
-  VoxelState state = VoxelState::kUnknown;
-  float distance = 0.0f;
-  if (!voxelDistance(layer, layer.globalVoxelIndexFromPoint(point), &state, &distance)) {
-    return sample;
-  }
-  sample.state = state;
-  if (state != VoxelState::kUnknown) sample.distance = distance;
-  return sample;
+  if (!point.allFinite()) return DistanceSample{};
+  return nearestSample(layer, nullptr, layer.globalVoxelIndexFromPoint(point));
 }
 
 DistanceSample queryInterpolated(const EsdfLayer& layer, const Eigen::Vector3f& point) {
@@ -83,17 +88,22 @@ DistanceSample queryInterpolated(const EsdfLayer& layer, const Eigen::Vector3f& 
   const Eigen::Vector3f scaled = point / layer.voxelSize() - Eigen::Vector3f::Constant(0.5f);
   const GlobalVoxelIndex base = gridIndexFromPoint(scaled, 1.0f);
   const Eigen::Vector3f t = scaled - base.cast<float>();
-  float c[8];
-  // One hash lookup for the base corner's block; the other corners and most sites are in it
-  // or next to it.
+  // One hash lookup for the base corner's block; the other corners, the voxel that holds
+  // `point` (one of them) and most sites are in it or next to it.
   const EsdfBlock* hint = locate(layer, nullptr, base).block;
+  const GlobalVoxelIndex nearest = layer.globalVoxelIndexFromPoint(point);
+  if (hint == nullptr) return nearestSample(layer, nullptr, nearest);
+  float c[8];
   for (int corner = 0; corner < 8; ++corner) {
     const GlobalVoxelIndex index = base + GlobalVoxelIndex(corner & 1, (corner >> 1) & 1,
                                                            (corner >> 2) & 1);
     const VoxelRef ref = locate(layer, hint, index);
+    // Unknown or absent: no interpolation, and no site looked up for nothing.
+    if (ref.voxel == nullptr || ref.voxel->state == VoxelState::kUnknown) {
+      return nearestSample(layer, hint, nearest);
+    }
     VoxelState state = VoxelState::kUnknown;
-    if (ref.voxel != nullptr) distanceOf(layer, ref, index, &state, &c[corner]);
-    if (ref.voxel == nullptr || state == VoxelState::kUnknown) return queryNearest(layer, point);
+    distanceOf(layer, ref, index, &state, &c[corner]);
   }
   // c[x + 2y + 4z]; interpolate along x, then y, then z.
   const float x00 = c[0] + t.x() * (c[1] - c[0]), x10 = c[2] + t.x() * (c[3] - c[2]);

@@ -31,21 +31,24 @@ std::shared_ptr<PlanningMap::Field> PlanningMap::fieldFor(const Submap& submap) 
 void PlanningMap::updateField(const Submap& submap, const TsdfLayer& layer,
                               std::unique_lock<std::mutex>* layer_lock, EsdfIntegrator* integrator,
                               Field* field) {
-  std::unique_lock<std::shared_mutex> field_lock(field->mutex);
-  EsdfUpdateStats stats = integrator->stage(layer, &field->layer);
+  EsdfUpdateStats stats = integrator->stage(layer, &field->work);
   field->revision = submap.revision();  // stable while the layer is not written
   if (layer_lock != nullptr) layer_lock->unlock();
-  integrator->finish(&field->layer, &stats);
-  const size_t bytes = field->dropped ? 0 : field->layer.memoryBytes();
-  if (bytes >= field->counted_bytes) {
-    memory_bytes_.fetch_add(bytes - field->counted_bytes, std::memory_order_relaxed);
-  } else {
-    memory_bytes_.fetch_sub(field->counted_bytes - bytes, std::memory_order_relaxed);
+  integrator->finish(&field->work, &stats);
+  std::shared_ptr<const EsdfLayer> published = field->work.snapshot();
+  {
+    std::lock_guard<std::mutex> lock(field->bytes_mutex);
+    const size_t bytes = field->dropped ? 0 : field->work.memoryBytes() + published->memoryBytes();
+    if (bytes >= field->counted_bytes) {
+      memory_bytes_.fetch_add(bytes - field->counted_bytes, std::memory_order_relaxed);
+    } else {
+      memory_bytes_.fetch_sub(field->counted_bytes - bytes, std::memory_order_relaxed);
+    }
+    field->counted_bytes = bytes;
   }
-  field->counted_bytes = bytes;
   Eigen::AlignedBox3f box;
   const float block_size = layer.blockSize();
-  for (const auto& [key, block] : field->layer.blocks()) {
+  for (const auto& [key, block] : published->blocks()) {
     const Eigen::Vector3f lo = block->index.cast<float>() * block_size;
     box.extend(lo);
     box.extend(lo + Eigen::Vector3f::Constant(block_size));
@@ -54,7 +57,11 @@ void PlanningMap::updateField(const Submap& submap, const TsdfLayer& layer,
   if (stats.rebuilt) rebuilds_.fetch_add(1, std::memory_order_relaxed);
   std::lock_guard<std::mutex> lock(index_mutex_);
   const auto it = index_.find(submap.id());
-  if (it != index_.end() && it->second.field.get() == field) it->second.box_M = box;
+  if (it != index_.end() && it->second.field.get() == field) {
+    // The previous snapshot is freed here, or by the last query that still holds it.
+    it->second.layer = std::move(published);
+    it->second.box_M = box;
+  }
 }
 
 void PlanningMap::refresh(const SubmapCollection& collection, Scope scope) {
@@ -74,8 +81,9 @@ void PlanningMap::refresh(const SubmapCollection& collection, Scope scope) {
     }
   }
   for (const std::shared_ptr<Field>& field : dropped) {
-    // Queries that took it before the erase may still sample it; its bytes leave now.
-    std::unique_lock<std::shared_mutex> field_lock(field->mutex);
+    // Queries that took its snapshot before the erase may still sample it; its bytes leave
+    // now, and an update in hand on another thread publishes nowhere.
+    std::lock_guard<std::mutex> lock(field->bytes_mutex);
     field->dropped = true;
     memory_bytes_.fetch_sub(field->counted_bytes, std::memory_order_relaxed);
     field->counted_bytes = 0;
@@ -84,19 +92,24 @@ void PlanningMap::refresh(const SubmapCollection& collection, Scope scope) {
   bool updated = false;
   for (const std::shared_ptr<Submap>& submap : submaps) {
     if (scope == Scope::kFinished && submap->isActive()) continue;
-    updated = refreshOne(*submap, &integrator_, /*owns_finished=*/true) || updated;
+    updated = refreshOne(*submap, &integrator_, /*owns_finished=*/true,
+                         /*wait=*/scope == Scope::kAll) ||
+              updated;
   }
   if (updated) recordRefresh(start);
   setPoses(collection.poseSnapshot());
 }
 
-bool PlanningMap::refreshOne(const Submap& submap, EsdfIntegrator* integrator,
-                             bool owns_finished) {
+bool PlanningMap::refreshOne(const Submap& submap, EsdfIntegrator* integrator, bool owns_finished,
+                             bool wait) {
   const std::shared_ptr<Field> field = fieldFor(submap);
-  {
-    std::shared_lock<std::shared_mutex> field_lock(field->mutex);
-    if (field->layer.numBlocks() > 0 && field->revision == submap.revision()) return false;
+  std::unique_lock<std::mutex> update_lock(field->update_mutex, std::defer_lock);
+  if (wait) {
+    update_lock.lock();
+  } else if (!update_lock.try_lock()) {
+    return false;
   }
+  if (field->work.numBlocks() > 0 && field->revision == submap.revision()) return false;
   if (submap.isActive()) {
     std::unique_lock<std::mutex> layer_lock = submap.lockLayer();
     if (submap.isActive()) {
@@ -117,7 +130,7 @@ void PlanningMap::refreshActive(const SubmapCollection& collection) {
   bool updated = false;
   {
     std::lock_guard<std::mutex> lock(active_integrator_mutex_);
-    updated = refreshOne(*active, &active_integrator_, /*owns_finished=*/false);
+    updated = refreshOne(*active, &active_integrator_, /*owns_finished=*/false, /*wait=*/true);
   }
   if (updated) recordRefresh(start);
   setPoses(collection.poseSnapshot());
@@ -149,15 +162,14 @@ std::vector<PlanningMap::IndexEntry> PlanningMap::indexSnapshot() const {
 Eigen::AlignedBox3d PlanningMap::boundsG() const {
   Eigen::AlignedBox3d bounds;  // empty
   for (const IndexEntry& entry : indexSnapshot()) {
-    if (entry.box_M.isEmpty()) continue;
+    if (entry.box_M.isEmpty() || !entry.layer) continue;
     const Transformationd T_G_M = entry.T_M_G.inverse();
-    std::shared_lock<std::shared_mutex> field_lock(entry.field->mutex);
     const double block_size =
-        static_cast<double>(entry.field->layer.voxelSize()) * entry.field->layer.voxelsPerSide();
+        static_cast<double>(entry.layer->voxelSize()) * entry.layer->voxelsPerSide();
     // Each block's centre, grown by its half diagonal: tight for a subvolume frame rotated
     // against G, where the box of the blocks' box would be much larger.
     const double reach = 0.5 * std::sqrt(3.0) * block_size;
-    for (const auto& [key, block] : entry.field->layer.blocks()) {
+    for (const auto& [key, block] : entry.layer->blocks()) {
       const Eigen::Vector3d centre_M =
           (block->index.cast<double>() + Eigen::Vector3d::Constant(0.5)) * block_size;
       const Eigen::Vector3d centre_G = T_G_M * centre_M;
@@ -175,11 +187,7 @@ DistanceAnswer PlanningMap::sample(const std::vector<IndexEntry>& index,
   for (const IndexEntry& entry : index) {
     const Eigen::Vector3f p_M = (entry.T_M_G * p_G).cast<float>();
     if (entry.box_M.isEmpty() || !entry.box_M.contains(p_M)) continue;
-    DistanceSample s;
-    {
-      std::shared_lock<std::shared_mutex> lock(entry.field->mutex);
-      s = queryInterpolated(entry.field->layer, p_M);
-    }
+    const DistanceSample s = queryInterpolated(*entry.layer, p_M);
     if (s.state == VoxelState::kUnknown) continue;
     // Occupied wins over free; among equals the nearest obstacle wins.
     const bool better =
@@ -256,9 +264,8 @@ bool PlanningMap::localGrid(const Eigen::Vector3d& min_G, const Eigen::Vector3d&
 PlanningMapStats PlanningMap::stats() const {
   PlanningMapStats stats;
   for (const IndexEntry& entry : indexSnapshot()) {
-    std::shared_lock<std::shared_mutex> lock(entry.field->mutex);
     ++stats.fields;
-    stats.blocks += entry.field->layer.numBlocks();
+    if (entry.layer) stats.blocks += entry.layer->numBlocks();
   }
   stats.memory_bytes = memoryBytes();
   stats.updates = updates_.load(std::memory_order_relaxed);

@@ -14,7 +14,6 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <shared_mutex>
 #include <span>
 #include <string>
 #include <vector>
@@ -88,11 +87,15 @@ struct PlanningMapStats {
 /// - refreshActive(): the active subvolume, from a thread at the integrator's priority.
 /// - setPoses(): after a pose batch (the mapper's maintenance thread).
 /// - query(), queryBatch(), localGrid(), stats(), memoryBytes(): any thread, any time.
-/// A query holds each field's shared lock only while sampling it; refresh holds a field's
-/// exclusive lock while computing it, so a query waits at most for one field's update and
-/// never sees half of one. refresh(kAll) holds an active subvolume's layer lock (blocking
-/// integration) only while it reads the blocks that changed, not while the waves run.
-/// Lock order: subvolume layer lock -> field lock -> index mutex.
+/// Queries never wait for a field's computation: each field is computed in a working layer
+/// of its own and then published as an immutable snapshot (EsdfLayer::snapshot(), blocks
+/// shared copy-on-write), and a query samples the snapshots it took from the index, without
+/// any lock; it sees every field whole, as of its last publication. Two threads that
+/// refresh the same field take turns (its update mutex); a periodic refresh of finished
+/// subvolumes skips a field the other thread is computing. refresh(kAll) and
+/// refreshActive() hold an active subvolume's layer lock (blocking integration) only while
+/// they read the blocks that changed, not while the waves run.
+/// Lock order: field update mutex -> subvolume layer lock -> field bytes mutex -> index mutex.
 class PlanningMap {
  public:
   /// Throws std::invalid_argument with EsdfConfig::validate()'s message when invalid.
@@ -104,8 +107,10 @@ class PlanningMap {
 
   /// Which subvolumes refresh() computes.
   enum class Scope {
-    kFinished,  ///< finished ones only: never touches a layer integration is writing
-    kAll,       ///< the active one too, reading its changed blocks under Submap::lockLayer()
+    kFinished,  ///< finished ones only, never touching a layer integration is writing;
+                ///< a field another thread is computing is left for the next refresh
+    kAll,       ///< the active one too, reading its changed blocks under Submap::lockLayer();
+                ///< waits for a field another thread is computing
   };
   /// Makes the fields follow `collection`: fields of subvolumes no longer in it are dropped;
   /// a subvolume in `scope` without a field, or whose Submap::revision() moved since its
@@ -150,8 +155,8 @@ class PlanningMap {
                  LocalGrid* grid, std::string* error) const;
 
   /// An axis-aligned box of G that holds every field's blocks at the subvolumes' current
-  /// poses (each block's bounding sphere), or an empty box when no field has a block. Takes
-  /// each field's shared lock in turn; O(blocks).
+  /// poses (each block's bounding sphere), or an empty box when no field has a block.
+  /// O(blocks).
   Eigen::AlignedBox3d boundsG() const;
 
   PlanningMapStats stats() const;
@@ -163,8 +168,9 @@ class PlanningMap {
   /// `layer`'s geometry (one field block per TSDF block), or memoryBytes() when more: what
   /// a memory cap counts, so that the fields' lag behind integration cannot overrun it.
   size_t projectedBytes(size_t tsdf_blocks, const LayerConfig& layer) const {
+    // The working block and its snapshot's record; the voxels are shared.
     const size_t per_block =
-        sizeof(EsdfBlock) + static_cast<size_t>(layer.voxels_per_side) *
+        2 * sizeof(EsdfBlock) + static_cast<size_t>(layer.voxels_per_side) *
                                 static_cast<size_t>(layer.voxels_per_side) *
                                 static_cast<size_t>(layer.voxels_per_side) * sizeof(EsdfVoxel);
     return std::max(memoryBytes(), tsdf_blocks * per_block);
@@ -172,32 +178,38 @@ class PlanningMap {
 
  private:
   struct Field {
-    Field(const LayerConfig& geometry, float max_distance_m) : layer(geometry, max_distance_m) {}
-    mutable std::shared_mutex mutex;  // guards layer and revision
-    EsdfLayer layer;
-    uint64_t revision = 0;          // Submap::revision() when last computed
-    size_t counted_bytes = 0;       // this field's share of memory_bytes_
-    bool dropped = false;           // its subvolume left the collection
+    Field(const LayerConfig& geometry, float max_distance_m) : work(geometry, max_distance_m) {}
+    std::mutex update_mutex;  // guards work and revision
+    EsdfLayer work;           // the integrators' layer; queries read its snapshots
+    uint64_t revision = 0;    // Submap::revision() when last computed
+    std::mutex bytes_mutex;   // guards counted_bytes and dropped
+    size_t counted_bytes = 0;  // this field's share of memory_bytes_
+    bool dropped = false;      // its subvolume left the collection
   };
-  /// One field as the queries see it: its pose and the bounding box of its blocks in M.
+  /// One field as the queries see it: its latest snapshot, its pose and the bounding box of
+  /// its blocks in M.
   struct IndexEntry {
     SubmapId id = 0;
     std::shared_ptr<Field> field;
+    std::shared_ptr<const EsdfLayer> layer;  // null until first computed
     Transformationd T_M_G;
     Eigen::Matrix3d R_G_M = Eigen::Matrix3d::Identity();
     Eigen::AlignedBox3f box_M;  // empty until the field has a block
   };
 
   std::shared_ptr<Field> fieldFor(const Submap& submap);
-  // Computes one field with `integrator`: stages it from `layer`, releases `layer_lock`
-  // (when it holds one), finishes it. Takes the field lock, then the index mutex.
+  // Computes one field with `integrator` (the caller holds its update mutex): stages it
+  // from `layer`, releases `layer_lock` (when it holds one), finishes it, publishes a
+  // snapshot into the index.
   void updateField(const Submap& submap, const TsdfLayer& layer,
                    std::unique_lock<std::mutex>* layer_lock, EsdfIntegrator* integrator,
                    Field* field);
   // One subvolume's field, when its layer changed since: an active subvolume's read under
   // its layer lock; a finished one's only by the owner of finished layers (`owns_finished`;
-  // otherwise left to it). True when the field was updated.
-  bool refreshOne(const Submap& submap, EsdfIntegrator* integrator, bool owns_finished);
+  // otherwise left to it). Without `wait`, a field another thread is computing is skipped.
+  // True when the field was updated.
+  bool refreshOne(const Submap& submap, EsdfIntegrator* integrator, bool owns_finished,
+                  bool wait);
   // Adds the time since `start` to refreshMs().
   void recordRefresh(std::chrono::steady_clock::time_point start);
   std::vector<IndexEntry> indexSnapshot() const;

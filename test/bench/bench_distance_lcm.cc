@@ -2,7 +2,9 @@
 // requests of --points random points in --box to a running cblox-mapper over LCM, one at a
 // time at --rate Hz (or back to back with --rate 0), and measures each round trip from
 // publish to the reply's arrival. Prints the median, p90, p99 and max round trip, the replies'
-// statuses and the points' states, and writes them as JSON with --json.
+// statuses and the points' states, and the mapper's own answer times from its last heartbeat
+// (distance_answer_us_median / _p99: a request's arrival at the mapper to its reply's
+// publication), and writes them as JSON with --json.
 //
 //   cblox-bench-distance-lcm --lcm-url URL --requests 200 --points 4096
 //       --box=0,0,0,5,6.5,2.7 --rate 10
@@ -25,6 +27,7 @@
 
 #include <cblox/distance_reply_t.hpp>
 #include <cblox/distance_request_t.hpp>
+#include <cblox/heartbeat_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
@@ -47,6 +50,20 @@ struct Waiter {
     if (msg.request_id != expected) return;
     arrived = Clock::now();
     reply = std::move(msg);
+  }
+};
+
+/// The mapper's answer-time counters from its latest heartbeat (-1 until one arrives).
+struct MapperAnswerTimes {
+  int64_t median_us = -1, p99_us = -1;
+  void onHeartbeat(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    cblox::heartbeat_t msg;
+    if (!cblox::decodeChecked(rbuf->data, rbuf->data_size, &msg).ok()) return;
+    if (msg.process != "cblox-mapper") return;
+    for (size_t i = 0; i < msg.counter_names.size() && i < msg.counter_values.size(); ++i) {
+      if (msg.counter_names[i] == "distance_answer_us_median") median_us = msg.counter_values[i];
+      if (msg.counter_names[i] == "distance_answer_us_p99") p99_us = msg.counter_values[i];
+    }
   }
 };
 
@@ -87,6 +104,8 @@ int main(int argc, char** argv) {
   }
   Waiter waiter;
   lcm.subscribe("CBLOX_DISTANCE_REPLY", &Waiter::onReply, &waiter);
+  MapperAnswerTimes mapper_times;
+  lcm.subscribe("CBLOX_HEARTBEAT", &MapperAnswerTimes::onHeartbeat, &mapper_times);
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> ux((*box)[0], (*box)[3]), uy((*box)[1], (*box)[4]),
       uz((*box)[2], (*box)[5]);
@@ -135,6 +154,12 @@ int main(int argc, char** argv) {
       static_cast<unsigned long long>(statuses[3]), static_cast<unsigned long long>(statuses[4]),
       static_cast<unsigned long long>(states[0]), static_cast<unsigned long long>(states[1]),
       static_cast<unsigned long long>(states[2]), static_cast<unsigned long long>(states[3]));
+  if (mapper_times.median_us >= 0) {
+    std::printf("mapper's answer time (arrival to reply published, its last heartbeat): "
+                "median %.2f ms, p99 %.2f ms\n",
+                static_cast<double>(mapper_times.median_us) / 1000.0,
+                static_cast<double>(mapper_times.p99_us) / 1000.0);
+  }
   if (!json_path.empty()) {
     nlohmann::json j;
     j["requests"] = requests;
@@ -142,6 +167,10 @@ int main(int argc, char** argv) {
     j["round_trip_ms"] = {{"median", median}, {"p90", p90}, {"p99", p99}, {"max", max}};
     j["statuses"] = statuses;
     j["states"] = states;
+    if (mapper_times.median_us >= 0) {
+      j["mapper_answer_ms"] = {{"median", static_cast<double>(mapper_times.median_us) / 1000.0},
+                               {"p99", static_cast<double>(mapper_times.p99_us) / 1000.0}};
+    }
     std::ofstream(json_path) << j.dump(2) << "\n";
   }
   return 0;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <vector>
 
@@ -127,7 +128,7 @@ TEST(EsdfIntegratorTest, SurfaceVoxelsOnBothSidesAnswerTheirTsdfDistance) {
       ASSERT_TRUE(voxelDistance(esdf, global, &state, &distance));
       const float truth = ball(esdf.globalVoxelCenter(global));
       if (std::abs(truth) < kVoxel) {
-        EXPECT_TRUE(block->voxels[static_cast<size_t>(i)].isSite());
+        EXPECT_TRUE(block->voxel(i).isSite());
         EXPECT_EQ(state, truth <= 0.0f ? VoxelState::kOccupied : VoxelState::kFree);
         EXPECT_NEAR(distance, truth, 1e-6f);
         ++sites;
@@ -190,6 +191,48 @@ TEST(EsdfIntegratorTest, AMovedObstacleRaisesAndLowersLikeARebuild) {
   EXPECT_LT(errors.max(), 0.7f);
 }
 
+TEST(EsdfIntegratorTest, ASnapshotKeepsItsFieldWhileTheLayerIsUpdated) {
+  const Sdf wall = esdf_test::planeX(-0.6f);
+  const Sdf before = esdf_test::unite(wall, esdf_test::ball({0.2f, 0.1f, 0.0f}, 0.25f));
+  const Sdf after = esdf_test::unite(wall, esdf_test::ball({0.55f, -0.1f, 0.05f}, 0.2f));
+  const Eigen::Vector3f lo(-0.8f, -0.8f, -0.8f), hi(1.2f, 0.8f, 0.8f);
+  TsdfLayer tsdf(geometry());
+  esdf_test::writeTsdf(&tsdf, before, lo, hi, kTruncation);
+  EsdfLayer esdf(geometry(), 1.0f);
+  EsdfIntegrator integrator(fieldConfig());
+  integrator.update(tsdf, &esdf);
+  const std::shared_ptr<const EsdfLayer> snapshot = esdf.snapshot();
+  EsdfLayer old_field(geometry(), 1.0f);  // an independent copy of the field before the move
+  EsdfIntegrator(fieldConfig()).rebuild(tsdf, &old_field);
+  expectSameField(*snapshot, esdf, 0.0f);
+  // Records and table only: the voxels are the layer's.
+  EXPECT_EQ(snapshot->memoryBytes(),
+            esdf.memoryBytes() - esdf.numBlocks() * 512 * sizeof(EsdfVoxel) +
+                (snapshot->blocks().capacity() - esdf.blocks().capacity()) *
+                    (sizeof(EsdfLayer::BlockMap::value_type) + 1));
+
+  // The obstacle moves and a new slab of blocks arrives: the layer follows, the snapshot
+  // still answers the old field everywhere, through its own neighbour links.
+  esdf_test::writeTsdf(&tsdf, after, lo, hi, kTruncation);
+  esdf_test::writeTsdf(&tsdf, after, {1.7f, -0.8f, -0.8f}, {2.1f, 0.8f, 0.8f}, kTruncation);
+  const EsdfUpdateStats stats = integrator.update(tsdf, &esdf);
+  EXPECT_FALSE(stats.rebuilt);
+  EXPECT_GT(stats.esdf_blocks_added, 0u);
+  expectSameField(*snapshot, old_field, 0.1f);
+  EXPECT_LT(compare(*snapshot, before).max(), 0.7f);
+  EXPECT_LT(compare(esdf, after).max(), 0.7f);
+  EXPECT_EQ(snapshot->numBlocks(), old_field.numBlocks());
+  for (const auto& [key, block] : snapshot->blocks()) {
+    for (int slot = 0; slot < 27; ++slot) {
+      const EsdfBlock* n = block->neighbours[static_cast<size_t>(slot)];
+      if (n != nullptr) EXPECT_EQ(n, snapshot->getBlock(n->index)) << "a link out of the snapshot";
+    }
+  }
+  // A second snapshot sees the update; the first is unchanged by it.
+  expectSameField(*esdf.snapshot(), esdf, 0.0f);
+  expectSameField(*snapshot, old_field, 0.1f);
+}
+
 TEST(EsdfIntegratorTest, AVanishedObstacleLeavesNoDistanceBehind) {
   const Eigen::Vector3f lo(-0.6f, -0.6f, -0.6f), hi(0.6f, 0.6f, 0.6f);
   TsdfLayer tsdf(geometry());
@@ -202,7 +245,7 @@ TEST(EsdfIntegratorTest, AVanishedObstacleLeavesNoDistanceBehind) {
   // Every voxel is now observed free with no obstacle anywhere: the cap, exactly.
   for (const auto& [key, block] : esdf.blocks()) {
     for (int i = 0; i < esdf.voxelsPerBlock(); ++i) {
-      const EsdfVoxel& v = block->voxels[static_cast<size_t>(i)];
+      const EsdfVoxel& v = block->voxel(i);
       ASSERT_EQ(v.state, VoxelState::kFree);
       ASSERT_FALSE(v.hasSite());
       ASSERT_EQ(v.flags, 0);

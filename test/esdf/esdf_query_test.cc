@@ -95,7 +95,7 @@ TEST(EsdfLayerTest, MemoryIsCountedPerBlock) {
   EXPECT_GE(layer.memoryBytes(), empty + 2 * layer.bytesPerBlock());
   EXPECT_EQ(layer.bytesPerBlock(), sizeof(EsdfBlock) + 512 * sizeof(EsdfVoxel));
   // A new block is unknown at the cap, without a site.
-  const EsdfVoxel& v = layer.getBlock(BlockIndex(1, 2, 3))->voxels[7];
+  const EsdfVoxel& v = layer.getBlock(BlockIndex(1, 2, 3))->voxel(7);
   EXPECT_EQ(v.state, VoxelState::kUnknown);
   EXPECT_EQ(v.own_distance, 2.0f);
   EXPECT_FALSE(v.hasSite());

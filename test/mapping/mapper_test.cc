@@ -39,6 +39,10 @@ namespace {
 using std::chrono::milliseconds;
 
 constexpr float kVoxel = 0.04f;
+// How long a test waits for the mapper's threads to fall idle before it calls it a hang:
+// with planning on, idle includes the worker's distance fields, which take seconds each
+// under ThreadSanitizer on a loaded machine.
+constexpr milliseconds kIdleTimeout(60000);
 
 MapperConfig testConfig(const std::filesystem::path& output_dir) {
   MapperConfig config;
@@ -78,7 +82,7 @@ void feed(Mapper* mapper, size_t begin, size_t end) {
   for (size_t i = begin; i < end; ++i) {
     ASSERT_TRUE(mapper->onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));
     ASSERT_TRUE(mapper->onFramePose(groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C)));
-    ASSERT_TRUE(mapper->waitUntilIdle(milliseconds(10000)));
+    ASSERT_TRUE(mapper->waitUntilIdle(kIdleTimeout));
   }
 }
 
@@ -87,7 +91,7 @@ void keyframeAt(Mapper* mapper, int64_t* utime, int64_t key, double x, double y 
   *utime += 100000;
   const Transformationd T_G_K(Eigen::Quaterniond::Identity(), Eigen::Vector3d(x, y, 0.0));
   ASSERT_TRUE(mapper->onKeyframe(key, *utime, T_G_K));
-  ASSERT_TRUE(mapper->waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper->waitUntilIdle(kIdleTimeout));
 }
 
 MapperReply runCommand(Mapper* mapper, const MapperCommand& command);
@@ -217,7 +221,7 @@ TEST(MapperTest, ThePlanningMapAnswersTheRoomsDistancesAndFollowsPoseBatches) {
     batch.emplace_back(pose.anchor_keyframe, T * pose.T_G_M);
   }
   mapper.onKeyframePoses(batch);
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   EXPECT_EQ(planning->stats().updates, updates);
   size_t compared = 0;
   for (size_t i = 0; i < points.size(); i += 7) {
@@ -417,7 +421,7 @@ TEST(MapperTest, KeyframePoseBatchMovesSubvolumesWithoutTouchingVoxels) {
       {{6, moved},
        {999, moved},
        {0, Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d(nan, 0.0, 0.0))}});
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   EXPECT_TRUE(mapper.collection().getSubmap(1)->T_G_M().isApprox(moved, 1e-12));
   EXPECT_TRUE(mapper.collection().getSubmap(0)->T_G_M().isApprox(roomFrames()[0].T_G_C, 1e-12));
   const MapperStatus s = mapper.status();
@@ -465,7 +469,7 @@ TEST(MapperTest, NewestFrameWinsAndTheOthersAreCountedAsDropped) {
   Mapper& mapper = *started;
   // The newest frame's pose arrives: it is integrated, the three older ones are superseded.
   ASSERT_TRUE(mapper.onFramePose(groundTruthPose(utimeOf(roomFrames()[5]), roomFrames()[5].T_G_C)));
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   const MapperStatus s = mapper.status();
   EXPECT_EQ(s.frames_received, 6u);
   EXPECT_EQ(s.frames_integrated, 1u);
@@ -486,7 +490,7 @@ TEST(MapperTest, InOrderEveryWaitingFrameWithAPoseIsIntegrated) {
     ASSERT_TRUE(
         mapper.onFramePose(groundTruthPose(utimeOf(roomFrames()[i]), roomFrames()[i].T_G_C)));
   }
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   const MapperStatus s = mapper.status();
   EXPECT_EQ(s.frames_received, 6u);
   EXPECT_EQ(s.frames_integrated, 4u);
@@ -525,12 +529,12 @@ TEST(MapperTest, BadInputIsRejectedCountedAndLoggedOncePerKind) {
       Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d::Constant(std::nan("")));
   EXPECT_FALSE(mapper.onFramePose(nan_pose));
   EXPECT_FALSE(mapper.onKeyframe(7, 0, nan_pose.T_G_C));
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   // The valid frame went in despite everything around it (a synthesised keyframe, id 2).
   EXPECT_EQ(mapper.status().frames_integrated, 1u);
   mapper.onKeyframe(2, 0, f.T_G_C);  // the synthesised keyframe's id again
   mapper.reportProblem(InputProblem::kDepthUndecodable, "truncated message");
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
 
   const MapperStatus s = mapper.status();
   EXPECT_EQ(s.problem(InputProblem::kDepthInvalid), 4u);
@@ -566,13 +570,13 @@ TEST(MapperTest, TrackerModeFollowsKeyframesAndStartsANewSubvolumeAfterAJump) {
     pose.tracking_ok = ok;
     pose.epoch = epoch;
     ASSERT_TRUE(mapper.onFramePose(pose));
-    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+    ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   };
   // Before the first keyframe there is no subvolume: the frame waits for an anchor.
   frameWithPose(0);
   EXPECT_EQ(mapper.status().problem(InputProblem::kWaitingForAnchor), 1u);
   ASSERT_TRUE(mapper.onKeyframe(100, utimeOf(frames[1]), frames[1].T_G_C));
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   frameWithPose(1);
   frameWithPose(2);
   ASSERT_TRUE(mapper.onKeyframe(101, utimeOf(frames[2]), frames[2].T_G_C));  // joins submap 0
@@ -581,7 +585,7 @@ TEST(MapperTest, TrackerModeFollowsKeyframesAndStartsANewSubvolumeAfterAJump) {
   frameWithPose(5);
   EXPECT_EQ(mapper.collection().size(), 1u);
   ASSERT_TRUE(mapper.onKeyframe(102, utimeOf(frames[5]), frames[5].T_G_C));
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   frameWithPose(6);
   frameWithPose(7);
 
@@ -711,7 +715,7 @@ void integrateTrackedFrame(Mapper& mapper, size_t i, int64_t reference, int32_t 
   pose.reference_keyframe = reference;
   pose.jump = jump;
   ASSERT_TRUE(mapper.onFramePose(pose));
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
 }
 
 // subvolumes.revisit_after_frames: frames tracked against a keyframe of an older subvolume
@@ -737,7 +741,7 @@ TEST(MapperTest, TrackerModeAnchorsFramesTrackedInAnOlderSubvolumeToIt) {
   };
   auto keyframe = [&](KeyframeId id, size_t i) {
     ASSERT_TRUE(mapper.onKeyframe(id, utimeOf(frames[i]), frames[i].T_G_C));
-    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+    ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   };
   keyframe(100, 0);  // subvolume 0
   frameWithReference(0, 100);
@@ -767,7 +771,7 @@ TEST(MapperTest, TrackerModeAnchorsFramesTrackedInAnOlderSubvolumeToIt) {
       Transformationd(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.5, 0.0, 0.0)) *
       frames[0].T_G_C;
   mapper.onKeyframePoses({{100, moved}});
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   EXPECT_TRUE(mapper.collection().getSubmap(0)->T_G_M().isApprox(moved, 1e-12));
   EXPECT_TRUE(revisit->T_G_M().isApprox(moved, 1e-12));
 
@@ -820,7 +824,7 @@ TEST(MapperTest, TrackerModeJumpIntoAnOlderSubvolumeIsIntegratedAtOnce) {
     Mapper& mapper = *run->mapper;
     EXPECT_TRUE(mapper.onKeyframe(100, utimeOf(frames[0]), frames[0].T_G_C));
     EXPECT_TRUE(mapper.onKeyframe(101, utimeOf(frames[1]), frames[1].T_G_C));
-    EXPECT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+    EXPECT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
     integrateTrackedFrame(mapper, 1, 101);
     // A jump tracked against the active subvolume's own keyframe: the frame waits.
     integrateTrackedFrame(mapper, 2, 101, 0, true);
@@ -870,7 +874,7 @@ TEST(MapperTest, RevisitAnchoringIgnoresUnknownAndOtherEpochReferences) {
   ASSERT_TRUE(epoch1.has_value());
   ASSERT_TRUE(mapper.onKeyframe(0, utimeOf(frames[0]), frames[0].T_G_C));        // subvolume 0
   ASSERT_TRUE(mapper.onKeyframe(*epoch1, utimeOf(frames[1]), frames[1].T_G_C));  // 1: new map
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   for (size_t i = 1; i < 5; ++i) {
     integrateTrackedFrame(mapper, i, i % 2 == 0 ? 0 : 12345, 1);  // epoch 0's keyframe, or unknown
   }
@@ -904,12 +908,12 @@ TEST(MapperTest, TrackerModeFusesSubvolumesWhoseCovarianceIsSmallEnough) {
   auto frameWithPose = [&](size_t i) {
     ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));
     ASSERT_TRUE(mapper.onFramePose(groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C)));
-    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+    ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   };
   auto keyframe = [&](KeyframeId id, size_t frame, uint64_t first, uint64_t last) {
     ASSERT_TRUE(mapper.onKeyframe(id, utimeOf(frames[frame]), frames[frame].T_G_C,
                                   landmarkRange(first, last)));
-    ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+    ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   };
   // Subvolume 0: keyframes 100, 101 see landmarks [0, 100); subvolume 1: 102, 103 see
   // [50, 150) (50 shared, half of each set); subvolume 2: 104 sees [1000, 1100).
@@ -951,7 +955,7 @@ TEST(MapperTest, TrackerModeFusesSubvolumesWhoseCovarianceIsSmallEnough) {
   EXPECT_EQ(s.fusion.rejected_by_q, 0u);
   // A correction naming the absorbed subvolume's anchor: known, moves nothing.
   mapper.onKeyframePoses({{102, frames[3].T_G_C}});
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   EXPECT_EQ(mapper.status().problem(InputProblem::kKeyframePoseUnknown), 0u);
 
   // Keyframe 105 joins subvolume 2 and sees [0, 100) too: 2 shares 100 landmarks with 0
@@ -964,7 +968,7 @@ TEST(MapperTest, TrackerModeFusesSubvolumesWhoseCovarianceIsSmallEnough) {
   expectOnlyPair(second, 0, 2, 100, 104, 100);  // asked through the anchors
   ASSERT_TRUE(second.has_value());
   mapper.onCovarianceReply(second->request_id, {FusionCovarianceAnswer{true, "", 5e3}});
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   s = mapper.status();
   EXPECT_EQ(s.fusion.rejected_by_q, 1u);
   EXPECT_EQ(s.fusion.fused, 1u);
@@ -992,7 +996,7 @@ TEST(MapperTest, MaintenanceTickAsksForPairsFreedAfterTheLastInput) {
     for (size_t i = first_frame; i < first_frame + 2; ++i) {
       ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));
       ASSERT_TRUE(mapper.onFramePose(groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C)));
-      ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+      ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
     }
   };
   subvolume(100, 0, 0, 100);
@@ -1014,7 +1018,7 @@ TEST(MapperTest, MaintenanceTickAsksForPairsFreedAfterTheLastInput) {
   expectOnlyPair(requests.waitFor(1), 0, 2, 100, 102);
   // A second tick with the request still in flight asks nothing more.
   mapper.maintenanceTick();
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   std::lock_guard<std::mutex> lock(requests.mutex);
   EXPECT_EQ(requests.requests.size(), 2u);
 }
@@ -1097,7 +1101,7 @@ TEST(MapperTest, InterpolatesPosesBetweenFrameTimes) {
   ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[1], 1)));
   ASSERT_TRUE(mapper.onFramePose(groundTruthPose(utimeOf(frames[0]), frames[0].T_G_C)));
   ASSERT_TRUE(mapper.onFramePose(groundTruthPose(utimeOf(frames[2]), frames[2].T_G_C)));
-  ASSERT_TRUE(mapper.waitUntilIdle(milliseconds(10000)));
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
   EXPECT_EQ(mapper.status().frames_integrated, 1u);
   // The synthesised keyframe's pose is the interpolated one.
   const Transformationd expected =
@@ -1437,7 +1441,7 @@ TEST(MapperTest, ResumeRestoresTheCovisibilityGraphAndPairBackoffs) {
     ASSERT_TRUE(request.has_value());
     ASSERT_EQ(request->pairs.size(), 1u);
     first.onCovarianceReply(request->request_id, {FusionCovarianceAnswer{true, "", 1.0}});
-    ASSERT_TRUE(first.waitUntilIdle(milliseconds(10000)));
+    ASSERT_TRUE(first.waitUntilIdle(kIdleTimeout));
     ASSERT_EQ(first.status().fusion.rejected_by_q, 1u);
     edges = first.covisibilityEdges();
     ASSERT_EQ(edges.size(), 3u);  // (0, 1) 50, (0, 2) 10, (1, 2) 60

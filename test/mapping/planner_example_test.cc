@@ -34,7 +34,7 @@ TEST(PlannerExampleTest, TheReadmeExampleRunsOnTheSimulatedRoom) {
   for (size_t i = 0; i < frames.size(); ++i) {
     ASSERT_TRUE(mapper.onDepthFrame(depthFrame(frames[i], static_cast<int64_t>(i))));
     ASSERT_TRUE(mapper.onFramePose(groundTruthPose(utimeOf(frames[i]), frames[i].T_G_C)));
-    ASSERT_TRUE(mapper.waitUntilIdle(std::chrono::milliseconds(10000)));
+    ASSERT_TRUE(mapper.waitUntilIdle(std::chrono::seconds(60)));  // a hang guard
   }
   ASSERT_TRUE(mapper.syncPlanningMap(std::chrono::milliseconds(60000)));
   testing::internal::CaptureStdout();

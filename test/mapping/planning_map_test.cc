@@ -1,6 +1,8 @@
 #include "core/mapping/planning_map.h"
 
+#include <atomic>
 #include <cmath>
+#include <thread>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -181,6 +183,47 @@ TEST_F(PlanningMapTest, TheActiveSubvolumesFieldFollowsItsLayerAlone) {
   esdf_test::writeTsdf(ball_->mutableLayer(), esdf_test::empty(), lo_, hi_, kTruncation);
   planning_.refreshActive(collection_);
   EXPECT_EQ(planning_.stats().updates, updates + 1);
+}
+
+TEST_F(PlanningMapTest, QueriesBesideRefreshesSeeWholeFields) {
+  // The active ball alternates between radius 0.2 and 0.3 while another thread queries a
+  // point near it: every answer is one of the two fields', never a field half way through
+  // its waves (a raise wave clears distances before the lower wave refills them).
+  const Eigen::Vector3d p(1.5, 3.02, 0.03);
+  const auto grow = [this](float radius) {
+    Submap::WriteLock lock = ball_->lockForIntegration();
+    ASSERT_TRUE(lock);
+    esdf_test::writeTsdf(&lock.layer(), esdf_test::ball(Eigen::Vector3f(1.0f, 0.0f, 0.0f), radius),
+                         lo_, hi_, kTruncation);
+  };
+  planning_.refreshActive(collection_);
+  const double small = planning_.query(p).distance;
+  grow(0.3f);
+  planning_.refreshActive(collection_);
+  const double large = planning_.query(p).distance;
+  ASSERT_GT(small - large, 1.5 * kVoxel);
+  std::atomic<bool> done{false};
+  std::atomic<int> queries{0}, torn{0};
+  std::thread reader([&] {
+    while (!done.load()) {
+      const DistanceAnswer a = planning_.query(p);
+      if (a.state != VoxelState::kFree ||
+          (std::abs(a.distance - small) > 0.2 * kVoxel &&
+           std::abs(a.distance - large) > 0.2 * kVoxel)) {
+        torn.fetch_add(1);
+      }
+      queries.fetch_add(1);
+    }
+  });
+  for (int i = 0; i < 20; ++i) {
+    grow(i % 2 == 0 ? 0.2f : 0.3f);
+    planning_.refreshActive(collection_);
+  }
+  while (queries.load() < 100) std::this_thread::yield();
+  done = true;
+  reader.join();
+  EXPECT_EQ(torn.load(), 0) << "of " << queries.load() << " answers";
+  EXPECT_NEAR(planning_.query(p).distance, large, 0.2 * kVoxel);
 }
 
 TEST_F(PlanningMapTest, ALocalGridHoldsTheAnswersAtItsCellCentres) {

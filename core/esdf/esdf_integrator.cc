@@ -99,6 +99,17 @@ const EsdfVoxel* EsdfIntegrator::siteAt(const EsdfLayer& esdf, const EsdfBlock& 
   return v != nullptr && v->isSite() ? v : nullptr;
 }
 
+bool EsdfIntegrator::stale(const EsdfLayer& esdf, const VoxelRef& ref,
+                           const EsdfVoxel& voxel) const {
+  const Eigen::Vector3i offset = siteOf(voxel);
+  const EsdfVoxel* site = siteAt(esdf, *ref.block, ref.local, offset);
+  if (site == nullptr) return true;
+  const auto sq = static_cast<size_t>(offset.squaredNorm());
+  if (sq >= centre_distance_.size()) return false;
+  // The wave's own formula, so that a voxel computed from the site's current value is equal.
+  return voxel.own_distance < std::max(0.0f, centre_distance_[sq] + siteDistance(site->own_distance));
+}
+
 void EsdfIntegrator::readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStats* stats) {
   const Block& tsdf = *block->tsdf;
   EsdfVoxel* const voxels = block->mutableVoxels();
@@ -115,12 +126,20 @@ void EsdfIntegrator::readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStat
         setSite(&v, Eigen::Vector3i::Zero());
         queue_.push(0, {block, linear});
         ++stats->sites_added;
-      } else if (std::abs(siteDistance(t.distance) - siteDistance(v.own_distance)) * kKeySteps >
-                 voxel_size_) {
-        // Moved by more than a key step: its wave may now win voxels that another site has.
+        v.own_distance = t.distance;
+      } else if (std::abs(t.distance - v.own_distance) * kKeySteps > voxel_size_ ||
+                 (t.distance <= 0.0f) != (v.own_distance <= 0.0f)) {
+        // Moved by more than a key step: its wave may now win voxels that another site has;
+        // when its distance grew, the voxels that took it were computed through a nearer
+        // surface than there is now, and are raised first. A smaller move that keeps its
+        // side of the surface is not taken: the site keeps the value its voxels were
+        // computed with.
+        if (siteDistance(t.distance) > siteDistance(v.own_distance)) {
+          v.flags = static_cast<uint8_t>(v.flags | EsdfVoxel::kSiteMoved);
+        }
+        v.own_distance = t.distance;
         queue_.push(0, {block, linear});
       }
-      v.own_distance = t.distance;
       continue;
     }
     if (v.isSite()) {
@@ -172,8 +191,9 @@ void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
     const GridIndex local(entry.linear & mask, (entry.linear >> voxels_per_side_log2_) & mask,
                           entry.linear >> (2 * voxels_per_side_log2_));
     if ((v.flags & EsdfVoxel::kRaise) != 0) {
-      // Raise: neighbours whose site is no site any more join the wave; neighbours with a
-      // valid site become sources of the lower wave that refills the cleared region.
+      // Raise: neighbours whose site is no site any more, or whose distance is below what
+      // their site gives now (it moved away), join the wave; neighbours with a valid site
+      // become sources of the lower wave that refills the cleared region.
       for (const GridIndex& d : neighbours_) {
         const VoxelRef n = neighbour(esdf, entry.block, local, d);
         if (n.block == nullptr) continue;
@@ -184,9 +204,7 @@ void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
           continue;
         }
         const float n_distance = nv.own_distance;
-        if (siteAt(*esdf, *n.block, n.local, siteOf(nv)) == nullptr) {
-          n.mutableVoxel().flags = EsdfVoxel::kRaise;
-        }
+        if (stale(*esdf, n, nv)) n.mutableVoxel().flags = EsdfVoxel::kRaise;
         queue_.push(keyOf(n_distance), {n.block, n.linear});
       }
       EsdfVoxel& w = entry.block->mutableVoxels()[entry.linear];
@@ -194,11 +212,31 @@ void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
       w.own_distance = config_.max_distance_m;
       continue;
     }
-    if (!v.hasSite()) continue;
-    const Eigen::Vector3i site = siteOf(v);
-    float site_distance = siteDistance(v.own_distance);
-    if (!v.isSite()) {
-      if (keyOf(v.own_distance) != key) continue;  // improved since it was queued
+    if ((v.flags & EsdfVoxel::kSiteMoved) != 0) {
+      // A site whose distance grew: the neighbours that took it start a raise wave (which
+      // passes on to every voxel that took it); then it spreads as any site.
+      for (const GridIndex& d : neighbours_) {
+        const VoxelRef n = neighbour(esdf, entry.block, local, d);
+        if (n.block == nullptr) continue;
+        const EsdfVoxel& nv = n.voxel();
+        if (!nv.hasSite() || nv.isSite() || siteOf(nv) + d != Eigen::Vector3i::Zero() ||
+            !stale(*esdf, n, nv)) {
+          continue;
+        }
+        const float n_distance = nv.own_distance;
+        n.mutableVoxel().flags = EsdfVoxel::kRaise;
+        queue_.push(keyOf(n_distance), {n.block, n.linear});
+      }
+      EsdfVoxel& w = entry.block->mutableVoxels()[entry.linear];
+      w.flags = static_cast<uint8_t>(w.flags & ~EsdfVoxel::kSiteMoved);
+    }
+    // Read again: a write above may have moved the block's voxels.
+    const EsdfVoxel& u = entry.block->voxel(entry.linear);
+    if (!u.hasSite()) continue;
+    const Eigen::Vector3i site = siteOf(u);
+    float site_distance = siteDistance(u.own_distance);
+    if (!u.isSite()) {
+      if (keyOf(u.own_distance) != key) continue;  // improved since it was queued
       const EsdfVoxel* s = siteAt(*esdf, *entry.block, local, site);
       if (s == nullptr) continue;  // its site vanished; a raise wave is on its way
       site_distance = siteDistance(s->own_distance);

@@ -101,6 +101,9 @@ class EsdfIntegrator {
   void readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStats* stats);
   /// Pushes the sited voxels of `block`'s neighbours that touch it (it is new).
   void seedFromNeighbours(EsdfLayer* esdf, EsdfBlock* block);
+  /// Whether the voxel `ref` (with a site, not a site itself) holds less than its site gives
+  /// now: the site vanished, or its distance grew since the voxel took it.
+  bool stale(const EsdfLayer& esdf, const VoxelRef& ref, const EsdfVoxel& voxel) const;
   /// The site at `local` + `offset` (from `block`), or null when that voxel is no site.
   const EsdfVoxel* siteAt(const EsdfLayer& esdf, const EsdfBlock& block, const GridIndex& local,
                           const Eigen::Vector3i& offset) const;

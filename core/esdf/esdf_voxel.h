@@ -21,7 +21,9 @@ const char* voxelStateName(VoxelState state);
 /// value (esdf_query.h), so that a site whose value moves needs no wave to refresh the
 /// voxels that depend on it.
 ///   own_distance: sites (kSite: observed with TSDF distance below one voxel: every occupied
-///     voxel and the free side's voxels next to the surface): their TSDF distance. Other voxels with a
+///     voxel and the free side's voxels next to the surface): their TSDF distance as of its
+///     last change by more than 1/8 voxel or across zero (the value the voxels that took the
+///     site were computed with; within 1/8 voxel of the TSDF's, same sign). Other voxels with a
 ///     site: the distance through it when it was assigned (the wavefront's bookkeeping).
 ///     Voxels without a site: the layer's max distance.
 ///   site: offset in voxels from this voxel to the surface voxel nearest to it as far as the
@@ -32,6 +34,9 @@ struct EsdfVoxel {
   static constexpr uint8_t kHasSite = 1;  ///< site points at a surface voxel
   static constexpr uint8_t kRaise = 2;    ///< on the raise wave (its site vanished)
   static constexpr uint8_t kSite = 4;     ///< this voxel is a surface voxel (a site)
+  /// A site whose distance grew since the voxels that took it were computed: they are
+  /// raised and refilled (they may now have a nearer site).
+  static constexpr uint8_t kSiteMoved = 8;
 
   float own_distance = 0.0f;
   int16_t site[3] = {0, 0, 0};

@@ -191,6 +191,27 @@ TEST(EsdfIntegratorTest, AMovedObstacleRaisesAndLowersLikeARebuild) {
   EXPECT_LT(errors.max(), 0.7f);
 }
 
+TEST(EsdfIntegratorTest, ASurfaceMovingAwayHandsItsVoxelsToANearerOne) {
+  // A wall at x = 0 and a ball beyond it; the wall then moves 0.4 voxel away. Its surface
+  // voxels stay surface voxels with a larger distance: the voxels between wall and ball that
+  // took the wall must go to the ball where it is now nearer, as a rebuild has them.
+  const Sdf ball = esdf_test::ball({0.6f, 0.0f, 0.0f}, 0.2f);
+  const Eigen::Vector3f lo(-0.4f, -0.4f, -0.4f), hi(1.2f, 0.4f, 0.4f);
+  TsdfLayer tsdf(geometry());
+  esdf_test::writeTsdf(&tsdf, esdf_test::unite(esdf_test::planeX(0.0f), ball), lo, hi,
+                       kTruncation);
+  EsdfLayer esdf(geometry(), 1.0f);
+  EsdfIntegrator integrator(fieldConfig());
+  integrator.update(tsdf, &esdf);
+  const Sdf after = esdf_test::unite(esdf_test::planeX(-0.4f * kVoxel), ball);
+  esdf_test::writeTsdf(&tsdf, after, lo, hi, kTruncation);
+  EXPECT_FALSE(integrator.update(tsdf, &esdf).rebuilt);
+  EsdfLayer rebuilt(geometry(), 1.0f);
+  EsdfIntegrator(fieldConfig()).rebuild(tsdf, &rebuilt);
+  expectSameField(esdf, rebuilt, 0.1f);
+  EXPECT_LT(compare(esdf, after).max(), 0.7f);
+}
+
 TEST(EsdfIntegratorTest, ASnapshotKeepsItsFieldWhileTheLayerIsUpdated) {
   const Sdf wall = esdf_test::planeX(-0.6f);
   const Sdf before = esdf_test::unite(wall, esdf_test::ball({0.2f, 0.1f, 0.0f}, 0.25f));
@@ -225,7 +246,9 @@ TEST(EsdfIntegratorTest, ASnapshotKeepsItsFieldWhileTheLayerIsUpdated) {
   for (const auto& [key, block] : snapshot->blocks()) {
     for (int slot = 0; slot < 27; ++slot) {
       const EsdfBlock* n = block->neighbours[static_cast<size_t>(slot)];
-      if (n != nullptr) EXPECT_EQ(n, snapshot->getBlock(n->index)) << "a link out of the snapshot";
+      if (n != nullptr) {
+        EXPECT_EQ(n, snapshot->getBlock(n->index)) << "a link out of the snapshot";
+      }
     }
   }
   // A second snapshot sees the update; the first is unchanged by it.

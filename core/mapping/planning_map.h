@@ -125,7 +125,7 @@ class PlanningMap {
   /// "cblox-esdf"), so that the planner sees the space being mapped now, not once the
   /// subvolume is finished; never at idle priority, where holding the layer lock would
   /// stall integration. Safe beside refresh() on another thread (each has its own
-  /// integrator; a field's lock orders their updates).
+  /// integrator; a field's update mutex orders their updates).
   void refreshActive(const SubmapCollection& collection);
   /// The subvolumes' current poses (ids without a field are ignored).
   void setPoses(const std::vector<SubmapPose>& poses);

@@ -69,8 +69,8 @@ struct PlanningServiceStats {
 /// Answers distance requests and samples local grids on one worker thread, from a
 /// PlanningMap (or, without one, refuses with kNoPlanningMap).
 ///
-/// The worker only reads the planning map (its queries take each field's shared lock while
-/// sampling it), never a subvolume's layer: it cannot block integration. submit() never
+/// The worker only reads the planning map (its queries sample the fields' published
+/// snapshots without a lock), never a subvolume's layer: it cannot block integration. submit() never
 /// blocks on the worker either: it bounds the request, copies it into the queue, and
 /// returns. Thread-safety: submit() and stats() from any thread; the sinks run on the worker
 /// (a refusal's reply on submit()'s caller).

@@ -10,6 +10,9 @@ namespace cblox {
 std::string PlanningServiceConfig::validate() const {
   if (max_points < 1) return "service.max_points must be >= 1";
   if (queue_capacity < 1) return "service.queue_capacity must be >= 1";
+  if (query_threads < 1 || query_threads > 16) {
+    return "service.query_threads must be in [1, 16], got " + std::to_string(query_threads);
+  }
   if (!std::isfinite(grid_period_s) || grid_period_s < 0.0) {
     return "service.grid_period_s must be finite and >= 0, got " + std::to_string(grid_period_s);
   }

@@ -15,6 +15,11 @@ struct PlanningServiceConfig {
   size_t max_points = 4096;
   /// Requests waiting for the worker; one more is answered kBusy at once. >= 1.
   size_t queue_capacity = 16;
+  /// Threads that answer one request's points together (PlanningMap::queryBatch): the
+  /// query thread and query_threads - 1 helpers it starts per request of at least
+  /// PlanningMap::kMinPointsPerThread points each. In [1, 16]. More than 1 pays only with
+  /// a core to spare: the reply waits for the slowest helper to be scheduled.
+  int query_threads = 1;
   /// A local grid around the vehicle's newest pose every this many seconds; 0 = none.
   /// Finite, >= 0.
   double grid_period_s = 1.0;

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/common/text_format.h"
+#include "core/common/thread_team.h"
 #include "core/esdf/esdf_query.h"
 
 namespace cblox {
@@ -211,10 +212,18 @@ DistanceAnswer PlanningMap::query(const Eigen::Vector3d& p_G) const {
 }
 
 void PlanningMap::queryBatch(std::span<const Eigen::Vector3d> points_G,
-                             std::vector<DistanceAnswer>* answers) const {
+                             std::vector<DistanceAnswer>* answers, int num_threads) const {
   const std::vector<IndexEntry> index = indexSnapshot();
   answers->resize(points_G.size());
-  for (size_t i = 0; i < points_G.size(); ++i) (*answers)[i] = sample(index, points_G[i]);
+  const size_t n = points_G.size();
+  const size_t threads = std::clamp<size_t>(n / kMinPointsPerThread, 1,
+                                            static_cast<size_t>(std::max(num_threads, 1)));
+  // sample() only reads `index` and the immutable snapshots it holds.
+  runThreadTeam(static_cast<int>(threads), [&](int id) {
+    const size_t begin = n * static_cast<size_t>(id) / threads;
+    const size_t end = n * (static_cast<size_t>(id) + 1) / threads;
+    for (size_t i = begin; i < end; ++i) (*answers)[i] = sample(index, points_G[i]);
+  });
 }
 
 bool PlanningMap::localGrid(const Eigen::Vector3d& min_G, const Eigen::Vector3d& max_G,

@@ -133,10 +133,14 @@ class PlanningMap {
   /// The answer at `p_G` (see DistanceAnswer): every field whose blocks' bounding box holds
   /// the point is sampled with trilinear interpolation (esdf_query.h).
   DistanceAnswer query(const Eigen::Vector3d& p_G) const;
-  /// query() for each point, into `answers` (resized), with one snapshot of the poses for
-  /// the whole batch.
-  void queryBatch(std::span<const Eigen::Vector3d> points_G,
-                  std::vector<DistanceAnswer>* answers) const;
+  /// query() for each point, into `answers` (resized), with one snapshot of the poses and
+  /// fields for the whole batch. With num_threads > 1 the points are split into contiguous
+  /// parts of at least kMinPointsPerThread, answered on the calling thread and helpers it
+  /// starts; the answers are the same whatever the split.
+  void queryBatch(std::span<const Eigen::Vector3d> points_G, std::vector<DistanceAnswer>* answers,
+                  int num_threads = 1) const;
+  /// The fewest points queryBatch gives one thread.
+  static constexpr size_t kMinPointsPerThread = 512;
   /// The names a planner looks for: the same answer as query() (distance and gradient are
   /// always computed together), and whether some subvolume observed the point.
   DistanceAnswer distanceAndGradient(const Eigen::Vector3d& p_G) const { return query(p_G); }

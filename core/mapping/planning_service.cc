@@ -164,7 +164,7 @@ void PlanningService::answer(const Request& request) {
     }
   }
   std::vector<DistanceAnswer> answers;
-  planning_->queryBatch(valid, &answers);
+  planning_->queryBatch(valid, &answers, config_.query_threads);
   reply.answers.resize(request.points.size());
   for (size_t k = 0, v = 0; k < request.points.size(); ++k) {
     if (!reply.invalid_point[k]) reply.answers[k] = answers[v++];

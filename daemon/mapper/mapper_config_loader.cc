@@ -227,7 +227,8 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   const YAML::Node planning = root["planning"];
   requireKnownKeys(planning, "planning",
                    {"enabled", "max_distance_m", "min_weight", "refresh_period_s",
-                    "query_queue_capacity", "local_grid_period_s", "local_grid_size_m",
+                    "query_queue_capacity", "query_threads", "local_grid_period_s",
+                    "local_grid_size_m",
                     "local_grid_resolution_m"});
   if (!isAbsent(planning)) {
     readOptional(planning, "planning", "enabled", &m.planning.enabled);
@@ -244,6 +245,7 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
       }
       service.queue_capacity = static_cast<size_t>(capacity);
     }
+    readOptional(planning, "planning", "query_threads", &service.query_threads);
     readOptional(planning, "planning", "local_grid_period_s", &service.grid_period_s);
     readOptional(planning, "planning", "local_grid_resolution_m", &service.grid_resolution_m);
     if (planning["local_grid_size_m"]) {

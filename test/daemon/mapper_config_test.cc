@@ -96,6 +96,7 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.planning.esdf.min_weight, b.planning.esdf.min_weight);
   EXPECT_EQ(a.planning.refresh_period_s, b.planning.refresh_period_s);
   EXPECT_EQ(a.planning.service.queue_capacity, b.planning.service.queue_capacity);
+  EXPECT_EQ(a.planning.service.query_threads, b.planning.service.query_threads);
   EXPECT_EQ(a.planning.service.grid_period_s, b.planning.service.grid_period_s);
   EXPECT_EQ(a.planning.service.grid_size_m, b.planning.service.grid_size_m);
   EXPECT_EQ(a.planning.service.grid_resolution_m, b.planning.service.grid_resolution_m);
@@ -201,7 +202,8 @@ TEST(MapperConfigTest, ReadsOverrides) {
 TEST(MapperConfigTest, ReadsThePlanningSectionAndItsChannels) {
   const MapperProcessConfig config = loadMapperConfig(YAML::Load(
       "planning: {enabled: true, max_distance_m: 1.5, min_weight: 0.01, refresh_period_s: 2,\n"
-      "  query_queue_capacity: 4, local_grid_period_s: 0.5, local_grid_size_m: [4, 5, 1.5],\n"
+      "  query_queue_capacity: 4, query_threads: 3, local_grid_period_s: 0.5,\n"
+      "  local_grid_size_m: [4, 5, 1.5],\n"
       "  local_grid_resolution_m: 0.2}\n"
       "channels: {distance_request: DQ, distance_reply: DR, local_grid: LG}\n"));
   const PlanningConfig& p = config.mapper.planning;
@@ -210,6 +212,7 @@ TEST(MapperConfigTest, ReadsThePlanningSectionAndItsChannels) {
   EXPECT_EQ(p.esdf.min_weight, 0.01f);
   EXPECT_EQ(p.refresh_period_s, 2.0);
   EXPECT_EQ(p.service.queue_capacity, 4U);
+  EXPECT_EQ(p.service.query_threads, 3);
   EXPECT_EQ(p.service.grid_period_s, 0.5);
   EXPECT_EQ(p.service.grid_size_m, Eigen::Vector3d(4.0, 5.0, 1.5));
   EXPECT_EQ(p.service.grid_resolution_m, 0.2);
@@ -262,6 +265,8 @@ TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"planning: {max_distance_m: 0}\n", "planning."},
       {"planning: {query_queue_capacity: -1}\n", "planning.query_queue_capacity"},
       {"planning: {query_queue_capacity: 100000}\n", "planning.query_queue_capacity"},
+      {"planning: {query_threads: 0}\n", "service.query_threads"},
+      {"planning: {query_threads: 17}\n", "service.query_threads"},
       {"planning: {local_grid_period_s: -1}\n", "grid_period_s"},
       {"planning: {local_grid_size_m: [1, 2]}\n", "planning.local_grid_size_m"},
       {"planning: {local_grid_size_m: [100, 100, 100]}\n", "cells"},

@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <span>
 #include <thread>
 #include <vector>
 
@@ -224,6 +225,36 @@ TEST_F(PlanningMapTest, QueriesBesideRefreshesSeeWholeFields) {
   reader.join();
   EXPECT_EQ(torn.load(), 0) << "of " << queries.load() << " answers";
   EXPECT_NEAR(planning_.query(p).distance, large, 0.2 * kVoxel);
+}
+
+TEST_F(PlanningMapTest, ABatchSplitOverThreadsGivesTheSameAnswers) {
+  planning_.refresh(collection_, PlanningMap::Scope::kAll);
+  // Points over both subvolumes and the unknown space around them.
+  std::vector<Eigen::Vector3d> points;
+  for (double x = -0.5; x <= 1.7; x += 0.07) {
+    for (double y = -0.5; y <= 3.5; y += 0.09) {
+      for (double z = -0.3; z <= 0.3; z += 0.2) points.emplace_back(x, y, z);
+    }
+  }
+  ASSERT_GT(points.size(), 3 * PlanningMap::kMinPointsPerThread);
+  std::vector<DistanceAnswer> one, three;
+  planning_.queryBatch(points, &one, 1);
+  planning_.queryBatch(points, &three, 3);
+  ASSERT_EQ(three.size(), points.size());
+  size_t known = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    ASSERT_EQ(three[i].state, one[i].state) << i;
+    ASSERT_EQ(three[i].submap, one[i].submap) << i;
+    if (one[i].state == VoxelState::kUnknown) continue;
+    ++known;
+    ASSERT_EQ(three[i].distance, one[i].distance) << i;
+    ASSERT_EQ(three[i].has_gradient, one[i].has_gradient) << i;
+  }
+  EXPECT_GT(known, points.size() / 10);
+  // A batch too small to split: still every answer.
+  planning_.queryBatch(std::span<const Eigen::Vector3d>(points.data(), 7), &three, 3);
+  ASSERT_EQ(three.size(), 7u);
+  for (size_t i = 0; i < 7; ++i) EXPECT_EQ(three[i].state, one[i].state);
 }
 
 TEST_F(PlanningMapTest, ALocalGridHoldsTheAnswersAtItsCellCentres) {

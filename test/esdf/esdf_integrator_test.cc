@@ -163,11 +163,19 @@ void expectSameField(const EsdfLayer& incremental, const EsdfLayer& rebuilt, flo
   EXPECT_GT(compared, 0);
 }
 
+/// A wall and a ball that moves: the ball's voxels change state both ways.
+struct MovingBall {
+  Sdf before = esdf_test::unite(esdf_test::planeX(-0.6f),
+                                esdf_test::ball({0.2f, 0.1f, 0.0f}, 0.25f));
+  Sdf after = esdf_test::unite(esdf_test::planeX(-0.6f),
+                               esdf_test::ball({0.55f, -0.1f, 0.05f}, 0.2f));
+  Eigen::Vector3f lo{-0.8f, -0.8f, -0.8f}, hi{1.2f, 0.8f, 0.8f};
+};
+
 TEST(EsdfIntegratorTest, AMovedObstacleRaisesAndLowersLikeARebuild) {
-  const Sdf wall = esdf_test::planeX(-0.6f);
-  const Sdf before = esdf_test::unite(wall, esdf_test::ball({0.2f, 0.1f, 0.0f}, 0.25f));
-  const Sdf after = esdf_test::unite(wall, esdf_test::ball({0.55f, -0.1f, 0.05f}, 0.2f));
-  const Eigen::Vector3f lo(-0.8f, -0.8f, -0.8f), hi(1.2f, 0.8f, 0.8f);
+  const MovingBall scene;
+  const Sdf &before = scene.before, &after = scene.after;
+  const Eigen::Vector3f &lo = scene.lo, &hi = scene.hi;
   TsdfLayer tsdf(geometry());
   esdf_test::writeTsdf(&tsdf, before, lo, hi, kTruncation);
   EsdfLayer esdf(geometry(), 1.0f);
@@ -213,10 +221,9 @@ TEST(EsdfIntegratorTest, ASurfaceMovingAwayHandsItsVoxelsToANearerOne) {
 }
 
 TEST(EsdfIntegratorTest, ASnapshotKeepsItsFieldWhileTheLayerIsUpdated) {
-  const Sdf wall = esdf_test::planeX(-0.6f);
-  const Sdf before = esdf_test::unite(wall, esdf_test::ball({0.2f, 0.1f, 0.0f}, 0.25f));
-  const Sdf after = esdf_test::unite(wall, esdf_test::ball({0.55f, -0.1f, 0.05f}, 0.2f));
-  const Eigen::Vector3f lo(-0.8f, -0.8f, -0.8f), hi(1.2f, 0.8f, 0.8f);
+  const MovingBall scene;
+  const Sdf &before = scene.before, &after = scene.after;
+  const Eigen::Vector3f &lo = scene.lo, &hi = scene.hi;
   TsdfLayer tsdf(geometry());
   esdf_test::writeTsdf(&tsdf, before, lo, hi, kTruncation);
   EsdfLayer esdf(geometry(), 1.0f);

@@ -7,7 +7,11 @@
 //   - the field's error at every observed free voxel against the room's exact signed
 //     distance (in voxels, within max_distance_m), and the safety count: voxels within one
 //     voxel of an obstacle answered free farther than one voxel,
-//   - bytes per TSDF block.
+//   - bytes per TSDF block,
+//   - when built with the voxblox peer (test/bench/CMakeLists.txt): voxblox's own
+//     EsdfIntegrator on copies of the same TSDF layer, quasi-Euclidean (its default) and
+//     full Euclidean, incremental after each frame and batch, with the same error and
+//     safety figures at the voxels it observed.
 // Single thread. The fastest of --repeats rounds counts per frame.
 //
 //   build/test/bench/cblox-bench-esdf [--repeats R] [--frames N]
@@ -18,6 +22,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -33,6 +38,9 @@
 #include "drivers/synthetic/demo_room_orbit.h"
 #include "test/bench/bench_stats.h"
 #include "test/bench/integrator_bench_settings.h"
+#ifdef CBLOX_HAVE_VOXBLOX
+#include "test/bench/voxblox_esdf_peer.h"
+#endif
 
 namespace cblox::bench {
 namespace {
@@ -42,6 +50,15 @@ using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
+
+/// One voxblox mode's figures (voxblox_esdf_peer.h).
+struct PeerResult {
+  std::vector<double> update_ms;  // per frame
+  double batch_ms = 0.0;
+  std::vector<double> errors_voxels;
+  size_t unsafe = 0;
+  size_t observed_free = 0;
+};
 
 struct Result {
   float voxel = 0.0f;
@@ -53,6 +70,7 @@ struct Result {
   std::vector<double> errors_voxels;  // observed free voxels within max distance
   size_t unsafe = 0;                  // near obstacles, answered free farther than a voxel
   size_t observed_free = 0;
+  std::vector<PeerResult> voxblox;  // quasi-Euclidean, full Euclidean; empty without the peer
 };
 
 Result run(const DemoRoomOrbit& orbit, float voxel, const AnalyticScene& room) {
@@ -65,6 +83,17 @@ Result run(const DemoRoomOrbit& orbit, float voxel, const AnalyticScene& room) {
   const EsdfConfig esdf_config;
   EsdfLayer esdf(layer.config(), esdf_config.max_distance_m);
   EsdfIntegrator esdf_integrator(esdf_config);
+#ifdef CBLOX_HAVE_VOXBLOX
+  std::vector<std::unique_ptr<VoxbloxEsdfPeer>> peers;
+  // voxblox takes TSDF values below min_distance_m as distances: at the truncation itself,
+  // every truncated voxel would be pinned at the truncation distance. Half a voxel less.
+  for (const bool full : {false, true}) {
+    peers.push_back(std::make_unique<VoxbloxEsdfPeer>(
+        layer.config(), esdf_config.max_distance_m,
+        integrator_config.truncation_distance_m - 0.5f * voxel, full));
+  }
+  r.voxblox.resize(peers.size());
+#endif
   SyntheticDepthSource source = orbit.source();
   const PinholeCamera camera(source.camera().intrinsics());
   SyntheticFrame frame;
@@ -75,6 +104,11 @@ Result run(const DemoRoomOrbit& orbit, float voxel, const AnalyticScene& room) {
     const EsdfUpdateStats stats = esdf_integrator.update(layer, &esdf);
     r.update_ms.push_back(msSince(start));
     r.blocks_read.push_back(static_cast<double>(stats.tsdf_blocks_read));
+#ifdef CBLOX_HAVE_VOXBLOX
+    for (size_t m = 0; m < peers.size(); ++m) {
+      r.voxblox[m].update_ms.push_back(peers[m]->update(layer));
+    }
+#endif
   }
   r.blocks = layer.numBlocks();
   {
@@ -102,6 +136,27 @@ Result run(const DemoRoomOrbit& orbit, float voxel, const AnalyticScene& room) {
       }
     }
   }
+#ifdef CBLOX_HAVE_VOXBLOX
+  // voxblox's fields at the voxels it observed free, against the same truth.
+  for (size_t m = 0; m < peers.size(); ++m) {
+    PeerResult& p = r.voxblox[m];
+    p.batch_ms = peers[m]->batch();
+    for (const auto& [key, block] : esdf.blocks()) {
+      for (int i = 0; i < esdf.voxelsPerBlock(); ++i) {
+        const GlobalVoxelIndex g =
+            block->index * n + GridIndex(i % n, (i / n) % n, i / (n * n));
+        float distance = 0.0f;
+        if (!peers[m]->distance(g, &distance) || !(distance > 0.0f)) continue;
+        ++p.observed_free;
+        const double truth = room.signedDistance(esdf.globalVoxelCenter(g).cast<double>());
+        if (truth < voxel && distance > voxel) ++p.unsafe;
+        if (truth < esdf_config.max_distance_m - voxel) {
+          p.errors_voxels.push_back(std::abs(distance - truth) / voxel);
+        }
+      }
+    }
+  }
+#endif
   // Queries through the planning map (the planner's path: pose index, locks, interpolation).
   SubmapCollection collection(SubmapCollectionConfig{layer.config()});
   collection.restoreSubmap(0, std::move(layer), Transformationd(), 0, 0, true);
@@ -147,6 +202,7 @@ int main(int argc, char** argv) {
   std::printf("\n| voxel | TSDF blocks | update ms/frame median | p95 | max | blocks read/frame "
               "median | batch build ms | query ns/point | error median (voxels) | p99 | unsafe "
               "| observed free voxels |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::vector<Result> results;
   for (const float voxel : {0.05f, 0.02f}) {
     Result best;
     for (int round = 0; round < repeats; ++round) {
@@ -158,8 +214,13 @@ int main(int argc, char** argv) {
         keepFastestPerFrame(&best.update_ms, r.update_ms);
         best.batch_ms = std::min(best.batch_ms, r.batch_ms);
         best.query_ns = std::min(best.query_ns, r.query_ns);
+        for (size_t m = 0; m < best.voxblox.size(); ++m) {
+          keepFastestPerFrame(&best.voxblox[m].update_ms, r.voxblox[m].update_ms);
+          best.voxblox[m].batch_ms = std::min(best.voxblox[m].batch_ms, r.voxblox[m].batch_ms);
+        }
       }
     }
+    results.push_back(best);
     std::printf("| %.2f m | %zu | %.2f | %.2f | %.2f | %.0f | %.1f | %.0f | %.3f | %.3f | %zu | "
                 "%zu |\n",
                 voxel, best.blocks, median(best.update_ms), percentile(best.update_ms, 0.95),
@@ -168,6 +229,24 @@ int main(int argc, char** argv) {
                 median(best.errors_voxels), percentile(best.errors_voxels, 0.99), best.unsafe,
                 best.observed_free);
     std::fflush(stdout);
+  }
+  if (!results.empty() && !results.front().voxblox.empty()) {
+    std::printf("\nvoxblox's EsdfIntegrator on copies of the same TSDF layers (same rounds):\n"
+                "\n| voxel | voxblox mode | update ms/frame median | p95 | batch build ms | "
+                "ours / voxblox update median | ours / voxblox batch | error median (voxels) | "
+                "p99 | unsafe | observed free voxels |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for (const Result& res : results) {
+      for (size_t m = 0; m < res.voxblox.size(); ++m) {
+        const PeerResult& p = res.voxblox[m];
+        std::printf("| %.2f m | %s | %.2f | %.2f | %.1f | %.3f | %.3f | %.3f | %.3f | %zu | %zu |\n",
+                    res.voxel, m == 0 ? "quasi-Euclidean" : "full Euclidean", median(p.update_ms),
+                    percentile(p.update_ms, 0.95), p.batch_ms,
+                    median(res.update_ms) / median(p.update_ms), res.batch_ms / p.batch_ms,
+                    median(p.errors_voxels), percentile(p.errors_voxels, 0.99), p.unsafe,
+                    p.observed_free);
+      }
+    }
   }
   std::printf("\nbytes per TSDF block: TSDF %zu, distance field %zu (8^3 voxels)\n",
               sizeof(cblox::Block) + 512 * sizeof(cblox::TsdfVoxel),

@@ -47,10 +47,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double msSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
 /// The safety count's test: within one voxel of an obstacle (truth) yet answered free
 /// farther than one voxel, by more than 1 % of a voxel (a surface on a voxel boundary puts
 /// truth and answer at one voxel give or take a float rounding).

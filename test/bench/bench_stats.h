@@ -1,12 +1,19 @@
 #pragma once
 
-// Order statistics of the benchmarks' per-frame figures.
+// Order statistics of the benchmarks' per-frame figures, and their clock.
 
 #include <algorithm>
+#include <chrono>
 #include <cstddef>
 #include <vector>
 
 namespace cblox::bench {
+
+/// Milliseconds of the steady clock since `start`.
+inline double msSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
 
 /// The median (the mean of the two middle values of an even count); 0 when empty.
 inline double median(std::vector<double> v) {

@@ -8,15 +8,9 @@
 #include <voxblox/core/voxel.h>
 #include <voxblox/integrator/esdf_integrator.h>
 
+#include "test/bench/bench_stats.h"
+
 namespace cblox::bench {
-namespace {
-
-double msSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-      .count();
-}
-
-}  // namespace
 
 struct VoxbloxEsdfPeer::Impl {
   Impl(const LayerConfig& geometry, const voxblox::EsdfIntegrator::Config& config)

@@ -10,14 +10,11 @@
 
 #include "core/geometry/depth_to_point_cloud.h"
 #include "core/geometry/pinhole_camera.h"
+#include "test/bench/bench_stats.h"
 
 namespace cblox::bench {
 namespace {
 
-double msSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-      .count();
-}
 
 // voxblox's TSDF into a cblox layer of the same voxel size and block size, voxel by voxel
 // (distance, weight, colour). Both put block b at [b, b+1) * block size and voxel (i,j,k)

@@ -163,26 +163,33 @@ void expectSameField(const EsdfLayer& incremental, const EsdfLayer& rebuilt, flo
   EXPECT_GT(compared, 0);
 }
 
-/// A wall and a ball that moves: the ball's voxels change state both ways.
+/// A wall and a ball that moves: the ball's voxels change state both ways. Constructed with
+/// the field of `before` computed; moveBall() writes `after` into the TSDF.
 struct MovingBall {
+  MovingBall() {
+    esdf_test::writeTsdf(&tsdf, before, lo, hi, kTruncation);
+    integrator.update(tsdf, &esdf);
+  }
+  void moveBall() { esdf_test::writeTsdf(&tsdf, after, lo, hi, kTruncation); }
+
   Sdf before = esdf_test::unite(esdf_test::planeX(-0.6f),
                                 esdf_test::ball({0.2f, 0.1f, 0.0f}, 0.25f));
   Sdf after = esdf_test::unite(esdf_test::planeX(-0.6f),
                                esdf_test::ball({0.55f, -0.1f, 0.05f}, 0.2f));
   Eigen::Vector3f lo{-0.8f, -0.8f, -0.8f}, hi{1.2f, 0.8f, 0.8f};
+  TsdfLayer tsdf{geometry()};
+  EsdfLayer esdf{geometry(), 1.0f};
+  EsdfIntegrator integrator{fieldConfig()};
 };
 
 TEST(EsdfIntegratorTest, AMovedObstacleRaisesAndLowersLikeARebuild) {
-  const MovingBall scene;
-  const Sdf &before = scene.before, &after = scene.after;
-  const Eigen::Vector3f &lo = scene.lo, &hi = scene.hi;
-  TsdfLayer tsdf(geometry());
-  esdf_test::writeTsdf(&tsdf, before, lo, hi, kTruncation);
-  EsdfLayer esdf(geometry(), 1.0f);
-  EsdfIntegrator integrator(fieldConfig());
-  integrator.update(tsdf, &esdf);
+  MovingBall scene;
+  const Sdf& after = scene.after;
+  TsdfLayer& tsdf = scene.tsdf;
+  EsdfLayer& esdf = scene.esdf;
+  EsdfIntegrator& integrator = scene.integrator;
 
-  esdf_test::writeTsdf(&tsdf, after, lo, hi, kTruncation);
+  scene.moveBall();
   const EsdfUpdateStats stats = integrator.update(tsdf, &esdf);
   EXPECT_FALSE(stats.rebuilt);
   EXPECT_GT(stats.sites_removed, 0u);
@@ -221,14 +228,11 @@ TEST(EsdfIntegratorTest, ASurfaceMovingAwayHandsItsVoxelsToANearerOne) {
 }
 
 TEST(EsdfIntegratorTest, ASnapshotKeepsItsFieldWhileTheLayerIsUpdated) {
-  const MovingBall scene;
+  MovingBall scene;
   const Sdf &before = scene.before, &after = scene.after;
-  const Eigen::Vector3f &lo = scene.lo, &hi = scene.hi;
-  TsdfLayer tsdf(geometry());
-  esdf_test::writeTsdf(&tsdf, before, lo, hi, kTruncation);
-  EsdfLayer esdf(geometry(), 1.0f);
-  EsdfIntegrator integrator(fieldConfig());
-  integrator.update(tsdf, &esdf);
+  TsdfLayer& tsdf = scene.tsdf;
+  EsdfLayer& esdf = scene.esdf;
+  EsdfIntegrator& integrator = scene.integrator;
   const std::shared_ptr<const EsdfLayer> snapshot = esdf.snapshot();
   EsdfLayer old_field(geometry(), 1.0f);  // an independent copy of the field before the move
   EsdfIntegrator(fieldConfig()).rebuild(tsdf, &old_field);
@@ -241,7 +245,7 @@ TEST(EsdfIntegratorTest, ASnapshotKeepsItsFieldWhileTheLayerIsUpdated) {
 
   // The obstacle moves and a new slab of blocks arrives: the layer follows, the snapshot
   // still answers the old field everywhere, through its own neighbour links.
-  esdf_test::writeTsdf(&tsdf, after, lo, hi, kTruncation);
+  scene.moveBall();
   esdf_test::writeTsdf(&tsdf, after, {1.7f, -0.8f, -0.8f}, {2.1f, 0.8f, 0.8f}, kTruncation);
   const EsdfUpdateStats stats = integrator.update(tsdf, &esdf);
   EXPECT_FALSE(stats.rebuilt);

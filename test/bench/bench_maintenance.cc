@@ -41,7 +41,7 @@
 //                           [--q-min 3e3,1e4,3e4,1e5] [--most-shared-q-min Q,...]
 //                           [--anchors-q-min Q,...]
 //                           [--revisit-overlap-q-min Q,... [--revisit-keyframe-gap 30]]
-//                           [--out DIR]
+//                           [--planning-samples N] [--out DIR]
 //
 // Mappers integrate every frame (no time budget, waited for) so the comparison does not
 // depend on the machine's load; with --sync-slam (the default) the SLAM's local mapping and
@@ -53,7 +53,11 @@
 // DIR/maintenance_<scene>.json and DIR/maintenance_<scene>_sweep.png (map size against RMSE
 // for every variant; <scene>_two-loops for that route). For every fusion variant it also
 // prints the answered pairs: q (median, share >= q_min) and the distance between the two
-// keyframes asked about, so the reason for rejections is visible.
+// keyframes asked about, so the reason for rejections is visible. --planning-samples N: every
+// map keeps its planning map (the distance fields, MapperConfig::planning), scored at the end
+// at N random points of the scene's bounds against the exact signed distance (Embree closest
+// points; distance_field_accuracy.h): error, the unsafe count, observed free space answered
+// unknown; maps made with the tracker's poses are queried through the trajectory alignment.
 
 #include <algorithm>
 #include <chrono>
@@ -75,6 +79,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/common/quantile.h"
+#include "core/eval/distance_field_accuracy.h"
 #include "core/eval/mesh_accuracy.h"
 #include "core/eval/scatter_plot.h"
 #include "core/eval/umeyama.h"
@@ -120,6 +125,7 @@ struct Variant {
   size_t subvolumes = 0, blocks = 0, vertices = 0;
   double rmse_m = 0.0, median_m = 0.0;
   FusionSchedulerStats fusion;
+  std::optional<DistanceFieldAccuracy> planning;  // with --planning-samples
 };
 
 MapperConfig baseConfig(float voxel, const std::filesystem::path& out, bool deterministic) {
@@ -134,6 +140,78 @@ MapperConfig baseConfig(float voxel, const std::filesystem::path& out, bool dete
   config.pending_capacity = 4;
   config.max_pose_wait_s = 5.0;
   return config;
+}
+
+/// Scores every variant's planning map at `samples` random points of the scene's bounds
+/// against the exact signed distances (Embree closest points) and the depth images' free
+/// space, and prints a table. Maps built with the tracker's poses are queried at the points
+/// carried into their frame by the inverse of the trajectory alignment (T_true_estimated).
+void scorePlanningMaps(const TriangleMeshRaycaster& truth, const std::vector<DepthView>& views,
+                       size_t samples, float voxel,
+                       const std::optional<Transformationd>& T_true_estimated,
+                       std::vector<std::unique_ptr<Variant>>* variants) {
+  const MapperConfig& config = variants->front()->mapper->config();
+  DistanceTruthConfig truth_config;
+  truth_config.samples = samples;
+  truth_config.box = Eigen::AlignedBox3d(truth.bounds().min().cast<double>(),
+                                         truth.bounds().max().cast<double>());
+  truth_config.truncation_m = config.integrator.truncation_distance_m;
+  truth_config.free_margin_m = voxel;
+  truth_config.view_stride = 2;
+  const Clock::time_point start = Clock::now();
+  std::string error;
+  const auto truth_samples = sampleDistanceTruth(truth, views, truth_config, &error);
+  if (!truth_samples) {
+    std::fprintf(stderr, "planning truth: %s\n", error.c_str());
+    return;
+  }
+  std::fprintf(stderr, "planning truth: %zu points, %zu views (every 2nd used), %.1f s\n",
+               samples, views.size(), std::chrono::duration<double>(Clock::now() - start).count());
+  const double max_distance = config.planning.esdf.max_distance_m;
+  for (auto& v : *variants) {
+    if (!v->mapper->syncPlanningMap(std::chrono::minutes(5)) || !v->mapper->planningMap()) {
+      std::fprintf(stderr, "%s: the planning map did not follow the map\n", v->name.c_str());
+      continue;
+    }
+    const bool tracked = v->kind != Kind::kGroundTruth;
+    std::vector<Eigen::Vector3d> points;
+    points.reserve(truth_samples->size());
+    for (const DistanceTruthSample& s : *truth_samples) {
+      points.push_back(tracked && T_true_estimated ? T_true_estimated->inverse() * s.p_G : s.p_G);
+    }
+    std::vector<DistanceAnswer> answers;
+    v->mapper->planningMap()->queryBatch(points, &answers);
+    std::vector<FieldAnswer> field(answers.size());
+    for (size_t i = 0; i < answers.size(); ++i) {
+      field[i] = FieldAnswer{answers[i].state, answers[i].distance};
+    }
+    v->planning = scoreDistanceField(*truth_samples, field, voxel, max_distance);
+  }
+  std::printf(
+      "\nplanning maps at %zu random points of the scene's bounds (max_distance_m %.1f, voxel "
+      "%.3f m), against the exact signed distance; unsafe = inside or within one voxel of a "
+      "surface, answered free farther than one voxel; observed free = a depth image saw "
+      "through the point more than truncation + one voxel before the surface:\n"
+      "| map | free / occupied / unknown answers | compared | error median (voxels) | p99 | max "
+      "| unsafe (of near) | of them over by > 1 voxel | observed free answered unknown | far "
+      "answered occupied |\n"
+      "|---|---|---|---|---|---|---|---|---|---|\n",
+      samples, max_distance, voxel);
+  for (const auto& v : *variants) {
+    if (!v->planning) continue;
+    const DistanceFieldAccuracy& a = *v->planning;
+    std::printf("| %s | %zu / %zu / %zu | %zu | %.3f | %.3f | %.2f | %zu (of %zu) | %zu | %zu of "
+                "%zu (%.1f %%) | %zu |\n",
+                v->name.c_str(), a.answered_free, a.answered_occupied, a.answered_unknown,
+                a.compared, a.error_median_voxels, a.error_p99_voxels, a.error_max_voxels,
+                a.unsafe, a.near_obstacle, a.unsafe_by_a_voxel, a.observed_free_unknown,
+                a.observed_free,
+                a.observed_free > 0 ? 100.0 * static_cast<double>(a.observed_free_unknown) /
+                                          static_cast<double>(a.observed_free)
+                                    : 0.0,
+                a.far_answered_occupied);
+  }
+  std::fflush(stdout);
 }
 
 int run(int argc, char** argv) {
@@ -160,6 +238,7 @@ int run(int argc, char** argv) {
   std::vector<double> revisit_overlap_sweep;
   std::vector<double> anchors_sweep;
   int revisit_keyframe_gap = FusionSchedulerConfig{}.revisit_keyframe_gap;
+  size_t planning_samples = 0;
 #ifdef CBLOX_DEFAULT_VOCABULARY
   vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
 #endif
@@ -257,6 +336,10 @@ int run(int argc, char** argv) {
   app.add_option("--revisit-keyframe-gap", revisit_keyframe_gap,
                  "keyframe ids between the most shared keyframes of a revisit pair")
       ->capture_default_str();
+  app.add_option("--planning-samples", planning_samples,
+                 "every map keeps its planning map (distance fields), scored at the end at this "
+                 "many random points of the scene against the exact distances (0: off)")
+      ->capture_default_str();
   app.add_option("--out", out_dir, "writes DIR/maintenance_<scene>.json and the sweep picture")
       ->type_name("DIR");
   app.add_option("--vocabulary", vocabulary_path, "vocabulary file")->capture_default_str();
@@ -345,6 +428,7 @@ int run(int argc, char** argv) {
     v->revisit_m = revisit_m.value_or(revisit_distance);
     v->revisit_frames = frames.value_or(revisit_frames);
     MapperConfig config = baseConfig(voxel, work, sync_slam);
+    config.planning.enabled = planning_samples > 0;
     if (kind == Kind::kGroundTruth || kind == Kind::kNaive) {
       config.pose_source = PoseSource::kGroundTruth;          // poses fed as given, never corrected
       config.creation.max_keyframes_per_subvolume = 1 << 30;  // one volume
@@ -471,6 +555,7 @@ int run(int argc, char** argv) {
   }
 
   std::map<uint64_t, Transformationd> truth_by_frame;  // for the trajectory alignment
+  std::vector<DepthView> views;                       // the depth images' true poses
 
   // SLAM outputs, from its threads, handed to the tracker-mode mappers by the main loop.
   std::mutex mutex;
@@ -560,6 +645,10 @@ int run(int argc, char** argv) {
     }
     depth.min_depth_m = static_cast<float>(info.depth_min_m);
     depth.max_depth_m = static_cast<float>(info.depth_max_m);
+    if (planning_samples > 0) {
+      views.push_back(DepthView{*frame.T_G_C * depth.T_B_D, depth.intrinsics, info.depth_min_m,
+                                info.depth_max_m});
+    }
     const bool ok = r.state == TrackingState::kOk && r.T_C_G.has_value();
     if (!ok) ++lost;
     for (auto& v : variants) {
@@ -650,6 +739,11 @@ int run(int argc, char** argv) {
   const std::optional<Alignment> alignment =
       umeyamaAlign(estimated, true_positions, AlignmentType::kSE3, &error);
   if (!alignment) std::fprintf(stderr, "alignment: %s (maps compared unaligned)\n", error.c_str());
+  if (planning_samples > 0) {
+    scorePlanningMaps(*raycaster, views, planning_samples, voxel,
+                      alignment ? std::optional<Transformationd>(alignment->T_A_B) : std::nullopt,
+                      &variants);
+  }
   for (auto& v : variants) {
     accuracy_options.T_G_R.reset();
     if (v->kind != Kind::kGroundTruth && alignment) accuracy_options.T_G_R = *alignment;
@@ -815,6 +909,23 @@ int run(int argc, char** argv) {
                               {"fused", v->fusion.fused},
                               {"fused_same_anchor", v->fusion.same_anchor},
                               {"rejected_by_q", v->fusion.rejected_by_q}});
+      if (v->planning) {
+        const DistanceFieldAccuracy& a = *v->planning;
+        json["maps"].back()["planning"] = {
+            {"samples", a.samples},
+            {"answered_free", a.answered_free},
+            {"answered_occupied", a.answered_occupied},
+            {"answered_unknown", a.answered_unknown},
+            {"error_median_voxels", a.error_median_voxels},
+            {"error_p99_voxels", a.error_p99_voxels},
+            {"error_max_voxels", a.error_max_voxels},
+            {"near_obstacle", a.near_obstacle},
+            {"unsafe", a.unsafe},
+            {"unsafe_by_a_voxel", a.unsafe_by_a_voxel},
+            {"observed_free", a.observed_free},
+            {"observed_free_unknown", a.observed_free_unknown},
+            {"far_answered_occupied", a.far_answered_occupied}};
+      }
     }
     std::ofstream(out_dir + "/maintenance_" + stem + ".json") << json.dump(2) << "\n";
     ScatterPlotConfig plot;

@@ -20,6 +20,9 @@ std::string IntegratorConfig::validate(float voxel_size) const {
   } else if (!std::isfinite(max_ray_length_m) || max_ray_length_m <= min_ray_length_m) {
     error << "max_ray_length_m must be finite and > min_ray_length_m (" << min_ray_length_m
           << "), got " << max_ray_length_m;
+  } else if (!std::isfinite(projective_carving_depth_m) || projective_carving_depth_m < 0.0f) {
+    error << "projective_carving_depth_m must be finite and >= 0 (0 = no carving), got "
+          << projective_carving_depth_m;
   } else if (num_threads < 1 || num_threads > 64) {
     error << "num_threads must be in [1, 64], got " << num_threads;
   } else if (!finite_positive(start_voxel_subsampling_factor) ||

@@ -46,6 +46,12 @@ struct IntegratorConfig {
   /// Ray-casting integrators: also update the free space between the sensor and the
   /// truncation band (clamped to +truncation). Off: only the band is updated.
   bool voxel_carving_enabled = true;
+  /// Projective integrator: also the blocks in front of each 8x8-pixel cell's nearest
+  /// measured depth, up to this depth (metres along the optical axis), so the free space the
+  /// camera saw is mapped (its voxels updated to +truncation) and a planner can tell it from
+  /// unknown space; 0: only the blocks near the measured surfaces. Finite, >= 0. The
+  /// ray-casting integrators ignore it (voxel_carving_enabled).
+  float projective_carving_depth_m = 0.0f;
   ColorBlending color_blending = ColorBlending::kWeightedAverage;
   /// Worker threads for one frame (1 = the calling thread only).
   int num_threads = 2;

@@ -191,6 +191,11 @@ void ProjectiveTsdfIntegrator::collectBlocks(const Eigen::Matrix3f& R_G_C,
                               (vc - static_cast<float>(K.cy)) / static_cast<float>(K.fy), 1.0f);
   const CellRay ray{t_G_C, R_G_C * ray_C, truncation * ray_C.norm(),
                     (0.7072f * static_cast<float>(std::max(u1 - u0, v1 - v0)) + 0.5f) / f_min};
+  // The free space in front of the cell's nearest depth, from the sensor's near limit.
+  const float carve_to = std::min(range.d_min - truncation, config_.projective_carving_depth_m);
+  if (carve_to > config_.min_ray_length_m) {
+    addSegmentBlocks(ray, config_.min_ray_length_m, carve_to, keys);
+  }
   if (range.d_max - range.d_min <= truncation) {
     addSegmentBlocks(ray, range.d_min, range.d_max, keys);
     return;

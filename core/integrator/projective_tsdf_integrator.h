@@ -39,8 +39,12 @@ namespace cblox {
 /// Voxels are updated a row at a time (ProjectiveVoxelRows: eight voxels at once on AVX2
 /// CPUs, IntegratorConfig::vectorized).
 ///
-/// Compared with the ray-casting integrators it maps no free space outside the blocks
-/// of the truncation band, and it is much faster. Every voxel is owned by exactly one
+/// Free space: with IntegratorConfig::projective_carving_depth_m > 0 each cell also
+/// contributes the blocks around its centre ray from min_ray_length_m to its nearest depth
+/// less the truncation (at most that carving depth), and their voxels in front of the
+/// surface are updated to +truncation as the band's are. Without it (0, the default), it
+/// maps no free space outside the blocks of the truncation band, and it is much faster
+/// than the ray-casting integrators. Every voxel is owned by exactly one
 /// thread per frame (work is split by block), so results do not depend on num_threads.
 /// Uses truncation, weights, ray-length limits, colour blending and num_threads from
 /// IntegratorConfig; the fast-integrator settings and voxel carving do not apply.

@@ -62,9 +62,10 @@ IntegratorConfig loadIntegratorConfig(const YAML::Node& node, float voxel_size,
   requireKnownKeys(
       node, path,
       {"type", "truncation_distance_m", "max_weight", "min_ray_length_m", "max_ray_length_m",
-       "weight_model", "use_weight_dropoff", "voxel_carving_enabled", "color_blending",
-       "num_threads", "start_voxel_subsampling_factor", "max_consecutive_ray_collisions",
-       "max_integration_time_s", "visited_voxel_set", "approx_set_log2_buckets"});
+       "weight_model", "use_weight_dropoff", "voxel_carving_enabled", "projective_carving_depth_m",
+       "color_blending", "num_threads", "start_voxel_subsampling_factor",
+       "max_consecutive_ray_collisions", "max_integration_time_s", "visited_voxel_set",
+       "approx_set_log2_buckets"});
   IntegratorConfig config;
   if (!isAbsent(node)) {
     std::string type_name = integratorTypeName(*type);
@@ -84,6 +85,7 @@ IntegratorConfig loadIntegratorConfig(const YAML::Node& node, float voxel_size,
         &config.weight_model);
     readOptional(node, path, "use_weight_dropoff", &config.use_weight_dropoff);
     readOptional(node, path, "voxel_carving_enabled", &config.voxel_carving_enabled);
+    readOptional(node, path, "projective_carving_depth_m", &config.projective_carving_depth_m);
     readOptionalEnum(node, path, "color_blending",
                      {{"weighted_average", ColorBlending::kWeightedAverage},
                       {"overwrite", ColorBlending::kOverwrite},

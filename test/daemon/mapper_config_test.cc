@@ -39,6 +39,7 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.integrator.max_ray_length_m, b.integrator.max_ray_length_m);
   EXPECT_EQ(a.integrator.weight_model, b.integrator.weight_model);
   EXPECT_EQ(a.integrator.use_weight_dropoff, b.integrator.use_weight_dropoff);
+  EXPECT_EQ(a.integrator.projective_carving_depth_m, b.integrator.projective_carving_depth_m);
   EXPECT_EQ(a.integrator.color_blending, b.integrator.color_blending);
   EXPECT_EQ(a.integrator.num_threads, b.integrator.num_threads);
   EXPECT_EQ(a.integrator.max_integration_time_s, b.integrator.max_integration_time_s);

@@ -34,6 +34,7 @@ TEST(YamlConfig, ShippedConfigMatchesTheCodeDefaults) {
   EXPECT_EQ(integrator.weight_model, defaults.weight_model);
   EXPECT_EQ(integrator.use_weight_dropoff, defaults.use_weight_dropoff);
   EXPECT_EQ(integrator.voxel_carving_enabled, defaults.voxel_carving_enabled);
+  EXPECT_EQ(integrator.projective_carving_depth_m, defaults.projective_carving_depth_m);
   EXPECT_EQ(integrator.color_blending, defaults.color_blending);
   EXPECT_EQ(integrator.num_threads, defaults.num_threads);
   EXPECT_EQ(integrator.start_voxel_subsampling_factor, defaults.start_voxel_subsampling_factor);
@@ -57,7 +58,8 @@ TEST(YamlConfig, MissingSectionsKeepDefaults) {
 TEST(YamlConfig, ValuesAreRead) {
   const YAML::Node node = YAML::Load(
       "type: projective\ntruncation_distance_m: 0.1\nweight_model: constant\n"
-      "color_blending: none\nnum_threads: 1\nvisited_voxel_set: hash_set\n");
+      "color_blending: none\nnum_threads: 1\nvisited_voxel_set: hash_set\n"
+      "projective_carving_depth_m: 3.0\n");
   IntegratorType type = IntegratorType::kFast;
   const IntegratorConfig config = loadIntegratorConfig(node, 0.02f, &type);
   EXPECT_EQ(type, IntegratorType::kProjective);
@@ -66,6 +68,7 @@ TEST(YamlConfig, ValuesAreRead) {
   EXPECT_EQ(config.color_blending, ColorBlending::kNone);
   EXPECT_EQ(config.num_threads, 1);
   EXPECT_EQ(config.visited_voxel_set, VisitedVoxelSet::kApproxHashSet);
+  EXPECT_EQ(config.projective_carving_depth_m, 3.0f);
 }
 
 TEST(YamlConfig, ErrorsNameTheKey) {
@@ -81,6 +84,7 @@ TEST(YamlConfig, ErrorsNameTheKey) {
       {"type: magic", "integrator.type"},
       {"weight_model: cubic", "integrator.weight_model"},
       {"truncation_distance_m: 0.001", "integrator.truncation_distance_m"},
+      {"projective_carving_depth_m: -1", "integrator.projective_carving_depth_m"},
   };
   for (const auto& [yaml, key] : integrator_cases) {
     EXPECT_NE(errorOf([&] { loadIntegratorConfig(YAML::Load(yaml), 0.02f, &type); }).find(key),

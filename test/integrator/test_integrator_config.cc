@@ -30,6 +30,12 @@ TEST(IntegratorConfig, MessagesNameTheField) {
       {[](IntegratorConfig& c) { c.max_weight = 0.0f; }, "max_weight"},
       {[](IntegratorConfig& c) { c.min_ray_length_m = -1.0f; }, "min_ray_length_m"},
       {[](IntegratorConfig& c) { c.max_ray_length_m = 0.05f; }, "max_ray_length_m"},
+      {[](IntegratorConfig& c) { c.projective_carving_depth_m = -1.0f; },
+       "projective_carving_depth_m"},
+      {[](IntegratorConfig& c) {
+         c.projective_carving_depth_m = std::numeric_limits<float>::infinity();
+       },
+       "projective_carving_depth_m"},
       {[](IntegratorConfig& c) { c.num_threads = 0; }, "num_threads"},
       {[](IntegratorConfig& c) { c.start_voxel_subsampling_factor = 0.0f; },
        "start_voxel_subsampling_factor"},

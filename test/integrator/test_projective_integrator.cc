@@ -113,6 +113,44 @@ TEST(ProjectiveTsdfIntegrator, BlockSearchCoversTheTruncationBandOfEveryPixel) {
   EXPECT_GT(checked, 10000u);
 }
 
+// Carving: in front of a wall 2 m away, the space up to the carving depth is mapped as free
+// (+truncation, observed); beyond it, up to the band, no block is allocated; without carving
+// only the band is.
+TEST(ProjectiveTsdfIntegrator, CarvingMapsTheFreeSpaceInFrontOfTheSurfaceUpToItsDepth) {
+  const PinholeCamera camera = test::smallCamera();
+  const AnalyticScene scene =
+      makePlaneScene(Eigen::Vector3d(0, 0, 2.0), Eigen::Vector3d(0, 0, -1), 0.2);
+  DepthImage depth(160, 120);
+  scene.renderDepth(Transformationd(), camera, &depth, nullptr, 10.0);
+  for (const float carving : {0.0f, 1.0f}) {
+    TsdfLayer layer(LayerConfig{kVoxelSize, 8});
+    IntegratorConfig config;
+    config.projective_carving_depth_m = carving;
+    ProjectiveTsdfIntegrator integrator(config, &layer);
+    integrator.integrateDepthImage(Transformation(), depth, camera, nullptr);
+    size_t free = 0;
+    for (int v = 4; v < 116; v += 7) {
+      for (int u = 4; u < 156; u += 7) {
+        const Eigen::Vector3f ray((u - 79.5f) / 150.0f, (v - 59.5f) / 150.0f, 1.0f);
+        for (float z = 0.2f; z < 1.95f; z += 0.05f) {
+          const TsdfVoxel* voxel = layer.getVoxelAtPoint(ray * z);
+          if (carving > 0.0f && z <= carving - 0.02f) {
+            // Within the carving depth: free space, every voxel observed at +truncation.
+            ASSERT_NE(voxel, nullptr) << u << "," << v << " z " << z;
+            ASSERT_TRUE(voxel->observed()) << u << "," << v << " z " << z;
+            EXPECT_EQ(voxel->distance, config.truncation_distance_m);
+            ++free;
+          } else if (z > carving + 0.3f && z < 2.0f - config.truncation_distance_m - 0.3f) {
+            // Beyond the blocks' reach from the carved segment and from the band.
+            EXPECT_EQ(voxel, nullptr) << u << "," << v << " z " << z;
+          }
+        }
+      }
+    }
+    EXPECT_EQ(free > 0, carving > 0.0f);
+  }
+}
+
 TEST(ProjectiveTsdfIntegrator, SphereNearSurfaceVoxelsMatchTheTrueSignedDistance) {
   TsdfLayer layer(LayerConfig{kVoxelSize, 8});
   ProjectiveTsdfIntegrator integrator(IntegratorConfig{}, &layer);

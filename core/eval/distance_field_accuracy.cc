@@ -33,9 +33,44 @@ bool observedFree(const TriangleMeshRaycaster& truth, std::span<const DepthView>
     ray.t_far = static_cast<float>(view.max_depth_m);
     RaycastHit hit;
     if (!truth.intersect(ray, &hit)) continue;  // no depth measured there
+    if (static_cast<double>(hit.t) * (p_D / z).norm() > view.max_ray_length_m) continue;
     if (static_cast<double>(hit.t) - z >= free_depth) return true;
   }
   return false;
+}
+
+/// True if some view saw the surface point q: in its image, depth range and ray length, the
+/// first hit on the ray through q within a centimetre of q's depth.
+bool seen(const TriangleMeshRaycaster& truth, std::span<const DepthView> views, int stride,
+          const Eigen::Vector3d& q_G) {
+  constexpr double kTolerance = 0.01;
+  for (size_t v = 0; v < views.size(); v += static_cast<size_t>(stride)) {
+    const DepthView& view = views[v];
+    const Eigen::Vector3d q_D = view.T_G_D.inverse() * q_G;
+    const double z = q_D.z();
+    if (!(z >= view.min_depth_m) || !(z <= view.max_depth_m)) continue;
+    if (q_D.norm() > view.max_ray_length_m) continue;
+    const PinholeIntrinsics& k = view.intrinsics;
+    const double u = k.fx * q_D.x() / z + k.cx;
+    const double w = k.fy * q_D.y() / z + k.cy;
+    if (!(u >= 0.0 && u < k.width && w >= 0.0 && w < k.height)) continue;
+    Ray ray;
+    ray.origin = view.T_G_D.translation().cast<float>();
+    ray.direction = (view.T_G_D.rotation() * (q_D / z)).cast<float>();
+    ray.t_near = 0.0f;
+    ray.t_far = static_cast<float>(z + kTolerance);
+    RaycastHit hit;
+    if (truth.intersect(ray, &hit) && static_cast<double>(hit.t) >= z - kTolerance) return true;
+  }
+  return false;
+}
+
+/// Median, p99 and max of *errors (reordered) into the three outputs.
+void summarize(std::vector<double>* errors, double* median, double* p99, double* max) {
+  if (errors->empty()) return;
+  *max = *std::max_element(errors->begin(), errors->end());
+  *p99 = quantile(errors, 0.99);
+  *median = quantile(errors, 0.5);
 }
 
 }  // namespace
@@ -52,8 +87,11 @@ std::string DistanceTruthConfig::validate() const {
   return {};
 }
 
-double signedDistanceToMesh(const TriangleMeshRaycaster& truth, const Eigen::Vector3d& p) {
-  const double distance = truth.closestPoint(p).distance;
+double signedDistanceToMesh(const TriangleMeshRaycaster& truth, const Eigen::Vector3d& p,
+                            Eigen::Vector3d* closest) {
+  const ClosestSurfacePoint nearest = truth.closestPoint(p);
+  if (closest != nullptr) *closest = nearest.point;
+  const double distance = nearest.distance;
   static const Eigen::Vector3f kDirections[3] = {
       Eigen::Vector3f(0.267f, 0.534f, 0.802f).normalized(),
       Eigen::Vector3f(-0.577f, 0.211f, -0.789f).normalized(),
@@ -94,9 +132,11 @@ std::optional<std::vector<DistanceTruthSample>> sampleDistanceTruth(
     for (size_t i = static_cast<size_t>(id); i < samples.size();
          i += static_cast<size_t>(threads)) {
       DistanceTruthSample& s = samples[i];
-      s.signed_distance_m = signedDistanceToMesh(truth, s.p_G);
+      Eigen::Vector3d closest;
+      s.signed_distance_m = signedDistanceToMesh(truth, s.p_G, &closest);
       s.observed_free = s.signed_distance_m > 0.0 &&
                         observedFree(truth, views, config.view_stride, free_depth, s.p_G);
+      s.nearest_surface_seen = seen(truth, views, config.view_stride, closest);
     }
   });
   return samples;
@@ -110,7 +150,7 @@ DistanceFieldAccuracy scoreDistanceField(std::span<const DistanceTruthSample> tr
   }
   DistanceFieldAccuracy a;
   a.samples = truth.size();
-  std::vector<double> errors;
+  std::vector<double> errors, seen_errors;
   for (size_t i = 0; i < truth.size(); ++i) {
     const DistanceTruthSample& t = truth[i];
     const FieldAnswer& f = answers[i];
@@ -135,14 +175,14 @@ DistanceFieldAccuracy scoreDistanceField(std::span<const DistanceTruthSample> tr
     }
     if (known && std::abs(t.signed_distance_m) < max_distance_m - voxel_m) {
       errors.push_back(std::abs(f.distance_m - t.signed_distance_m) / voxel_m);
+      if (t.nearest_surface_seen) seen_errors.push_back(errors.back());
     }
   }
   a.compared = errors.size();
-  if (!errors.empty()) {
-    a.error_max_voxels = *std::max_element(errors.begin(), errors.end());
-    a.error_p99_voxels = quantile(&errors, 0.99);
-    a.error_median_voxels = quantile(&errors, 0.5);
-  }
+  a.compared_seen = seen_errors.size();
+  summarize(&errors, &a.error_median_voxels, &a.error_p99_voxels, &a.error_max_voxels);
+  summarize(&seen_errors, &a.seen_error_median_voxels, &a.seen_error_p99_voxels,
+            &a.seen_error_max_voxels);
   return a;
 }
 

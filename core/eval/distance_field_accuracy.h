@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -28,6 +29,9 @@ struct DepthView {
   PinholeIntrinsics intrinsics;
   double min_depth_m = 0.0;  ///< nearer depths are not measured
   double max_depth_m = 0.0;  ///< farther depths are not measured (no value at the pixel)
+  /// Measurements farther than this from the camera centre (along the ray) are not
+  /// integrated (the integrator's max_ray_length_m).
+  double max_ray_length_m = std::numeric_limits<double>::infinity();
 };
 
 /// Options of sampleDistanceTruth(). Plain value type.
@@ -58,8 +62,14 @@ struct DistanceTruthSample {
   /// negative inside a solid.
   double signed_distance_m = 0.0;
   /// Some view saw through the point: inside its image and depth range, with the surface
-  /// measured on the ray through it at least truncation_m + free_margin_m deeper.
+  /// measured on the ray through it (within the view's depth range and ray length) at least
+  /// truncation_m + free_margin_m deeper.
   bool observed_free = false;
+  /// Some view saw the surface point closest to the point (inside its image and depth
+  /// range, nothing in front of it by more than a centimetre): a field built from the views
+  /// can know the distance. False where the nearest surface was never seen (a ceiling the
+  /// camera never looked at): the field can only overestimate there.
+  bool nearest_surface_seen = false;
 };
 
 /// Samples the truth. The sign is the vote of three rays from the point (fixed, non-axis
@@ -72,9 +82,10 @@ std::optional<std::vector<DistanceTruthSample>> sampleDistanceTruth(
     const TriangleMeshRaycaster& truth, std::span<const DepthView> views,
     const DistanceTruthConfig& config, std::string* error);
 
-/// The signed distance of p to the truth mesh as sampleDistanceTruth() defines it.
-/// Thread-safe.
-double signedDistanceToMesh(const TriangleMeshRaycaster& truth, const Eigen::Vector3d& p);
+/// The signed distance of p to the truth mesh as sampleDistanceTruth() defines it, and the
+/// closest surface point when `closest` is not null. Thread-safe.
+double signedDistanceToMesh(const TriangleMeshRaycaster& truth, const Eigen::Vector3d& p,
+                            Eigen::Vector3d* closest = nullptr);
 
 /// A field's answer at one sample point.
 struct FieldAnswer {
@@ -90,6 +101,9 @@ struct DistanceFieldAccuracy {
   /// |distance| is below max_distance_m - voxel (beyond it the field clamps).
   size_t compared = 0;
   double error_median_voxels = 0.0, error_p99_voxels = 0.0, error_max_voxels = 0.0;
+  /// The same over the compared points whose nearest surface some view saw.
+  size_t compared_seen = 0;
+  double seen_error_median_voxels = 0.0, seen_error_p99_voxels = 0.0, seen_error_max_voxels = 0.0;
   /// Points inside a solid or within one voxel of one ...
   size_t near_obstacle = 0;
   /// ... that are answered free farther than one voxel (by more than 1 % of one): a planner

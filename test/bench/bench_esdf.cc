@@ -66,8 +66,9 @@ struct PeerResult {
 struct Result {
   float voxel = 0.0f;
   size_t blocks = 0;
-  std::vector<double> update_ms;      // per frame
-  std::vector<double> blocks_read;    // per frame
+  std::vector<double> update_ms;    // per frame
+  std::vector<double> blocks_read;  // per frame
+  std::vector<double> popped;       // per frame: wavefront steps
   double batch_ms = 0.0;
   double query_ns = 0.0;              // per point, 10^4 points
   std::vector<double> errors_voxels;  // observed free voxels within max distance
@@ -107,6 +108,7 @@ Result run(const DemoRoomOrbit& orbit, float voxel, const AnalyticScene& room) {
     const EsdfUpdateStats stats = esdf_integrator.update(layer, &esdf);
     r.update_ms.push_back(msSince(start));
     r.blocks_read.push_back(static_cast<double>(stats.tsdf_blocks_read));
+    r.popped.push_back(static_cast<double>(stats.voxels_popped));
 #ifdef CBLOX_HAVE_VOXBLOX
     for (size_t m = 0; m < peers.size(); ++m) {
       r.voxblox[m].update_ms.push_back(peers[m]->update(layer));
@@ -125,8 +127,7 @@ Result run(const DemoRoomOrbit& orbit, float voxel, const AnalyticScene& room) {
   const int n = esdf.voxelsPerSide();
   for (const auto& [key, block] : esdf.blocks()) {
     for (int i = 0; i < esdf.voxelsPerBlock(); ++i) {
-      const GlobalVoxelIndex g =
-          block->index * n + GridIndex(i % n, (i / n) % n, i / (n * n));
+      const GlobalVoxelIndex g = block->index * n + GridIndex(i % n, (i / n) % n, i / (n * n));
       VoxelState state;
       float distance;
       voxelDistance(esdf, g, &state, &distance);
@@ -146,8 +147,7 @@ Result run(const DemoRoomOrbit& orbit, float voxel, const AnalyticScene& room) {
     p.batch_ms = peers[m]->batch();
     for (const auto& [key, block] : esdf.blocks()) {
       for (int i = 0; i < esdf.voxelsPerBlock(); ++i) {
-        const GlobalVoxelIndex g =
-            block->index * n + GridIndex(i % n, (i / n) % n, i / (n * n));
+        const GlobalVoxelIndex g = block->index * n + GridIndex(i % n, (i / n) % n, i / (n * n));
         float distance = 0.0f;
         if (!peers[m]->distance(g, &distance) || !(distance > 0.0f)) continue;
         ++p.observed_free;
@@ -199,12 +199,15 @@ int main(int argc, char** argv) {
   cblox::DemoRoomOrbit orbit;
   orbit.frames = frames;
   const cblox::AnalyticScene room = orbit.source().scene();
-  std::printf("analytic room, %d frames 640x480, projective integrator, truncation 4 voxels, "
-              "depth cut at %.1f m; max_distance_m 2; %d rounds, 1 thread\n",
-              frames, kMaxDepth, repeats);
-  std::printf("\n| voxel | TSDF blocks | update ms/frame median | p95 | max | blocks read/frame "
-              "median | batch build ms | query ns/point | error median (voxels) | p99 | unsafe "
-              "| observed free voxels |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "analytic room, %d frames 640x480, projective integrator, truncation 4 voxels, "
+      "depth cut at %.1f m; max_distance_m 2; %d rounds, 1 thread\n",
+      frames, kMaxDepth, repeats);
+  std::printf(
+      "\n| voxel | TSDF blocks | update ms/frame median | p95 | max | blocks read/frame "
+      "median | voxels popped/frame median | batch build ms | query ns/point | error median "
+      "(voxels) | p99 | unsafe "
+      "| observed free voxels |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::vector<Result> results;
   for (const float voxel : {0.05f, 0.02f}) {
     Result best;
@@ -224,30 +227,31 @@ int main(int argc, char** argv) {
       }
     }
     results.push_back(best);
-    std::printf("| %.2f m | %zu | %.2f | %.2f | %.2f | %.0f | %.1f | %.0f | %.3f | %.3f | %zu | "
-                "%zu |\n",
-                voxel, best.blocks, median(best.update_ms), percentile(best.update_ms, 0.95),
-                *std::max_element(best.update_ms.begin(), best.update_ms.end()),
-                median(best.blocks_read), best.batch_ms, best.query_ns,
-                median(best.errors_voxels), percentile(best.errors_voxels, 0.99), best.unsafe,
-                best.observed_free);
+    std::printf(
+        "| %.2f m | %zu | %.2f | %.2f | %.2f | %.0f | %.0f | %.1f | %.0f | %.3f | %.3f | "
+        "%zu | %zu |\n",
+        voxel, best.blocks, median(best.update_ms), percentile(best.update_ms, 0.95),
+        *std::max_element(best.update_ms.begin(), best.update_ms.end()), median(best.blocks_read),
+        median(best.popped), best.batch_ms, best.query_ns, median(best.errors_voxels),
+        percentile(best.errors_voxels, 0.99), best.unsafe, best.observed_free);
     std::fflush(stdout);
   }
   if (!results.empty() && !results.front().voxblox.empty()) {
-    std::printf("\nvoxblox's EsdfIntegrator on copies of the same TSDF layers (same rounds):\n"
-                "\n| voxel | voxblox mode | update ms/frame median | p95 | batch build ms | "
-                "ours / voxblox update median | ours / voxblox batch | error median (voxels) | "
-                "p99 | unsafe | observed free voxels |\n"
-                "|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "\nvoxblox's EsdfIntegrator on copies of the same TSDF layers (same rounds):\n"
+        "\n| voxel | voxblox mode | update ms/frame median | p95 | batch build ms | "
+        "ours / voxblox update median | ours / voxblox batch | error median (voxels) | "
+        "p99 | unsafe | observed free voxels |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (const Result& res : results) {
       for (size_t m = 0; m < res.voxblox.size(); ++m) {
         const PeerResult& p = res.voxblox[m];
-        std::printf("| %.2f m | %s | %.2f | %.2f | %.1f | %.3f | %.3f | %.3f | %.3f | %zu | %zu |\n",
-                    res.voxel, m == 0 ? "quasi-Euclidean" : "full Euclidean", median(p.update_ms),
-                    percentile(p.update_ms, 0.95), p.batch_ms,
-                    median(res.update_ms) / median(p.update_ms), res.batch_ms / p.batch_ms,
-                    median(p.errors_voxels), percentile(p.errors_voxels, 0.99), p.unsafe,
-                    p.observed_free);
+        std::printf(
+            "| %.2f m | %s | %.2f | %.2f | %.1f | %.3f | %.3f | %.3f | %.3f | %zu | %zu |\n",
+            res.voxel, m == 0 ? "quasi-Euclidean" : "full Euclidean", median(p.update_ms),
+            percentile(p.update_ms, 0.95), p.batch_ms, median(res.update_ms) / median(p.update_ms),
+            res.batch_ms / p.batch_ms, median(p.errors_voxels), percentile(p.errors_voxels, 0.99),
+            p.unsafe, p.observed_free);
       }
     }
   }

@@ -41,7 +41,7 @@
 //                           [--q-min 3e3,1e4,3e4,1e5] [--most-shared-q-min Q,...]
 //                           [--anchors-q-min Q,...]
 //                           [--revisit-overlap-q-min Q,... [--revisit-keyframe-gap 30]]
-//                           [--planning-samples N] [--out DIR]
+//                           [--planning-samples N] [--carving-depth D] [--out DIR]
 //
 // Mappers integrate every frame (no time budget, waited for) so the comparison does not
 // depend on the machine's load; with --sync-slam (the default) the SLAM's local mapping and
@@ -58,6 +58,8 @@
 // at N random points of the scene's bounds against the exact signed distance (Embree closest
 // points; distance_field_accuracy.h): error, the unsafe count, observed free space answered
 // unknown; maps made with the tracker's poses are queried through the trajectory alignment.
+// --carving-depth D: the projective integrator also maps the free space in front of the
+// surfaces up to depth D (IntegratorConfig::projective_carving_depth_m).
 
 #include <algorithm>
 #include <chrono>
@@ -153,8 +155,8 @@ void scorePlanningMaps(const TriangleMeshRaycaster& truth, const std::vector<Dep
   const MapperConfig& config = variants->front()->mapper->config();
   DistanceTruthConfig truth_config;
   truth_config.samples = samples;
-  truth_config.box = Eigen::AlignedBox3d(truth.bounds().min().cast<double>(),
-                                         truth.bounds().max().cast<double>());
+  truth_config.box =
+      Eigen::AlignedBox3d(truth.bounds().min().cast<double>(), truth.bounds().max().cast<double>());
   truth_config.truncation_m = config.integrator.truncation_distance_m;
   truth_config.free_margin_m = voxel;
   truth_config.view_stride = 2;
@@ -165,8 +167,8 @@ void scorePlanningMaps(const TriangleMeshRaycaster& truth, const std::vector<Dep
     std::fprintf(stderr, "planning truth: %s\n", error.c_str());
     return;
   }
-  std::fprintf(stderr, "planning truth: %zu points, %zu views (every 2nd used), %.1f s\n",
-               samples, views.size(), std::chrono::duration<double>(Clock::now() - start).count());
+  std::fprintf(stderr, "planning truth: %zu points, %zu views (every 2nd used), %.1f s\n", samples,
+               views.size(), std::chrono::duration<double>(Clock::now() - start).count());
   const double max_distance = config.planning.esdf.max_distance_m;
   for (auto& v : *variants) {
     if (!v->mapper->syncPlanningMap(std::chrono::minutes(5)) || !v->mapper->planningMap()) {
@@ -191,25 +193,27 @@ void scorePlanningMaps(const TriangleMeshRaycaster& truth, const std::vector<Dep
       "\nplanning maps at %zu random points of the scene's bounds (max_distance_m %.1f, voxel "
       "%.3f m), against the exact signed distance; unsafe = inside or within one voxel of a "
       "surface, answered free farther than one voxel; observed free = a depth image saw "
-      "through the point more than truncation + one voxel before the surface:\n"
+      "through the point more than truncation + one voxel before the surface; nearest surface "
+      "seen = a depth image saw the surface point closest to the point:\n"
       "| map | free / occupied / unknown answers | compared | error median (voxels) | p99 | max "
-      "| unsafe (of near) | of them over by > 1 voxel | observed free answered unknown | far "
-      "answered occupied |\n"
-      "|---|---|---|---|---|---|---|---|---|---|\n",
+      "| nearest surface seen: compared | error median | p99 | max | unsafe (of near) | of them "
+      "over by > 1 voxel | observed free answered unknown | far answered occupied |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
       samples, max_distance, voxel);
   for (const auto& v : *variants) {
     if (!v->planning) continue;
     const DistanceFieldAccuracy& a = *v->planning;
-    std::printf("| %s | %zu / %zu / %zu | %zu | %.3f | %.3f | %.2f | %zu (of %zu) | %zu | %zu of "
-                "%zu (%.1f %%) | %zu |\n",
-                v->name.c_str(), a.answered_free, a.answered_occupied, a.answered_unknown,
-                a.compared, a.error_median_voxels, a.error_p99_voxels, a.error_max_voxels,
-                a.unsafe, a.near_obstacle, a.unsafe_by_a_voxel, a.observed_free_unknown,
-                a.observed_free,
-                a.observed_free > 0 ? 100.0 * static_cast<double>(a.observed_free_unknown) /
-                                          static_cast<double>(a.observed_free)
-                                    : 0.0,
-                a.far_answered_occupied);
+    std::printf(
+        "| %s | %zu / %zu / %zu | %zu | %.3f | %.3f | %.2f | %zu | %.3f | %.3f | %.2f | "
+        "%zu (of %zu) | %zu | %zu of %zu (%.1f %%) | %zu |\n",
+        v->name.c_str(), a.answered_free, a.answered_occupied, a.answered_unknown, a.compared,
+        a.error_median_voxels, a.error_p99_voxels, a.error_max_voxels, a.compared_seen,
+        a.seen_error_median_voxels, a.seen_error_p99_voxels, a.seen_error_max_voxels, a.unsafe,
+        a.near_obstacle, a.unsafe_by_a_voxel, a.observed_free_unknown, a.observed_free,
+        a.observed_free > 0 ? 100.0 * static_cast<double>(a.observed_free_unknown) /
+                                  static_cast<double>(a.observed_free)
+                            : 0.0,
+        a.far_answered_occupied);
   }
   std::fflush(stdout);
 }
@@ -239,6 +243,7 @@ int run(int argc, char** argv) {
   std::vector<double> anchors_sweep;
   int revisit_keyframe_gap = FusionSchedulerConfig{}.revisit_keyframe_gap;
   size_t planning_samples = 0;
+  float carving_depth = IntegratorConfig{}.projective_carving_depth_m;
 #ifdef CBLOX_DEFAULT_VOCABULARY
   vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
 #endif
@@ -340,6 +345,10 @@ int run(int argc, char** argv) {
                  "every map keeps its planning map (distance fields), scored at the end at this "
                  "many random points of the scene against the exact distances (0: off)")
       ->capture_default_str();
+  app.add_option("--carving-depth", carving_depth,
+                 "the projective integrator maps free space up to this depth, metres "
+                 "(integrator.projective_carving_depth_m; 0: the surfaces' band only)")
+      ->capture_default_str();
   app.add_option("--out", out_dir, "writes DIR/maintenance_<scene>.json and the sweep picture")
       ->type_name("DIR");
   app.add_option("--vocabulary", vocabulary_path, "vocabulary file")->capture_default_str();
@@ -429,6 +438,7 @@ int run(int argc, char** argv) {
     v->revisit_frames = frames.value_or(revisit_frames);
     MapperConfig config = baseConfig(voxel, work, sync_slam);
     config.planning.enabled = planning_samples > 0;
+    config.integrator.projective_carving_depth_m = carving_depth;
     if (kind == Kind::kGroundTruth || kind == Kind::kNaive) {
       config.pose_source = PoseSource::kGroundTruth;          // poses fed as given, never corrected
       config.creation.max_keyframes_per_subvolume = 1 << 30;  // one volume
@@ -555,7 +565,7 @@ int run(int argc, char** argv) {
   }
 
   std::map<uint64_t, Transformationd> truth_by_frame;  // for the trajectory alignment
-  std::vector<DepthView> views;                       // the depth images' true poses
+  std::vector<DepthView> views;                        // the depth images' true poses
 
   // SLAM outputs, from its threads, handed to the tracker-mode mappers by the main loop.
   std::mutex mutex;
@@ -647,7 +657,8 @@ int run(int argc, char** argv) {
     depth.max_depth_m = static_cast<float>(info.depth_max_m);
     if (planning_samples > 0) {
       views.push_back(DepthView{*frame.T_G_C * depth.T_B_D, depth.intrinsics, info.depth_min_m,
-                                info.depth_max_m});
+                                info.depth_max_m,
+                                variants.front()->mapper->config().integrator.max_ray_length_m});
     }
     const bool ok = r.state == TrackingState::kOk && r.T_C_G.has_value();
     if (!ok) ++lost;
@@ -911,20 +922,23 @@ int run(int argc, char** argv) {
                               {"rejected_by_q", v->fusion.rejected_by_q}});
       if (v->planning) {
         const DistanceFieldAccuracy& a = *v->planning;
-        json["maps"].back()["planning"] = {
-            {"samples", a.samples},
-            {"answered_free", a.answered_free},
-            {"answered_occupied", a.answered_occupied},
-            {"answered_unknown", a.answered_unknown},
-            {"error_median_voxels", a.error_median_voxels},
-            {"error_p99_voxels", a.error_p99_voxels},
-            {"error_max_voxels", a.error_max_voxels},
-            {"near_obstacle", a.near_obstacle},
-            {"unsafe", a.unsafe},
-            {"unsafe_by_a_voxel", a.unsafe_by_a_voxel},
-            {"observed_free", a.observed_free},
-            {"observed_free_unknown", a.observed_free_unknown},
-            {"far_answered_occupied", a.far_answered_occupied}};
+        json["maps"].back()["planning"] = {{"samples", a.samples},
+                                           {"answered_free", a.answered_free},
+                                           {"answered_occupied", a.answered_occupied},
+                                           {"answered_unknown", a.answered_unknown},
+                                           {"error_median_voxels", a.error_median_voxels},
+                                           {"error_p99_voxels", a.error_p99_voxels},
+                                           {"error_max_voxels", a.error_max_voxels},
+                                           {"compared_seen", a.compared_seen},
+                                           {"seen_error_median_voxels", a.seen_error_median_voxels},
+                                           {"seen_error_p99_voxels", a.seen_error_p99_voxels},
+                                           {"seen_error_max_voxels", a.seen_error_max_voxels},
+                                           {"near_obstacle", a.near_obstacle},
+                                           {"unsafe", a.unsafe},
+                                           {"unsafe_by_a_voxel", a.unsafe_by_a_voxel},
+                                           {"observed_free", a.observed_free},
+                                           {"observed_free_unknown", a.observed_free_unknown},
+                                           {"far_answered_occupied", a.far_answered_occupied}};
       }
     }
     std::ofstream(out_dir + "/maintenance_" + stem + ".json") << json.dump(2) << "\n";

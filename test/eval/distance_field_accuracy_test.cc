@@ -105,6 +105,40 @@ TEST(DistanceFieldAccuracyTest, ObservedFreeIsWhatTheViewSawThroughBeyondTheTrun
   }
 }
 
+TEST(DistanceFieldAccuracyTest, TheNearestSurfaceIsSeenWhenTheViewSawItsClosestPoint) {
+  const auto truth = cubeInRoom();
+  const DepthView view = lookingAtTheCube();
+  DepthView near_view = view;
+  auto at = [&](const Eigen::Vector3d& p) {
+    DistanceTruthConfig config;
+    config.samples = 1;
+    config.box = Eigen::AlignedBox3d(p - Eigen::Vector3d::Constant(1e-9),
+                                     p + Eigen::Vector3d::Constant(1e-9));
+    config.truncation_m = 0.2;
+    std::string error;
+    const auto samples =
+        sampleDistanceTruth(*truth, std::span<const DepthView>(&near_view, 1), config, &error);
+    EXPECT_TRUE(samples) << error;
+    return samples ? samples->front() : DistanceTruthSample{};
+  };
+  // In front of the face x = 0 the camera looks at: its closest point is on that face.
+  const DistanceTruthSample front = at(Eigen::Vector3d(-0.5, 0.5, 0.5));
+  EXPECT_NEAR(front.signed_distance_m, 0.5, 1e-6);
+  EXPECT_TRUE(front.observed_free);
+  EXPECT_TRUE(front.nearest_surface_seen);
+  // Behind the cube: its closest point is on the back face x = 1, hidden from the camera.
+  const DistanceTruthSample behind = at(Eigen::Vector3d(1.3, 0.5, 0.5));
+  EXPECT_NEAR(behind.signed_distance_m, 0.3, 1e-6);
+  EXPECT_FALSE(behind.observed_free);
+  EXPECT_FALSE(behind.nearest_surface_seen);
+  // A camera that integrates nothing farther than 1.9 m along the ray measured neither the
+  // face 2 m away nor the space in front of it.
+  near_view.max_ray_length_m = 1.9;
+  const DistanceTruthSample unmeasured = at(Eigen::Vector3d(-0.5, 0.5, 0.5));
+  EXPECT_FALSE(unmeasured.observed_free);
+  EXPECT_FALSE(unmeasured.nearest_surface_seen);
+}
+
 TEST(DistanceFieldAccuracyTest, BadOptionsAreRefused) {
   const auto truth = cubeInRoom();
   DistanceTruthConfig config;
@@ -121,20 +155,21 @@ TEST(DistanceFieldAccuracyTest, BadOptionsAreRefused) {
 
 TEST(DistanceFieldAccuracyTest, TheFiguresCountWhatAPlannerWouldMeet) {
   constexpr double kVoxel = 0.1;
-  auto sample = [](double d, bool observed_free) {
+  auto sample = [](double d, bool observed_free, bool seen = true) {
     DistanceTruthSample s;
     s.signed_distance_m = d;
     s.observed_free = observed_free;
+    s.nearest_surface_seen = seen;
     return s;
   };
   const std::vector<DistanceTruthSample> truth = {
-      sample(-0.05, false),  // inside, answered free 0.2: unsafe
-      sample(0.05, false),   // near, answered free 0.1005: within 1 % of a voxel, safe
-      sample(0.09, false),   // near, answered free 0.15: unsafe by less than a voxel
-      sample(0.08, false),   // near, answered occupied -0.02
-      sample(0.5, true),     // observed free, answered 0.45
-      sample(0.9, true),     // observed free, answered unknown
-      sample(3.0, true),     // beyond max distance, answered occupied: a false obstacle
+      sample(-0.05, false, false),  // inside, answered free 0.2: unsafe; its surface unseen
+      sample(0.05, false),          // near, answered free 0.1005: within 1 % of a voxel, safe
+      sample(0.09, false),          // near, answered free 0.15: unsafe by less than a voxel
+      sample(0.08, false),          // near, answered occupied -0.02
+      sample(0.5, true),            // observed free, answered 0.45
+      sample(0.9, true),            // observed free, answered unknown
+      sample(3.0, true),            // beyond max distance, answered occupied: a false obstacle
   };
   const std::vector<FieldAnswer> answers = {
       {VoxelState::kFree, 0.2},       {VoxelState::kFree, 0.1005}, {VoxelState::kFree, 0.15},
@@ -157,6 +192,11 @@ TEST(DistanceFieldAccuracyTest, TheFiguresCountWhatAPlannerWouldMeet) {
   EXPECT_NEAR(a.error_median_voxels, 0.6, 1e-9);  // the upper median
   EXPECT_NEAR(a.error_p99_voxels, 2.5, 1e-9);
   EXPECT_NEAR(a.error_max_voxels, 2.5, 1e-9);
+  // Without the point whose nearest surface no view saw: 0.505, 0.6, 1.0, 0.5.
+  EXPECT_EQ(a.compared_seen, 4u);
+  EXPECT_NEAR(a.seen_error_median_voxels, 0.6, 1e-9);
+  EXPECT_NEAR(a.seen_error_p99_voxels, 1.0, 1e-9);
+  EXPECT_NEAR(a.seen_error_max_voxels, 1.0, 1e-9);
   EXPECT_THROW(
       scoreDistanceField(truth, std::span<const FieldAnswer>(answers).first(2), kVoxel, 2.0),
       std::invalid_argument);

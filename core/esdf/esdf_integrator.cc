@@ -10,7 +10,8 @@ namespace {
 // Queue keys are distances in 1/kKeySteps voxel.
 constexpr float kKeySteps = 8.0f;
 // A bucket keeps at most this many entries' storage between updates.
-constexpr size_t kKeepBucketEntries = 4096;
+// Entries' worth of queue storage kept between waves (over all buckets).
+constexpr size_t kKeepQueueEntries = size_t{1} << 14;
 
 Eigen::Vector3i siteOf(const EsdfVoxel& v) { return {v.site[0], v.site[1], v.site[2]}; }
 
@@ -92,10 +93,9 @@ const EsdfVoxel* EsdfIntegrator::siteAt(const EsdfLayer& esdf, const EsdfBlock& 
                                         const GridIndex& local,
                                         const Eigen::Vector3i& offset) const {
   const GridIndex n = local + offset;
-  const EsdfVoxel* v =
-      n.minCoeff() >= 0 && n.maxCoeff() < voxels_per_side_
-          ? &block.voxel(esdf.linearIndex(n))
-          : esdf.getVoxel(block.index * voxels_per_side_ + n);
+  const EsdfVoxel* v = n.minCoeff() >= 0 && n.maxCoeff() < voxels_per_side_
+                           ? &block.voxel(esdf.linearIndex(n))
+                           : esdf.getVoxel(block.index * voxels_per_side_ + n);
   return v != nullptr && v->isSite() ? v : nullptr;
 }
 
@@ -107,7 +107,8 @@ bool EsdfIntegrator::stale(const EsdfLayer& esdf, const VoxelRef& ref,
   const auto sq = static_cast<size_t>(offset.squaredNorm());
   if (sq >= centre_distance_.size()) return false;
   // The wave's own formula, so that a voxel computed from the site's current value is equal.
-  return voxel.own_distance < std::max(0.0f, centre_distance_[sq] + siteDistance(site->own_distance));
+  return voxel.own_distance <
+         std::max(0.0f, centre_distance_[sq] + siteDistance(site->own_distance));
 }
 
 void EsdfIntegrator::readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStats* stats) {
@@ -117,14 +118,14 @@ void EsdfIntegrator::readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStat
     const TsdfVoxel& t = tsdf.voxel(linear);
     EsdfVoxel& v = voxels[linear];
     const bool observed = t.weight > 0.0f && t.weight >= config_.min_weight;
-    v.state = !observed           ? VoxelState::kUnknown
+    v.state = !observed            ? VoxelState::kUnknown
               : t.distance <= 0.0f ? VoxelState::kOccupied
                                    : VoxelState::kFree;
     if (observed && t.distance < voxel_size_) {
       if (!v.isSite()) {
         v.flags = EsdfVoxel::kSite;
         setSite(&v, Eigen::Vector3i::Zero());
-        queue_.push(0, {block, linear});
+        push(0, block, linear);
         ++stats->sites_added;
         v.own_distance = t.distance;
       } else if (std::abs(t.distance - v.own_distance) * kKeySteps > voxel_size_ ||
@@ -138,14 +139,14 @@ void EsdfIntegrator::readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStat
           v.flags = static_cast<uint8_t>(v.flags | EsdfVoxel::kSiteMoved);
         }
         v.own_distance = t.distance;
-        queue_.push(0, {block, linear});
+        push(0, block, linear);
       }
       continue;
     }
     if (v.isSite()) {
       // The surface is gone: the raise wave clears the voxels that took it as their site.
       v.flags = EsdfVoxel::kRaise;
-      queue_.push(0, {block, linear});
+      push(0, block, linear);
       ++stats->sites_removed;
     } else if (v.flags == 0) {
       v.own_distance = config_.max_distance_m;
@@ -171,7 +172,7 @@ void EsdfIntegrator::seedFromNeighbours(EsdfLayer* esdf, EsdfBlock* block) {
           const int linear = esdf->linearIndex(GridIndex(x, y, z));
           const EsdfVoxel& v = other->voxel(linear);
           if (v.hasSite() && (v.flags & EsdfVoxel::kRaise) == 0) {
-            queue_.push(v.isSite() ? 0 : keyOf(v.own_distance), {other, linear});
+            push(v.isSite() ? 0 : keyOf(v.own_distance), other, linear);
           }
         }
       }
@@ -181,33 +182,35 @@ void EsdfIntegrator::seedFromNeighbours(EsdfLayer* esdf, EsdfBlock* block) {
 
 void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
   const int mask = voxels_per_side_ - 1;
-  Entry entry{nullptr, 0};
+  Entry entry{0, 0};
   uint32_t key = 0;
   while (!queue_.empty()) {
     queue_.pop(&entry, &key);
     ++stats->voxels_popped;
-    // Read only: a write to entry.block below may move its voxels (copy-on-write).
-    const EsdfVoxel& v = entry.block->voxel(entry.linear);
-    const GridIndex local(entry.linear & mask, (entry.linear >> voxels_per_side_log2_) & mask,
-                          entry.linear >> (2 * voxels_per_side_log2_));
+    EsdfBlock* const block = slots_[entry.slot];
+    const int linear = static_cast<int>(entry.linear);
+    // Read only: a write to block below may move its voxels (copy-on-write).
+    const EsdfVoxel& v = block->voxel(linear);
+    const GridIndex local(linear & mask, (linear >> voxels_per_side_log2_) & mask,
+                          linear >> (2 * voxels_per_side_log2_));
     if ((v.flags & EsdfVoxel::kRaise) != 0) {
       // Raise: neighbours whose site is no site any more, or whose distance is below what
       // their site gives now (it moved away), join the wave; neighbours with a valid site
       // become sources of the lower wave that refills the cleared region.
       for (const GridIndex& d : neighbours_) {
-        const VoxelRef n = neighbour(esdf, entry.block, local, d);
+        const VoxelRef n = neighbour(esdf, block, local, d);
         if (n.block == nullptr) continue;
         const EsdfVoxel& nv = n.voxel();
         if (!nv.hasSite()) continue;
         if (nv.isSite()) {
-          queue_.push(0, {n.block, n.linear});
+          push(0, n.block, n.linear);
           continue;
         }
         const float n_distance = nv.own_distance;
         if (stale(*esdf, n, nv)) n.mutableVoxel().flags = EsdfVoxel::kRaise;
-        queue_.push(keyOf(n_distance), {n.block, n.linear});
+        push(keyOf(n_distance), n.block, n.linear);
       }
-      EsdfVoxel& w = entry.block->mutableVoxels()[entry.linear];
+      EsdfVoxel& w = block->mutableVoxels()[linear];
       w.flags = 0;
       w.own_distance = config_.max_distance_m;
       continue;
@@ -216,7 +219,7 @@ void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
       // A site whose distance grew: the neighbours that took it start a raise wave (which
       // passes on to every voxel that took it); then it spreads as any site.
       for (const GridIndex& d : neighbours_) {
-        const VoxelRef n = neighbour(esdf, entry.block, local, d);
+        const VoxelRef n = neighbour(esdf, block, local, d);
         if (n.block == nullptr) continue;
         const EsdfVoxel& nv = n.voxel();
         if (!nv.hasSite() || nv.isSite() || siteOf(nv) + d != Eigen::Vector3i::Zero() ||
@@ -225,19 +228,19 @@ void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
         }
         const float n_distance = nv.own_distance;
         n.mutableVoxel().flags = EsdfVoxel::kRaise;
-        queue_.push(keyOf(n_distance), {n.block, n.linear});
+        push(keyOf(n_distance), n.block, n.linear);
       }
-      EsdfVoxel& w = entry.block->mutableVoxels()[entry.linear];
+      EsdfVoxel& w = block->mutableVoxels()[linear];
       w.flags = static_cast<uint8_t>(w.flags & ~EsdfVoxel::kSiteMoved);
     }
     // Read again: a write above may have moved the block's voxels.
-    const EsdfVoxel& u = entry.block->voxel(entry.linear);
+    const EsdfVoxel& u = block->voxel(linear);
     if (!u.hasSite()) continue;
     const Eigen::Vector3i site = siteOf(u);
     float site_distance = siteDistance(u.own_distance);
     if (!u.isSite()) {
       if (keyOf(u.own_distance) != key) continue;  // improved since it was queued
-      const EsdfVoxel* s = siteAt(*esdf, *entry.block, local, site);
+      const EsdfVoxel* s = siteAt(*esdf, *block, local, site);
       if (s == nullptr) continue;  // its site vanished; a raise wave is on its way
       site_distance = siteDistance(s->own_distance);
     }
@@ -246,10 +249,10 @@ void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
       const GridIndex& d = neighbours_[k];
       VoxelRef n;
       if (interior) {  // the common case: no block border to cross
-        n.block = entry.block;
-        n.linear = entry.linear + neighbour_linear_[k];
+        n.block = block;
+        n.linear = linear + neighbour_linear_[k];
       } else {
-        n = neighbour(esdf, entry.block, local, d);
+        n = neighbour(esdf, block, local, d);
         if (n.block == nullptr) continue;
       }
       const EsdfVoxel& nv = n.voxel();
@@ -263,10 +266,16 @@ void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
       EsdfVoxel& w = n.mutableVoxel();
       setSite(&w, offset);
       w.own_distance = through;
-      queue_.push(keyOf(through), {n.block, n.linear});
+      push(keyOf(through), n.block, n.linear);
     }
   }
-  queue_.releaseLargeBuckets(kKeepBucketEntries);
+  stats->queue_peak_bytes = queue_.peakStorageBytes();
+  queue_high_water_bytes_ = std::max(queue_high_water_bytes_, stats->queue_peak_bytes);
+  queue_.releaseStorage(kKeepQueueEntries);
+}
+
+size_t EsdfIntegrator::workingBytes() const {
+  return queue_high_water_bytes_ + centre_distance_.capacity() * sizeof(float);
 }
 
 EsdfUpdateStats EsdfIntegrator::stage(const TsdfLayer& tsdf, EsdfLayer* esdf) {
@@ -274,6 +283,7 @@ EsdfUpdateStats EsdfIntegrator::stage(const TsdfLayer& tsdf, EsdfLayer* esdf) {
     throw std::invalid_argument("the TSDF and distance-field layers have different geometry");
   }
   prepare(*esdf);
+  queue_.resetPeak();
   EsdfUpdateStats stats;
   std::vector<EsdfBlock*> added;
   std::vector<EsdfBlock*> changed;
@@ -293,6 +303,13 @@ EsdfUpdateStats EsdfIntegrator::stage(const TsdfLayer& tsdf, EsdfLayer* esdf) {
     }
   }
   if (esdf->numBlocks() != tsdf.numBlocks()) return restage(tsdf, esdf);
+  // The queue names blocks by slot (8-byte entries): number them before the first push.
+  slots_.clear();
+  slots_.reserve(esdf->numBlocks());
+  for (const auto& [key, block] : esdf->blocks()) {
+    block->queue_slot = static_cast<uint32_t>(slots_.size());
+    slots_.push_back(block.get());
+  }
   // New blocks first take the waves of their neighbours' sites (before any of them is read,
   // so only established sites are pushed), then every new or changed block is read.
   for (EsdfBlock* block : added) seedFromNeighbours(esdf, block);

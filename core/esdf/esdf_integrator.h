@@ -4,21 +4,22 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/esdf/distance_bucket_queue.h"
 #include "core/esdf/esdf_config.h"
 #include "core/esdf/esdf_layer.h"
-#include "core/esdf/distance_bucket_queue.h"
 #include "core/tsdf/tsdf_layer.h"
 
 namespace cblox {
 
 /// What one EsdfIntegrator call did.
 struct EsdfUpdateStats {
-  size_t tsdf_blocks_read = 0;    ///< TSDF blocks whose voxels were read (new or changed)
-  size_t esdf_blocks_added = 0;   ///< distance-field blocks allocated
-  size_t sites_added = 0;         ///< voxels that became (or changed as) obstacles
-  size_t sites_removed = 0;       ///< obstacle voxels that stopped being obstacles
-  size_t voxels_popped = 0;       ///< wavefront steps
-  bool rebuilt = false;           ///< the whole field was recomputed
+  size_t tsdf_blocks_read = 0;   ///< TSDF blocks whose voxels were read (new or changed)
+  size_t esdf_blocks_added = 0;  ///< distance-field blocks allocated
+  size_t sites_added = 0;        ///< voxels that became (or changed as) obstacles
+  size_t sites_removed = 0;      ///< obstacle voxels that stopped being obstacles
+  size_t voxels_popped = 0;      ///< wavefront steps
+  size_t queue_peak_bytes = 0;   ///< the waves' queue at its fullest (entries x entry size)
+  bool rebuilt = false;          ///< the whole field was recomputed
 };
 
 /// Computes a subvolume's Euclidean signed distance field (EsdfLayer) from its TSDF layer,
@@ -77,11 +78,22 @@ class EsdfIntegrator {
   EsdfUpdateStats stage(const TsdfLayer& tsdf, EsdfLayer* esdf);
   void finish(EsdfLayer* esdf, EsdfUpdateStats* stats);
 
+  /// The waves' working memory as a memory cap counts it: the high-water mark of the queue's
+  /// storage over all calls (a wave's peak; after a call at most 256 KiB of it stays
+  /// allocated, but the allocator seldom returns the rest to the system) and the distance
+  /// table. 0 before the first call; it never decreases, so a cap's stage does not move back
+  /// and forth with each wave. O(1).
+  size_t workingBytes() const;
+
  private:
+  // A voxel in the queue: its block's EsdfBlock::queue_slot and its linear index.
   struct Entry {
-    EsdfBlock* block;
-    int linear;
+    uint32_t slot;
+    uint32_t linear;
   };
+  void push(uint32_t key, const EsdfBlock* block, int linear) {
+    queue_.push(key, {block->queue_slot, static_cast<uint32_t>(linear)});
+  }
   struct VoxelRef {
     EsdfBlock* block = nullptr;
     GridIndex local = GridIndex::Zero();  ///< inside `block`
@@ -120,11 +132,13 @@ class EsdfIntegrator {
   int voxels_per_side_log2_ = 0;
   float max_reach_ = 0.0f;  // farthest distance a wave carries a site, metres
   uint32_t max_key_ = 0;
-  std::vector<GridIndex> neighbours_;  // the 26 offsets
-  std::vector<int> neighbour_linear_;  // the same as linear index steps inside a block
+  std::vector<GridIndex> neighbours_;   // the 26 offsets
+  std::vector<int> neighbour_linear_;   // the same as linear index steps inside a block
   std::vector<float> centre_distance_;  // metres, by squared offset length in voxels
   float centre_distance_voxel_ = 0.0f;
   DistanceBucketQueue<Entry> queue_{0};
+  std::vector<EsdfBlock*> slots_;  // the layer's blocks by queue_slot, numbered by stage()
+  size_t queue_high_water_bytes_ = 0;
 };
 
 }  // namespace cblox

@@ -31,7 +31,9 @@ class EsdfBlock {
   }
 
   /// Index into `neighbours` of the block at offset (dx, dy, dz), each in {-1, 0, 1}.
-  static int neighbourSlot(int dx, int dy, int dz) { return (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1); }
+  static int neighbourSlot(int dx, int dy, int dz) {
+    return (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1);
+  }
 
   /// The voxels, x fastest (EsdfLayer::linearIndex).
   const EsdfVoxel* voxels() const { return voxels_.get(); }
@@ -39,7 +41,8 @@ class EsdfBlock {
   /// The voxels for writing: a private copy first when a snapshot shares them. The pointer
   /// stays valid until the next EsdfLayer::snapshot().
   EsdfVoxel* mutableVoxels() {
-    if (shared_) [[unlikely]] unshare();
+    if (shared_) [[unlikely]]
+      unshare();
     return voxels_.get();
   }
 
@@ -51,6 +54,9 @@ class EsdfBlock {
   /// The TSDF block this block was last computed from, and its Block::changeCount() then.
   const Block* tsdf = nullptr;
   uint64_t tsdf_change_count = 0;
+  /// The EsdfIntegrator's number for this block during one update (its waves' queue names
+  /// blocks by it).
+  uint32_t queue_slot = 0;
 
  private:
   friend class EsdfLayer;
@@ -58,8 +64,8 @@ class EsdfBlock {
 
   std::shared_ptr<EsdfVoxel[]> voxels_;
   int num_voxels_ = 0;
-  bool shared_ = false;         // a snapshot holds voxels_
-  EsdfBlock* copy_ = nullptr;   // scratch of EsdfLayer::snapshot(): this block's copy
+  bool shared_ = false;        // a snapshot holds voxels_
+  EsdfBlock* copy_ = nullptr;  // scratch of EsdfLayer::snapshot(): this block's copy
 };
 
 /// A sparse distance field with the geometry (voxel size, block size, frame) of the TSDF

@@ -38,7 +38,8 @@ struct PlanningServiceConfig {
 struct PlanningConfig {
   /// Keep a distance field per subvolume and answer distance queries (Mapper::planningMap).
   /// Off (the default): no field, no memory, Mapper::planningMap() is null. Off by default
-  /// while the waves' working memory is outside the memory cap's accounting.
+  /// while the memory cap's RSS bound is not kept with it on (a 1 cm map's first frames
+  /// overshoot the cap, and each block then costs its field too).
   bool enabled = false;
   /// The fields' settings.
   EsdfConfig esdf;

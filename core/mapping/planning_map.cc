@@ -36,6 +36,8 @@ void PlanningMap::updateField(const Submap& submap, const TsdfLayer& layer,
   field->revision = submap.revision();  // stable while the layer is not written
   if (layer_lock != nullptr) layer_lock->unlock();
   integrator->finish(&field->work, &stats);
+  (integrator == &active_integrator_ ? active_working_bytes_ : working_bytes_)
+      .store(integrator->workingBytes(), std::memory_order_relaxed);
   std::shared_ptr<const EsdfLayer> published = field->work.snapshot();
   {
     std::lock_guard<std::mutex> lock(field->bytes_mutex);
@@ -199,9 +201,9 @@ DistanceAnswer PlanningMap::sample(const std::vector<IndexEntry>& index,
     answer.state = s.state;
     answer.distance = s.distance;
     answer.has_gradient = s.has_gradient;
-    answer.gradient = s.has_gradient ? Eigen::Vector3d(entry.R_G_M * s.gradient.cast<double>())
-                                     : Eigen::Vector3d::Constant(
-                                           std::numeric_limits<double>::quiet_NaN());
+    answer.gradient = s.has_gradient
+                          ? Eigen::Vector3d(entry.R_G_M * s.gradient.cast<double>())
+                          : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
     answer.submap = static_cast<int64_t>(entry.id);
   }
   return answer;
@@ -216,8 +218,8 @@ void PlanningMap::queryBatch(std::span<const Eigen::Vector3d> points_G,
   const std::vector<IndexEntry> index = indexSnapshot();
   answers->resize(points_G.size());
   const size_t n = points_G.size();
-  const size_t threads = std::clamp<size_t>(n / kMinPointsPerThread, 1,
-                                            static_cast<size_t>(std::max(num_threads, 1)));
+  const size_t threads =
+      std::clamp<size_t>(n / kMinPointsPerThread, 1, static_cast<size_t>(std::max(num_threads, 1)));
   // sample() only reads `index` and the immutable snapshots it holds.
   runThreadTeam(static_cast<int>(threads), [&](int id) {
     const size_t begin = n * static_cast<size_t>(id) / threads;
@@ -246,8 +248,8 @@ bool PlanningMap::localGrid(const Eigen::Vector3d& min_G, const Eigen::Vector3d&
   const Eigen::Vector3d cells =
       ((max_G - min_G) / resolution - Eigen::Vector3d::Constant(1e-6)).array().ceil().max(1.0);
   if (cells.prod() > static_cast<double>(kMaxGridCells)) {
-    *error = "the box has " + significant(cells.prod(), 3) + " cells at this resolution, more than " +
-             std::to_string(kMaxGridCells);
+    *error = "the box has " + significant(cells.prod(), 3) +
+             " cells at this resolution, more than " + std::to_string(kMaxGridCells);
     return false;
   }
   grid->origin = min_G;

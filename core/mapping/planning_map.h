@@ -61,8 +61,8 @@ struct LocalGrid {
 
   size_t index(int i, int j, int k) const {
     return static_cast<size_t>(i) +
-           static_cast<size_t>(size.x()) * (static_cast<size_t>(j) +
-                                            static_cast<size_t>(size.y()) * static_cast<size_t>(k));
+           static_cast<size_t>(size.x()) *
+               (static_cast<size_t>(j) + static_cast<size_t>(size.y()) * static_cast<size_t>(k));
   }
   Eigen::Vector3d cellCenter(int i, int j, int k) const {
     return origin + (Eigen::Vector3d(i, j, k) + Eigen::Vector3d::Constant(0.5)) * resolution;
@@ -152,9 +152,9 @@ class PlanningMap {
   static constexpr size_t kMaxGridCells = size_t{1} << 22;
   /// Samples the box [min_G, max_G] at cell centres `resolution` apart (query() per cell,
   /// one pose snapshot for the whole grid) into *grid: ceil(side / resolution) cells per
-  /// axis, a side within 1e-6 cells of a whole number counting as that number. Refused (false, *error says why,
-  /// nothing allocated) when a bound is not finite, max_G is not above min_G on every axis,
-  /// resolution is not finite and > 0, or the box has more than kMaxGridCells cells.
+  /// axis, a side within 1e-6 cells of a whole number counting as that number. Refused (false,
+  /// *error says why, nothing allocated) when a bound is not finite, max_G is not above min_G on
+  /// every axis, resolution is not finite and > 0, or the box has more than kMaxGridCells cells.
   bool localGrid(const Eigen::Vector3d& min_G, const Eigen::Vector3d& max_G, double resolution,
                  LocalGrid* grid, std::string* error) const;
 
@@ -166,8 +166,13 @@ class PlanningMap {
   PlanningMapStats stats() const;
   /// Durations of the refresh() calls that updated a field, ms.
   const TimingWindow& refreshMs() const { return refresh_ms_; }
-  /// Bytes the fields hold. O(1).
-  size_t memoryBytes() const { return memory_bytes_.load(std::memory_order_relaxed); }
+  /// Bytes the fields hold, and their two integrators' working memory
+  /// (EsdfIntegrator::workingBytes: the high-water mark of the waves' queues). O(1).
+  size_t memoryBytes() const {
+    return memory_bytes_.load(std::memory_order_relaxed) +
+           working_bytes_.load(std::memory_order_relaxed) +
+           active_working_bytes_.load(std::memory_order_relaxed);
+  }
   /// Bytes the fields will hold once they follow a collection of `tsdf_blocks` blocks of
   /// `layer`'s geometry (one field block per TSDF block), or memoryBytes() when more: what
   /// a memory cap counts, so that the fields' lag behind integration cannot overrun it.
@@ -175,18 +180,18 @@ class PlanningMap {
     // The working block and its snapshot's record; the voxels are shared.
     const size_t per_block =
         2 * sizeof(EsdfBlock) + static_cast<size_t>(layer.voxels_per_side) *
-                                static_cast<size_t>(layer.voxels_per_side) *
-                                static_cast<size_t>(layer.voxels_per_side) * sizeof(EsdfVoxel);
+                                    static_cast<size_t>(layer.voxels_per_side) *
+                                    static_cast<size_t>(layer.voxels_per_side) * sizeof(EsdfVoxel);
     return std::max(memoryBytes(), tsdf_blocks * per_block);
   }
 
  private:
   struct Field {
     Field(const LayerConfig& geometry, float max_distance_m) : work(geometry, max_distance_m) {}
-    std::mutex update_mutex;  // guards work and revision
-    EsdfLayer work;           // the integrators' layer; queries read its snapshots
-    uint64_t revision = 0;    // Submap::revision() when last computed
-    std::mutex bytes_mutex;   // guards counted_bytes and dropped
+    std::mutex update_mutex;   // guards work and revision
+    EsdfLayer work;            // the integrators' layer; queries read its snapshots
+    uint64_t revision = 0;     // Submap::revision() when last computed
+    std::mutex bytes_mutex;    // guards counted_bytes and dropped
     size_t counted_bytes = 0;  // this field's share of memory_bytes_
     bool dropped = false;      // its subvolume left the collection
   };
@@ -212,15 +217,14 @@ class PlanningMap {
   // its layer lock; a finished one's only by the owner of finished layers (`owns_finished`;
   // otherwise left to it). Without `wait`, a field another thread is computing is skipped.
   // True when the field was updated.
-  bool refreshOne(const Submap& submap, EsdfIntegrator* integrator, bool owns_finished,
-                  bool wait);
+  bool refreshOne(const Submap& submap, EsdfIntegrator* integrator, bool owns_finished, bool wait);
   // Adds the time since `start` to refreshMs().
   void recordRefresh(std::chrono::steady_clock::time_point start);
   std::vector<IndexEntry> indexSnapshot() const;
   static DistanceAnswer sample(const std::vector<IndexEntry>& index, const Eigen::Vector3d& p_G);
 
   const EsdfConfig config_;
-  EsdfIntegrator integrator_;  // refresh()'s
+  EsdfIntegrator integrator_;           // refresh()'s
   std::mutex active_integrator_mutex_;  // one refreshActive() at a time
   EsdfIntegrator active_integrator_;    // refreshActive()'s
   TimingWindow refresh_ms_{200};
@@ -229,6 +233,8 @@ class PlanningMap {
   std::map<SubmapId, IndexEntry> index_;
 
   std::atomic<size_t> memory_bytes_{0};
+  std::atomic<size_t> working_bytes_{0};         // integrator_.workingBytes()
+  std::atomic<size_t> active_working_bytes_{0};  // active_integrator_.workingBytes()
   std::atomic<uint64_t> updates_{0}, rebuilds_{0};
 };
 

@@ -69,6 +69,8 @@ struct Result {
   std::vector<double> update_ms;    // per frame
   std::vector<double> blocks_read;  // per frame
   std::vector<double> popped;       // per frame: wavefront steps
+  size_t update_queue_peak = 0;     // bytes, the fullest over the frames
+  size_t batch_queue_peak = 0;      // bytes
   double batch_ms = 0.0;
   double query_ns = 0.0;              // per point, 10^4 points
   std::vector<double> errors_voxels;  // observed free voxels within max distance
@@ -109,6 +111,7 @@ Result run(const DemoRoomOrbit& orbit, float voxel, const AnalyticScene& room) {
     r.update_ms.push_back(msSince(start));
     r.blocks_read.push_back(static_cast<double>(stats.tsdf_blocks_read));
     r.popped.push_back(static_cast<double>(stats.voxels_popped));
+    r.update_queue_peak = std::max(r.update_queue_peak, stats.queue_peak_bytes);
 #ifdef CBLOX_HAVE_VOXBLOX
     for (size_t m = 0; m < peers.size(); ++m) {
       r.voxblox[m].update_ms.push_back(peers[m]->update(layer));
@@ -120,8 +123,9 @@ Result run(const DemoRoomOrbit& orbit, float voxel, const AnalyticScene& room) {
     EsdfLayer batch(layer.config(), esdf_config.max_distance_m);
     EsdfIntegrator batch_integrator(esdf_config);
     const Clock::time_point start = Clock::now();
-    batch_integrator.update(layer, &batch);
+    const EsdfUpdateStats stats = batch_integrator.update(layer, &batch);
     r.batch_ms = msSince(start);
+    r.batch_queue_peak = stats.queue_peak_bytes;
   }
   // Errors and safety at every voxel of the incremental field.
   const int n = esdf.voxelsPerSide();
@@ -255,6 +259,15 @@ int main(int argc, char** argv) {
       }
     }
   }
+  for (const Result& res : results) {
+    std::printf(
+        "\n%.2f m: the waves' queue at its fullest: update %.2f MiB (the largest frame), "
+        "batch %.2f MiB (%.0f bytes per TSDF block)",
+        res.voxel, static_cast<double>(res.update_queue_peak) / (1 << 20),
+        static_cast<double>(res.batch_queue_peak) / (1 << 20),
+        static_cast<double>(res.batch_queue_peak) / static_cast<double>(res.blocks));
+  }
+  std::printf("\n");
   std::printf("\nbytes per TSDF block: TSDF %zu, distance field %zu (8^3 voxels)\n",
               sizeof(cblox::Block) + 512 * sizeof(cblox::TsdfVoxel),
               sizeof(cblox::EsdfBlock) + 512 * sizeof(cblox::EsdfVoxel));

@@ -40,7 +40,9 @@ struct Errors {
     std::sort(sorted.begin(), sorted.end());
     return sorted[static_cast<size_t>(q * static_cast<double>(sorted.size() - 1))];
   }
-  float max() const { return voxels.empty() ? 0.0f : *std::max_element(voxels.begin(), voxels.end()); }
+  float max() const {
+    return voxels.empty() ? 0.0f : *std::max_element(voxels.begin(), voxels.end());
+  }
 };
 
 /// Compares every observed voxel of `esdf` with the exact signed distance: occupied voxels
@@ -172,10 +174,10 @@ struct MovingBall {
   }
   void moveBall() { esdf_test::writeTsdf(&tsdf, after, lo, hi, kTruncation); }
 
-  Sdf before = esdf_test::unite(esdf_test::planeX(-0.6f),
-                                esdf_test::ball({0.2f, 0.1f, 0.0f}, 0.25f));
-  Sdf after = esdf_test::unite(esdf_test::planeX(-0.6f),
-                               esdf_test::ball({0.55f, -0.1f, 0.05f}, 0.2f));
+  Sdf before =
+      esdf_test::unite(esdf_test::planeX(-0.6f), esdf_test::ball({0.2f, 0.1f, 0.0f}, 0.25f));
+  Sdf after =
+      esdf_test::unite(esdf_test::planeX(-0.6f), esdf_test::ball({0.55f, -0.1f, 0.05f}, 0.2f));
   Eigen::Vector3f lo{-0.8f, -0.8f, -0.8f}, hi{1.2f, 0.8f, 0.8f};
   TsdfLayer tsdf{geometry()};
   EsdfLayer esdf{geometry(), 1.0f};
@@ -213,8 +215,7 @@ TEST(EsdfIntegratorTest, ASurfaceMovingAwayHandsItsVoxelsToANearerOne) {
   const Sdf ball = esdf_test::ball({0.6f, 0.0f, 0.0f}, 0.2f);
   const Eigen::Vector3f lo(-0.4f, -0.4f, -0.4f), hi(1.2f, 0.4f, 0.4f);
   TsdfLayer tsdf(geometry());
-  esdf_test::writeTsdf(&tsdf, esdf_test::unite(esdf_test::planeX(0.0f), ball), lo, hi,
-                       kTruncation);
+  esdf_test::writeTsdf(&tsdf, esdf_test::unite(esdf_test::planeX(0.0f), ball), lo, hi, kTruncation);
   EsdfLayer esdf(geometry(), 1.0f);
   EsdfIntegrator integrator(fieldConfig());
   integrator.update(tsdf, &esdf);
@@ -312,10 +313,19 @@ TEST(EsdfIntegratorTest, AnUnchangedLayerIsNotReadAgain) {
                        {0.4f, 0.4f, 0.4f}, kTruncation);
   EsdfLayer esdf(geometry(), 1.0f);
   EsdfIntegrator integrator(fieldConfig());
-  integrator.update(tsdf, &esdf);
+  const EsdfUpdateStats first = integrator.update(tsdf, &esdf);
+  // The queue's storage at its fullest is counted as the integrator's working memory (with
+  // its distance table, under 256 KiB here), and stays counted.
+  EXPECT_GT(first.queue_peak_bytes, 0u);
+  EXPECT_EQ(EsdfIntegrator(fieldConfig()).workingBytes(), 0u);
+  const size_t working = integrator.workingBytes();
+  EXPECT_GE(working, first.queue_peak_bytes);
+  EXPECT_LE(working, first.queue_peak_bytes + (size_t{1} << 18));
   const EsdfUpdateStats again = integrator.update(tsdf, &esdf);
   EXPECT_EQ(again.tsdf_blocks_read, 0u);
   EXPECT_EQ(again.voxels_popped, 0u);
+  EXPECT_LE(again.queue_peak_bytes, size_t{1} << 18);  // only the storage kept between waves
+  EXPECT_EQ(integrator.workingBytes(), working);       // constant: a cap sees no wave
   EXPECT_FALSE(again.rebuilt);
   // One block marked changed (as an integrator does) is read again, and only it.
   tsdf.blocks().begin()->second->setUpdated(true);

@@ -47,8 +47,8 @@ struct MapperUnderTest {
     config.mapper.memory_cap.cap_mb = 1;
     // The planner interface on the tracker-mode mapper (fields, queries, local grids); the
     // other keeps it off (requests answered NO_PLANNING_MAP).
+    config.mapper.planning.enabled = pose_source == PoseSource::kTracker;
     if (pose_source == PoseSource::kTracker) {
-      config.mapper.planning.enabled = true;
       config.mapper.planning.refresh_period_s = 0.05;
       config.mapper.planning.service.grid_period_s = 0.05;
       config.mapper.planning.service.grid_size_m = Eigen::Vector3d(2.0, 2.0, 1.0);

@@ -1541,11 +1541,12 @@ TEST(MapperTest, PlanningExportsCheckTheirArgumentsAndFollowTheMap) {
     return c;
   };
   {
+    config.planning.enabled = false;
     Mapper off(config);
     std::string error;
     ASSERT_TRUE(off.start(&error)) << error;
-    const MapperReply r = runCommand(&off, command("export_distance_slice", {{"path", "s.png"},
-                                                                            {"z", "1"}}));
+    const MapperReply r =
+        runCommand(&off, command("export_distance_slice", {{"path", "s.png"}, {"z", "1"}}));
     EXPECT_FALSE(r.ok);
     EXPECT_NE(r.message.find("planning.enabled"), std::string::npos) << r.message;
     off.stop();
@@ -1559,15 +1560,16 @@ TEST(MapperTest, PlanningExportsCheckTheirArgumentsAndFollowTheMap) {
   feed(&mapper, 0, 8);
   // The slice needs no sync: the command brings every field up to date first, the active
   // subvolume's too.
-  const MapperReply slice = runCommand(
-      &mapper, command("export_distance_slice", {{"path", "slice.png"}, {"z", "1.0"}}));
+  const MapperReply slice =
+      runCommand(&mapper, command("export_distance_slice", {{"path", "slice.png"}, {"z", "1.0"}}));
   ASSERT_TRUE(slice.ok) << slice.message;
   EXPECT_TRUE(std::filesystem::exists(dir.file("slice.png")));
   EXPECT_NE(slice.value("occupied"), "0");
   EXPECT_FALSE(mapper.trajectoryG().empty());
   const MapperReply grid = runCommand(
-      &mapper, command("export_distance_grid",
-                       {{"path", "grid.ply"}, {"box", "-1,-1,0.5,1,1,1.5"}, {"resolution", "0.1"}}));
+      &mapper,
+      command("export_distance_grid",
+              {{"path", "grid.ply"}, {"box", "-1,-1,0.5,1,1,1.5"}, {"resolution", "0.1"}}));
   ASSERT_TRUE(grid.ok) << grid.message;
   EXPECT_EQ(grid.value("cells"), "4000");
   // Bad arguments are refused with their name, and counted.
@@ -1577,11 +1579,10 @@ TEST(MapperTest, PlanningExportsCheckTheirArgumentsAndFollowTheMap) {
            {command("export_distance_slice", {{"path", "s.png"}, {"z", "high"}}), "'z'"},
            {command("export_distance_slice", {{"path", "s.png"}, {"z", "nan"}}), "'z'"},
            {command("export_distance_grid", {{"path", "g.ply"}, {"box", "1,2,3"}}), "'box'"},
-           {command("export_distance_grid", {{"path", "g.ply"}, {"box", "0,0,0,1,1,1"},
-                                             {"resolution", "0"}}),
+           {command("export_distance_grid",
+                    {{"path", "g.ply"}, {"box", "0,0,0,1,1,1"}, {"resolution", "0"}}),
             "'resolution'"},
-           {command("export_distance_grid", {{"path", "../g.ply"}, {"box", "0,0,0,1,1,1"}}),
-            ""},
+           {command("export_distance_grid", {{"path", "../g.ply"}, {"box", "0,0,0,1,1,1"}}), ""},
        }) {
     const MapperReply r = runCommand(&mapper, c);
     EXPECT_FALSE(r.ok) << c.name;
@@ -1589,8 +1590,9 @@ TEST(MapperTest, PlanningExportsCheckTheirArgumentsAndFollowTheMap) {
   }
   // A box too large for one grid is refused by the worker, with the reason.
   const MapperReply huge = runCommand(
-      &mapper, command("export_distance_grid",
-                       {{"path", "g.ply"}, {"box", "0,0,0,1000,1000,1000"}, {"resolution", "0.01"}}));
+      &mapper,
+      command("export_distance_grid",
+              {{"path", "g.ply"}, {"box", "0,0,0,1000,1000,1000"}, {"resolution", "0.01"}}));
   EXPECT_FALSE(huge.ok);
   EXPECT_NE(huge.message.find("cells"), std::string::npos) << huge.message;
   EXPECT_EQ(mapper.status().problem(InputProblem::kCommandInvalid), invalid + 6);

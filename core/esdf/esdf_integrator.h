@@ -36,8 +36,12 @@ struct EsdfUpdateStats {
 ///     projective TSDF seen at a grazing angle has no voxel within one voxel of zero.
 ///   - every other voxel (free or unknown) carries a site s that minimises
 ///     |x - s| + max(tsdf(s), -voxel) as far as the wavefront knows, where |x - s| is the
-///     distance between voxel centres; it answers that value with s's current TSDF value
-///     (esdf_query.h), at least 0, capped at max_distance_m. Through a free-side site the
+///     distance between voxel centres; it answers that value as the wave computed it (with
+///     s's TSDF value then; esdf_query.h reads it without looking s up), at least 0, capped
+///     at max_distance_m. A site whose value moves by less than a key step keeps the value
+///     its voxels were computed with; one that grows by more raises the voxels that took it
+///     through its neighbours, and a voxel that took it past neighbouring sites may keep the
+///     value it was computed with. Through a free-side site the
 ///     formula is an upper bound of the true distance (triangle inequality), through an
 ///     occupied one it may undershoot; the minimum over the sites near the surface is within
 ///     a fraction of a voxel of the truth on exact TSDFs (the analytic tests bound it).

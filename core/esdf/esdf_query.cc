@@ -22,9 +22,10 @@ VoxelRef locate(const EsdfLayer& layer, const EsdfBlock* hint, const GlobalVoxel
   const EsdfBlock* block = nullptr;
   if (hint != nullptr) {
     const BlockIndex d = block_index - hint->index;
-    block = (d.array().abs() <= 1).all()
-                ? hint->neighbours[static_cast<size_t>(EsdfBlock::neighbourSlot(d.x(), d.y(), d.z()))]
-                : layer.getBlock(block_index);
+    block =
+        (d.array().abs() <= 1).all()
+            ? hint->neighbours[static_cast<size_t>(EsdfBlock::neighbourSlot(d.x(), d.y(), d.z()))]
+            : layer.getBlock(block_index);
   } else {
     block = layer.getBlock(block_index);
   }
@@ -32,37 +33,23 @@ VoxelRef locate(const EsdfLayer& layer, const EsdfBlock* hint, const GlobalVoxel
   return {block, &block->voxel(layer.linearIndex(local))};
 }
 
-/// voxelDistance() of the voxel `ref` at `index`: its site is looked up from ref's block.
-void distanceOf(const EsdfLayer& layer, const VoxelRef& ref, const GlobalVoxelIndex& index,
-                VoxelState* state, float* distance) {
+/// voxelDistance() of the voxel `ref`.
+void distanceOf(const EsdfLayer& layer, const VoxelRef& ref, VoxelState* state, float* distance) {
   const EsdfVoxel* v = ref.voxel;
   *state = v->state;
-  if (v->isSite()) {
-    *distance = std::min(v->own_distance, layer.maxDistance());
-    return;
-  }
-  float d = layer.maxDistance();
-  if (v->hasSite()) {
-    const Eigen::Vector3i offset(v->site[0], v->site[1], v->site[2]);
-    const EsdfVoxel* site = locate(layer, ref.block, index + offset).voxel;
-    if (site != nullptr && site->isSite()) {
-      // The site's TSDF distance counts down to -one voxel (EsdfIntegrator::siteDistance).
-      const float site_distance = std::max(site->own_distance, -layer.voxelSize());
-      d = std::max(0.0f, offset.cast<float>().norm() * layer.voxelSize() + site_distance);
-    }
-  }
-  *distance = std::min(d, layer.maxDistance());
+  // A site holds its TSDF distance, any other voxel with a site what the wave carried to it.
+  *distance = v->hasSite() ? std::min(v->own_distance, layer.maxDistance()) : layer.maxDistance();
 }
 
 /// queryNearest() of the voxel `index`, found from `hint` (may be null). An unknown voxel's
-/// site is not looked up: its distance is not answered.
+/// distance is not answered.
 DistanceSample nearestSample(const EsdfLayer& layer, const EsdfBlock* hint,
                              const GlobalVoxelIndex& index) {
   DistanceSample sample;
   const VoxelRef ref = locate(layer, hint, index);
   if (ref.voxel == nullptr || ref.voxel->state == VoxelState::kUnknown) return sample;
   float distance = 0.0f;
-  distanceOf(layer, ref, index, &sample.state, &distance);
+  distanceOf(layer, ref, &sample.state, &distance);
   sample.distance = distance;
   return sample;
 }
@@ -73,7 +60,7 @@ bool voxelDistance(const EsdfLayer& layer, const GlobalVoxelIndex& index, VoxelS
                    float* distance) {
   const VoxelRef ref = locate(layer, nullptr, index);
   if (ref.voxel == nullptr) return false;
-  distanceOf(layer, ref, index, state, distance);
+  distanceOf(layer, ref, state, distance);
   return true;
 }
 
@@ -95,15 +82,15 @@ DistanceSample queryInterpolated(const EsdfLayer& layer, const Eigen::Vector3f& 
   if (hint == nullptr) return nearestSample(layer, nullptr, nearest);
   float c[8];
   for (int corner = 0; corner < 8; ++corner) {
-    const GlobalVoxelIndex index = base + GlobalVoxelIndex(corner & 1, (corner >> 1) & 1,
-                                                           (corner >> 2) & 1);
+    const GlobalVoxelIndex index =
+        base + GlobalVoxelIndex(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
     const VoxelRef ref = locate(layer, hint, index);
-    // Unknown or absent: no interpolation, and no site looked up for nothing.
+    // Unknown or absent: no interpolation.
     if (ref.voxel == nullptr || ref.voxel->state == VoxelState::kUnknown) {
       return nearestSample(layer, hint, nearest);
     }
     VoxelState state = VoxelState::kUnknown;
-    distanceOf(layer, ref, index, &state, &c[corner]);
+    distanceOf(layer, ref, &state, &c[corner]);
   }
   // c[x + 2y + 4z]; interpolate along x, then y, then z.
   const float x00 = c[0] + t.x() * (c[1] - c[0]), x10 = c[2] + t.x() * (c[3] - c[2]);

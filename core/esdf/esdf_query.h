@@ -24,11 +24,11 @@ struct DistanceSample {
 };
 
 /// The field's value at one voxel: sites (occupied voxels and the free side's near-surface
-/// voxels) their TSDF distance; other voxels max(0, |site| * voxel_size + max(the site's
-/// current TSDF distance, -voxel_size)), or maxDistance() without a valid site; capped at
-/// maxDistance() (see EsdfVoxel). Unknown voxels get the same value (the distance to the
-/// nearest obstacle known). False, with nothing written, when the voxel's block is absent.
-/// Thread-safe against other readers.
+/// voxels) their TSDF distance; other voxels the distance the wave carried to them through
+/// their site (EsdfIntegrator), or maxDistance() without a site; capped at maxDistance()
+/// (see EsdfVoxel). No site is looked up: one voxel read per answer. Unknown voxels get the same
+/// value (the distance to the nearest obstacle known). False, with nothing written, when the
+/// voxel's block is absent. Thread-safe against other readers.
 bool voxelDistance(const EsdfLayer& layer, const GlobalVoxelIndex& index, VoxelState* state,
                    float* distance);
 

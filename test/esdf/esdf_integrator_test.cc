@@ -147,7 +147,34 @@ TEST(EsdfIntegratorTest, SurfaceVoxelsOnBothSidesAnswerTheirTsdfDistance) {
 
 /// Per-voxel comparison of an incrementally updated field with a rebuilt one: the same
 /// states everywhere, distances within `tolerance` voxels.
+/// The integrator's contract that queries read: after an update, every voxel that carries a
+/// site holds what that site gives now, |x - s| + max(tsdf(s), -voxel) (at least 0), and
+/// its site is a site.
+void expectDistancesFollowTheirSites(const EsdfLayer& esdf) {
+  size_t checked = 0;
+  for (const auto& [key, block] : esdf.blocks()) {
+    for (int i = 0; i < esdf.voxelsPerBlock(); ++i) {
+      const EsdfVoxel& v = block->voxel(i);
+      if (!v.hasSite() || v.isSite()) continue;
+      const GlobalVoxelIndex global = block->index * 8 + GridIndex(i & 7, (i >> 3) & 7, i >> 6);
+      const Eigen::Vector3i offset(v.site[0], v.site[1], v.site[2]);
+      const EsdfVoxel* site = esdf.getVoxel(global + offset);
+      ASSERT_NE(site, nullptr) << global.transpose();
+      ASSERT_TRUE(site->isSite()) << global.transpose();
+      const float gives = std::max(
+          0.0f, offset.cast<float>().norm() * kVoxel + std::max(site->own_distance, -kVoxel));
+      ASSERT_NEAR(std::min(v.own_distance, esdf.maxDistance()), std::min(gives, esdf.maxDistance()),
+                  1e-5f)
+          << global.transpose();
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 0u);
+}
+
 void expectSameField(const EsdfLayer& incremental, const EsdfLayer& rebuilt, float tolerance) {
+  expectDistancesFollowTheirSites(incremental);
+  expectDistancesFollowTheirSites(rebuilt);
   ASSERT_EQ(incremental.numBlocks(), rebuilt.numBlocks());
   int compared = 0;
   for (const auto& [key, block] : rebuilt.blocks()) {

@@ -13,23 +13,32 @@ namespace {
 
 double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
+/// The ray of `view` through p_G, scaled to unit depth (its parameter is the depth), with
+/// t_far unset, when p lies in the view's image and depth range; *p_D is p in the view.
+bool viewRayThrough(const DepthView& view, const Eigen::Vector3d& p_G, Eigen::Vector3d* p_D,
+                    Ray* ray) {
+  *p_D = view.T_G_D.inverse() * p_G;
+  const double z = p_D->z();
+  if (!(z >= view.min_depth_m) || !(z <= view.max_depth_m)) return false;
+  const PinholeIntrinsics& k = view.intrinsics;
+  const double u = k.fx * p_D->x() / z + k.cx;
+  const double w = k.fy * p_D->y() / z + k.cy;
+  if (!(u >= 0.0 && u < k.width && w >= 0.0 && w < k.height)) return false;
+  ray->origin = view.T_G_D.translation().cast<float>();
+  ray->direction = (view.T_G_D.rotation() * (*p_D / z)).cast<float>();
+  ray->t_near = 0.0f;
+  return true;
+}
+
 /// True if some view measured a surface at least `free_depth` behind p on the ray through it.
 bool observedFree(const TriangleMeshRaycaster& truth, std::span<const DepthView> views, int stride,
                   double free_depth, const Eigen::Vector3d& p_G) {
   for (size_t v = 0; v < views.size(); v += static_cast<size_t>(stride)) {
     const DepthView& view = views[v];
-    const Eigen::Vector3d p_D = view.T_G_D.inverse() * p_G;
-    const double z = p_D.z();
-    if (!(z >= view.min_depth_m) || !(z <= view.max_depth_m)) continue;
-    const PinholeIntrinsics& k = view.intrinsics;
-    const double u = k.fx * p_D.x() / z + k.cx;
-    const double w = k.fy * p_D.y() / z + k.cy;
-    if (!(u >= 0.0 && u < k.width && w >= 0.0 && w < k.height)) continue;
-    // The ray through p, scaled to unit depth: its parameter is the depth.
+    Eigen::Vector3d p_D;
     Ray ray;
-    ray.origin = view.T_G_D.translation().cast<float>();
-    ray.direction = (view.T_G_D.rotation() * (p_D / z)).cast<float>();
-    ray.t_near = 0.0f;
+    if (!viewRayThrough(view, p_G, &p_D, &ray)) continue;
+    const double z = p_D.z();
     ray.t_far = static_cast<float>(view.max_depth_m);
     RaycastHit hit;
     if (!truth.intersect(ray, &hit)) continue;  // no depth measured there
@@ -46,18 +55,10 @@ bool seen(const TriangleMeshRaycaster& truth, std::span<const DepthView> views, 
   constexpr double kTolerance = 0.01;
   for (size_t v = 0; v < views.size(); v += static_cast<size_t>(stride)) {
     const DepthView& view = views[v];
-    const Eigen::Vector3d q_D = view.T_G_D.inverse() * q_G;
-    const double z = q_D.z();
-    if (!(z >= view.min_depth_m) || !(z <= view.max_depth_m)) continue;
-    if (q_D.norm() > view.max_ray_length_m) continue;
-    const PinholeIntrinsics& k = view.intrinsics;
-    const double u = k.fx * q_D.x() / z + k.cx;
-    const double w = k.fy * q_D.y() / z + k.cy;
-    if (!(u >= 0.0 && u < k.width && w >= 0.0 && w < k.height)) continue;
+    Eigen::Vector3d q_D;
     Ray ray;
-    ray.origin = view.T_G_D.translation().cast<float>();
-    ray.direction = (view.T_G_D.rotation() * (q_D / z)).cast<float>();
-    ray.t_near = 0.0f;
+    if (!viewRayThrough(view, q_G, &q_D, &ray) || q_D.norm() > view.max_ray_length_m) continue;
+    const double z = q_D.z();
     ray.t_far = static_cast<float>(z + kTolerance);
     RaycastHit hit;
     if (truth.intersect(ray, &hit) && static_cast<double>(hit.t) >= z - kTolerance) return true;

@@ -9,7 +9,6 @@ namespace {
 
 // Queue keys are distances in 1/kKeySteps voxel.
 constexpr float kKeySteps = 8.0f;
-// A bucket keeps at most this many entries' storage between updates.
 // Entries' worth of queue storage kept between waves (over all buckets).
 constexpr size_t kKeepQueueEntries = size_t{1} << 14;
 

@@ -81,9 +81,8 @@ class DistanceBucketQueue {
     peak_chunks_ = chunks_;
   }
 
-  /// Entries the allocated chunks hold room for, and their bytes. O(1).
+  /// Entries the allocated chunks hold room for. O(1).
   size_t capacity() const { return chunks_ * kChunkEntries; }
-  size_t storageBytes() const { return chunks_ * sizeof(Chunk); }
 
   /// Frees the free chunks beyond room for `max_entries` entries, so that a large wave's
   /// peak does not stay allocated between waves. Precondition: empty() (every chunk is free

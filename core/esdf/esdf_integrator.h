@@ -18,7 +18,7 @@ struct EsdfUpdateStats {
   size_t sites_added = 0;        ///< voxels that became (or changed as) obstacles
   size_t sites_removed = 0;      ///< obstacle voxels that stopped being obstacles
   size_t voxels_popped = 0;      ///< wavefront steps
-  size_t queue_peak_bytes = 0;   ///< the waves' queue at its fullest (entries x entry size)
+  size_t queue_peak_bytes = 0;   ///< the waves' queue storage at its fullest, bytes
   bool rebuilt = false;          ///< the whole field was recomputed
 };
 

@@ -168,21 +168,18 @@ class PlanningMap {
   const TimingWindow& refreshMs() const { return refresh_ms_; }
   /// Bytes the fields hold, and their two integrators' working memory
   /// (EsdfIntegrator::workingBytes: the high-water mark of the waves' queues). O(1).
-  size_t memoryBytes() const {
-    return memory_bytes_.load(std::memory_order_relaxed) +
-           working_bytes_.load(std::memory_order_relaxed) +
-           active_working_bytes_.load(std::memory_order_relaxed);
-  }
+  size_t memoryBytes() const { return fieldBytes() + workingBytes(); }
   /// Bytes the fields will hold once they follow a collection of `tsdf_blocks` blocks of
-  /// `layer`'s geometry (one field block per TSDF block), or memoryBytes() when more: what
-  /// a memory cap counts, so that the fields' lag behind integration cannot overrun it.
+  /// `layer`'s geometry (one field block per TSDF block), or what they hold when more, plus
+  /// the integrators' working memory: what a memory cap counts, so that the fields' lag
+  /// behind integration cannot overrun it.
   size_t projectedBytes(size_t tsdf_blocks, const LayerConfig& layer) const {
     // The working block and its snapshot's record; the voxels are shared.
     const size_t per_block =
         2 * sizeof(EsdfBlock) + static_cast<size_t>(layer.voxels_per_side) *
                                     static_cast<size_t>(layer.voxels_per_side) *
                                     static_cast<size_t>(layer.voxels_per_side) * sizeof(EsdfVoxel);
-    return std::max(memoryBytes(), tsdf_blocks * per_block);
+    return std::max(fieldBytes(), tsdf_blocks * per_block) + workingBytes();
   }
 
  private:
@@ -235,6 +232,11 @@ class PlanningMap {
   std::atomic<size_t> memory_bytes_{0};
   std::atomic<size_t> working_bytes_{0};         // integrator_.workingBytes()
   std::atomic<size_t> active_working_bytes_{0};  // active_integrator_.workingBytes()
+  size_t fieldBytes() const { return memory_bytes_.load(std::memory_order_relaxed); }
+  size_t workingBytes() const {
+    return working_bytes_.load(std::memory_order_relaxed) +
+           active_working_bytes_.load(std::memory_order_relaxed);
+  }
   std::atomic<uint64_t> updates_{0}, rebuilds_{0};
 };
 

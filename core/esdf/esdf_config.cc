@@ -11,6 +11,9 @@ std::string EsdfConfig::validate() const {
   if (!std::isfinite(min_weight) || min_weight < 0.0f) {
     return "min_weight must be finite and >= 0, got " + std::to_string(min_weight);
   }
+  if (band_blocks < 0 || band_blocks > 2) {
+    return "band_blocks must be in [0, 2], got " + std::to_string(band_blocks);
+  }
   return {};
 }
 

@@ -12,6 +12,12 @@ struct EsdfConfig {
   /// A TSDF voxel with weight below this is unknown space: neither free nor an obstacle.
   /// Finite and >= 0.
   float min_weight = 1e-4f;
+  /// Rings of blocks around the TSDF's blocks that the field also covers, every voxel
+  /// unknown there: the wave carries the distance to this subvolume's obstacles into space
+  /// it never observed, where another subvolume may have observed it free (PlanningMap
+  /// bounds such an answer by it). 0 = the TSDF's blocks only (a single volume needs no
+  /// band). Each ring costs about as many blocks as a surface's own. In [0, 2].
+  int band_blocks = 0;
 
   /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
   std::string validate() const;

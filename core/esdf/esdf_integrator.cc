@@ -284,8 +284,9 @@ EsdfUpdateStats EsdfIntegrator::stage(const TsdfLayer& tsdf, EsdfLayer* esdf) {
   prepare(*esdf);
   queue_.resetPeak();
   EsdfUpdateStats stats;
-  std::vector<EsdfBlock*> added;
-  std::vector<EsdfBlock*> changed;
+  std::vector<EsdfBlock*> added;    // new blocks, with a TSDF block
+  std::vector<EsdfBlock*> changed;  // blocks to read again (band blocks now observed too)
+  std::vector<EsdfBlock*> grown;    // blocks that have a TSDF block since this call
   for (const auto& [key, tsdf_block] : tsdf.blocks()) {
     bool fresh = false;
     EsdfBlock* block = esdf->allocateBlock(tsdf_block->index(), &fresh);
@@ -294,6 +295,13 @@ EsdfUpdateStats EsdfIntegrator::stage(const TsdfLayer& tsdf, EsdfLayer* esdf) {
       block->tsdf = tsdf_block.get();
       block->tsdf_change_count = count;
       added.push_back(block);
+      grown.push_back(block);
+    } else if (block->isBand()) {
+      // A band block the TSDF now covers: it keeps the distances it carries.
+      block->tsdf = tsdf_block.get();
+      block->tsdf_change_count = count;
+      changed.push_back(block);
+      grown.push_back(block);
     } else if (block->tsdf != tsdf_block.get()) {
       return restage(tsdf, esdf);  // a block was removed and another allocated there
     } else if (block->tsdf_change_count != count) {
@@ -301,20 +309,39 @@ EsdfUpdateStats EsdfIntegrator::stage(const TsdfLayer& tsdf, EsdfLayer* esdf) {
       changed.push_back(block);
     }
   }
-  if (esdf->numBlocks() != tsdf.numBlocks()) return restage(tsdf, esdf);
+  // The band around the blocks the TSDF gained.
+  const int band = config_.band_blocks;
+  std::vector<EsdfBlock*> band_added;
+  for (const EsdfBlock* block : grown) {
+    for (int z = -band; z <= band; ++z) {
+      for (int y = -band; y <= band; ++y) {
+        for (int x = -band; x <= band; ++x) {
+          const BlockIndex index = block->index + BlockIndex(x, y, z);
+          if (!gridIndexInRange(index)) continue;
+          bool fresh = false;
+          EsdfBlock* other = esdf->allocateBlock(index, &fresh);
+          if (fresh) band_added.push_back(other);
+        }
+      }
+    }
+  }
   // The queue names blocks by slot (8-byte entries): number them before the first push.
   slots_.clear();
   slots_.reserve(esdf->numBlocks());
+  size_t observed_blocks = 0;
   for (const auto& [key, block] : esdf->blocks()) {
     block->queue_slot = static_cast<uint32_t>(slots_.size());
     slots_.push_back(block.get());
+    if (!block->isBand()) ++observed_blocks;
   }
+  if (observed_blocks != tsdf.numBlocks()) return restage(tsdf, esdf);  // TSDF blocks left
   // New blocks first take the waves of their neighbours' sites (before any of them is read,
   // so only established sites are pushed), then every new or changed block is read.
   for (EsdfBlock* block : added) seedFromNeighbours(esdf, block);
+  for (EsdfBlock* block : band_added) seedFromNeighbours(esdf, block);
   for (EsdfBlock* block : added) readBlock(esdf, block, &stats);
   for (EsdfBlock* block : changed) readBlock(esdf, block, &stats);
-  stats.esdf_blocks_added = added.size();
+  stats.esdf_blocks_added = added.size() + band_added.size();
   stats.tsdf_blocks_read = added.size() + changed.size();
   return stats;
 }

@@ -25,7 +25,9 @@ struct EsdfUpdateStats {
 /// Computes a subvolume's Euclidean signed distance field (EsdfLayer) from its TSDF layer,
 /// in the subvolume's own frame, and keeps it up to date incrementally.
 ///
-/// The field, per voxel of every allocated TSDF block:
+/// The field covers every allocated TSDF block and, with EsdfConfig::band_blocks = b, the
+/// blocks within b blocks of them (band blocks: every voxel unknown; they only carry sites).
+/// Per voxel:
 ///   - state: unknown when the TSDF weight is 0 or below min_weight; occupied when observed
 ///     with TSDF distance <= 0; free otherwise.
 ///   - sites: observed voxels whose TSDF distance is below one voxel size: every occupied
@@ -49,7 +51,8 @@ struct EsdfUpdateStats {
 ///   1/8 voxel), after Lau, Sprunk and Burgard, "Efficient grid-based spatial representations
 ///   for robot navigation in dynamic environments" (RAS 2013): lower waves spread new sites,
 ///   raise waves clear voxels whose site stopped being one before the lower wave refills
-///   them. Surfaces in space no TSDF block covers are not seen.
+///   them. Surfaces in space no TSDF block covers are not seen; a band block stays until the
+///   next rebuild.
 ///
 /// Incremental contract: update() reads only TSDF blocks that are new or whose
 /// Block::changeCount() moved since the last call, so integrators must mark changed blocks

@@ -46,12 +46,17 @@ class EsdfBlock {
     return voxels_.get();
   }
 
+  /// A block of the band around the TSDF's blocks: every voxel unknown, only carrying
+  /// distances to obstacles of neighbouring blocks.
+  bool isBand() const { return tsdf == nullptr; }
+
   BlockIndex index;
   /// The 26 adjacent blocks of the layer (null where absent; slot 13 is this block), kept
   /// by EsdfLayer::allocateBlock / removeBlock so that wavefronts cross block borders
   /// without a hash lookup.
   std::array<EsdfBlock*, 27> neighbours;
-  /// The TSDF block this block was last computed from, and its Block::changeCount() then.
+  /// The TSDF block this block was last computed from, and its Block::changeCount() then;
+  /// null for a band block (EsdfConfig::band_blocks), which no TSDF block covers.
   const Block* tsdf = nullptr;
   uint64_t tsdf_change_count = 0;
   /// The EsdfIntegrator's number for this block during one update (its waves' queue names
@@ -69,7 +74,7 @@ class EsdfBlock {
 };
 
 /// A sparse distance field with the geometry (voxel size, block size, frame) of the TSDF
-/// layer it is computed from: one EsdfBlock per TSDF block.
+/// layer it is computed from: one EsdfBlock per TSDF block, and the band blocks around them.
 ///
 /// Thread safety: const methods may run concurrently with each other; anything else needs
 /// exclusive access (the owner's lock). A snapshot() is immutable and shares nothing

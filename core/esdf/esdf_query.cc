@@ -42,16 +42,35 @@ void distanceOf(const EsdfLayer& layer, const VoxelRef& ref, VoxelState* state, 
 }
 
 /// queryNearest() of the voxel `index`, found from `hint` (may be null). An unknown voxel's
-/// distance is not answered.
+/// distance is not answered; the obstacle distance it carries is its bound.
 DistanceSample nearestSample(const EsdfLayer& layer, const EsdfBlock* hint,
                              const GlobalVoxelIndex& index) {
   DistanceSample sample;
   const VoxelRef ref = locate(layer, hint, index);
-  if (ref.voxel == nullptr || ref.voxel->state == VoxelState::kUnknown) return sample;
+  if (ref.voxel == nullptr) return sample;
   float distance = 0.0f;
   distanceOf(layer, ref, &sample.state, &distance);
-  sample.distance = distance;
+  if (sample.state == VoxelState::kUnknown) {
+    if (ref.voxel->hasSite()) sample.bound = distance;
+  } else {
+    sample.distance = distance;
+  }
   return sample;
+}
+
+/// Trilinear interpolation of the corner values c[x + 2y + 4z] at fractions t, with the
+/// gradient in metres per metre (inv_h = 1 / voxel size).
+float interpolate(const float c[8], const Eigen::Vector3f& t, float inv_h,
+                  Eigen::Vector3f* gradient) {
+  const float x00 = c[0] + t.x() * (c[1] - c[0]), x10 = c[2] + t.x() * (c[3] - c[2]);
+  const float x01 = c[4] + t.x() * (c[5] - c[4]), x11 = c[6] + t.x() * (c[7] - c[6]);
+  const float y0 = x00 + t.y() * (x10 - x00), y1 = x01 + t.y() * (x11 - x01);
+  const float dx0 = (1 - t.y()) * (c[1] - c[0]) + t.y() * (c[3] - c[2]);
+  const float dx1 = (1 - t.y()) * (c[5] - c[4]) + t.y() * (c[7] - c[6]);
+  gradient->x() = ((1 - t.z()) * dx0 + t.z() * dx1) * inv_h;
+  gradient->y() = ((1 - t.z()) * (x10 - x00) + t.z() * (x11 - x01)) * inv_h;
+  gradient->z() = (y1 - y0) * inv_h;
+  return y0 + t.z() * (y1 - y0);
 }
 
 }  // namespace
@@ -80,31 +99,31 @@ DistanceSample queryInterpolated(const EsdfLayer& layer, const Eigen::Vector3f& 
   const EsdfBlock* hint = locate(layer, nullptr, base).block;
   const GlobalVoxelIndex nearest = layer.globalVoxelIndexFromPoint(point);
   if (hint == nullptr) return nearestSample(layer, nullptr, nearest);
-  float c[8];
+  float c[8];  // c[x + 2y + 4z]
+  bool all_observed = true;
   for (int corner = 0; corner < 8; ++corner) {
     const GlobalVoxelIndex index =
         base + GlobalVoxelIndex(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
     const VoxelRef ref = locate(layer, hint, index);
-    // Unknown or absent: no interpolation.
-    if (ref.voxel == nullptr || ref.voxel->state == VoxelState::kUnknown) {
-      return nearestSample(layer, hint, nearest);
-    }
+    // Absent: no interpolation.
+    if (ref.voxel == nullptr) return nearestSample(layer, hint, nearest);
     VoxelState state = VoxelState::kUnknown;
     distanceOf(layer, ref, &state, &c[corner]);
+    all_observed = all_observed && state != VoxelState::kUnknown;
   }
-  // c[x + 2y + 4z]; interpolate along x, then y, then z.
-  const float x00 = c[0] + t.x() * (c[1] - c[0]), x10 = c[2] + t.x() * (c[3] - c[2]);
-  const float x01 = c[4] + t.x() * (c[5] - c[4]), x11 = c[6] + t.x() * (c[7] - c[6]);
-  const float y0 = x00 + t.y() * (x10 - x00), y1 = x01 + t.y() * (x11 - x01);
-  DistanceSample sample;
-  sample.distance = y0 + t.z() * (y1 - y0);
-  sample.state = sample.distance <= 0.0f ? VoxelState::kOccupied : VoxelState::kFree;
   const float inv_h = 1.0f / layer.voxelSize();
-  const float dx0 = (1 - t.y()) * (c[1] - c[0]) + t.y() * (c[3] - c[2]);
-  const float dx1 = (1 - t.y()) * (c[5] - c[4]) + t.y() * (c[7] - c[6]);
-  sample.gradient.x() = ((1 - t.z()) * dx0 + t.z() * dx1) * inv_h;
-  sample.gradient.y() = ((1 - t.z()) * (x10 - x00) + t.z() * (x11 - x01)) * inv_h;
-  sample.gradient.z() = (y1 - y0) * inv_h;
+  if (!all_observed) {
+    // Unknown nearby: the nearest voxel answers; an unknown one's bound is interpolated.
+    DistanceSample sample = nearestSample(layer, hint, nearest);
+    if (sample.state == VoxelState::kUnknown && !std::isnan(sample.bound)) {
+      sample.bound = interpolate(c, t, inv_h, &sample.gradient);
+      sample.has_gradient = true;
+    }
+    return sample;
+  }
+  DistanceSample sample;
+  sample.distance = interpolate(c, t, inv_h, &sample.gradient);
+  sample.state = sample.distance <= 0.0f ? VoxelState::kOccupied : VoxelState::kFree;
   sample.has_gradient = true;
   return sample;
 }

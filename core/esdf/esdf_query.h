@@ -14,11 +14,17 @@ namespace cblox {
 ///   distance: metres to the nearest obstacle surface; negative inside obstacles; capped at
 ///     the layer's maxDistance() ("at least this far"). NaN when state is unknown: unknown
 ///     space has no distance, whatever obstacles are known around it.
+///   bound: unknown answers only: the distance to the nearest obstacle the layer knows, as
+///     its wave carried it there (band blocks and unobserved voxels carry them), capped at
+///     maxDistance(): the clearance at the point is at most this, since that obstacle was
+///     observed. NaN otherwise, and outside every block.
 ///   gradient: d distance / d position (about unit length, pointing away from the nearest
-///     obstacle), only when has_gradient; NaN otherwise.
+///     obstacle), only when has_gradient; NaN otherwise. For an unknown answer, the
+///     gradient of bound.
 struct DistanceSample {
   VoxelState state = VoxelState::kUnknown;
   float distance = std::numeric_limits<float>::quiet_NaN();
+  float bound = std::numeric_limits<float>::quiet_NaN();
   Eigen::Vector3f gradient = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
   bool has_gradient = false;
 };
@@ -38,7 +44,8 @@ DistanceSample queryNearest(const EsdfLayer& layer, const Eigen::Vector3f& point
 /// Trilinear interpolation of the eight voxel centres around `point`, with the analytic
 /// gradient, when all eight are observed (free or occupied); state is then occupied where
 /// the interpolated distance is <= 0, free elsewhere. When any of the eight is unknown or
-/// absent, the answer is queryNearest's (no gradient).
+/// absent, the answer is queryNearest's (no gradient); when that is unknown and all eight
+/// voxels are in blocks, its bound is the interpolation of their values, with its gradient.
 DistanceSample queryInterpolated(const EsdfLayer& layer, const Eigen::Vector3f& point);
 
 }  // namespace cblox

@@ -41,8 +41,9 @@ struct PlanningConfig {
   /// while the memory cap's RSS bound is not kept with it on (a 1 cm map's first frames
   /// overshoot the cap, and each block then costs its field too).
   bool enabled = false;
-  /// The fields' settings.
-  EsdfConfig esdf;
+  /// The fields' settings; one band ring (EsdfConfig::band_blocks), so that a subvolume's
+  /// obstacles bound the free answers of the others next to its blocks.
+  EsdfConfig esdf{.band_blocks = 1};
   /// The fields follow the map every this many seconds, on the fusion/export worker
   /// (PlanningMap::refresh); finite and > 0.
   double refresh_period_s = 0.5;

@@ -16,6 +16,37 @@ namespace cblox {
 PlanningMap::PlanningMap(const EsdfConfig& config)
     : config_(config), integrator_(config), active_integrator_(config) {}
 
+namespace {
+
+/// Moves a field's share `*counted` of the sum `*total` to `now`.
+void recount(std::atomic<size_t>* total, size_t* counted, size_t now) {
+  if (now >= *counted) {
+    total->fetch_add(now - *counted, std::memory_order_relaxed);
+  } else {
+    total->fetch_sub(*counted - now, std::memory_order_relaxed);
+  }
+  *counted = now;
+}
+
+}  // namespace
+
+size_t PlanningMap::projectedBytes(size_t tsdf_blocks, const LayerConfig& layer) const {
+  // The working block and its snapshot's record; the voxels are shared.
+  const size_t per_block =
+      2 * sizeof(EsdfBlock) + static_cast<size_t>(layer.voxels_per_side) *
+                                  static_cast<size_t>(layer.voxels_per_side) *
+                                  static_cast<size_t>(layer.voxels_per_side) * sizeof(EsdfVoxel);
+  const size_t blocks = field_blocks_.load(std::memory_order_relaxed);
+  const size_t band = band_blocks_.load(std::memory_order_relaxed);
+  // Band blocks per observed block as the computed fields have them (a sum of two relaxed
+  // loads: an estimate while a field is being recounted).
+  const double per_tsdf_block =
+      blocks > band ? static_cast<double>(blocks) / static_cast<double>(blocks - band) : 1.0;
+  const auto projected =
+      static_cast<size_t>(static_cast<double>(tsdf_blocks) * per_tsdf_block) * per_block;
+  return std::max(fieldBytes(), projected) + workingBytes();
+}
+
 std::shared_ptr<PlanningMap::Field> PlanningMap::fieldFor(const Submap& submap) {
   std::lock_guard<std::mutex> lock(index_mutex_);
   IndexEntry& entry = index_[submap.id()];
@@ -39,22 +70,22 @@ void PlanningMap::updateField(const Submap& submap, const TsdfLayer& layer,
   (integrator == &active_integrator_ ? active_working_bytes_ : working_bytes_)
       .store(integrator->workingBytes(), std::memory_order_relaxed);
   std::shared_ptr<const EsdfLayer> published = field->work.snapshot();
-  {
-    std::lock_guard<std::mutex> lock(field->bytes_mutex);
-    const size_t bytes = field->dropped ? 0 : field->work.memoryBytes() + published->memoryBytes();
-    if (bytes >= field->counted_bytes) {
-      memory_bytes_.fetch_add(bytes - field->counted_bytes, std::memory_order_relaxed);
-    } else {
-      memory_bytes_.fetch_sub(field->counted_bytes - bytes, std::memory_order_relaxed);
-    }
-    field->counted_bytes = bytes;
-  }
   Eigen::AlignedBox3f box;
   const float block_size = layer.blockSize();
+  size_t band_blocks = 0;
   for (const auto& [key, block] : published->blocks()) {
     const Eigen::Vector3f lo = block->index.cast<float>() * block_size;
     box.extend(lo);
     box.extend(lo + Eigen::Vector3f::Constant(block_size));
+    if (block->isBand()) ++band_blocks;
+  }
+  {
+    std::lock_guard<std::mutex> lock(field->bytes_mutex);
+    const bool counted = !field->dropped;
+    recount(&memory_bytes_, &field->counted_bytes,
+            counted ? field->work.memoryBytes() + published->memoryBytes() : 0);
+    recount(&field_blocks_, &field->counted_blocks, counted ? published->numBlocks() : 0);
+    recount(&band_blocks_, &field->counted_band_blocks, counted ? band_blocks : 0);
   }
   updates_.fetch_add(1, std::memory_order_relaxed);
   if (stats.rebuilt) rebuilds_.fetch_add(1, std::memory_order_relaxed);
@@ -88,8 +119,9 @@ void PlanningMap::refresh(const SubmapCollection& collection, Scope scope) {
     // now, and an update in hand on another thread publishes nowhere.
     std::lock_guard<std::mutex> lock(field->bytes_mutex);
     field->dropped = true;
-    memory_bytes_.fetch_sub(field->counted_bytes, std::memory_order_relaxed);
-    field->counted_bytes = 0;
+    recount(&memory_bytes_, &field->counted_bytes, 0);
+    recount(&field_blocks_, &field->counted_blocks, 0);
+    recount(&band_blocks_, &field->counted_band_blocks, 0);
   }
   const auto start = std::chrono::steady_clock::now();
   bool updated = false;
@@ -173,6 +205,7 @@ Eigen::AlignedBox3d PlanningMap::boundsG() const {
     // against G, where the box of the blocks' box would be much larger.
     const double reach = 0.5 * std::sqrt(3.0) * block_size;
     for (const auto& [key, block] : entry.layer->blocks()) {
+      if (block->isBand()) continue;  // not observed
       const Eigen::Vector3d centre_M =
           (block->index.cast<double>() + Eigen::Vector3d::Constant(0.5)) * block_size;
       const Eigen::Vector3d centre_G = T_G_M * centre_M;
@@ -187,11 +220,20 @@ DistanceAnswer PlanningMap::sample(const std::vector<IndexEntry>& index,
                                    const Eigen::Vector3d& p_G) {
   DistanceAnswer answer;
   if (!p_G.allFinite()) return answer;
+  // The smallest bound of the fields that cover the point without having observed it.
+  DistanceSample bound;
+  const IndexEntry* bound_entry = nullptr;
   for (const IndexEntry& entry : index) {
     const Eigen::Vector3f p_M = (entry.T_M_G * p_G).cast<float>();
     if (entry.box_M.isEmpty() || !entry.box_M.contains(p_M)) continue;
     const DistanceSample s = queryInterpolated(*entry.layer, p_M);
-    if (s.state == VoxelState::kUnknown) continue;
+    if (s.state == VoxelState::kUnknown) {
+      if (s.bound < bound.bound || (bound_entry == nullptr && !std::isnan(s.bound))) {
+        bound = s;
+        bound_entry = &entry;
+      }
+      continue;
+    }
     // Occupied wins over free; among equals the nearest obstacle wins.
     const bool better =
         answer.state == VoxelState::kUnknown ||
@@ -205,6 +247,15 @@ DistanceAnswer PlanningMap::sample(const std::vector<IndexEntry>& index,
                           ? Eigen::Vector3d(entry.R_G_M * s.gradient.cast<double>())
                           : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
     answer.submap = static_cast<int64_t>(entry.id);
+  }
+  if (answer.state == VoxelState::kFree && bound_entry != nullptr &&
+      static_cast<double>(bound.bound) < answer.distance) {
+    answer.distance = bound.bound;
+    answer.has_gradient = bound.has_gradient;
+    answer.gradient = bound.has_gradient
+                          ? Eigen::Vector3d(bound_entry->R_G_M * bound.gradient.cast<double>())
+                          : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    answer.submap = static_cast<int64_t>(bound_entry->id);
   }
   return answer;
 }

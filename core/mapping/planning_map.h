@@ -37,10 +37,12 @@ namespace cblox {
 ///     subvolume observed the point free; else unknown (no subvolume observed it).
 ///   distance: metres to the nearest obstacle surface that the subvolumes observing the point
 ///     know: the smallest of their answers (negative inside an obstacle), capped at
-///     max_distance_m. NaN when unknown.
+///     max_distance_m. A free answer is also at most the bound of every subvolume whose
+///     field covers the point without having observed it (DistanceSample::bound: the
+///     distance to an obstacle that subvolume observed nearby). NaN when unknown.
 ///   gradient: of the answering subvolume's field, rotated into G (about unit length,
 ///     pointing away from the obstacle); only with has_gradient.
-///   submap: the subvolume whose field gave the distance; -1 when unknown.
+///   submap: the subvolume whose field gave the distance (or the bound); -1 when unknown.
 struct DistanceAnswer {
   VoxelState state = VoxelState::kUnknown;
   double distance = std::numeric_limits<double>::quiet_NaN();
@@ -169,18 +171,17 @@ class PlanningMap {
   /// Bytes the fields hold, and their two integrators' working memory
   /// (EsdfIntegrator::workingBytes: the high-water mark of the waves' queues). O(1).
   size_t memoryBytes() const { return fieldBytes() + workingBytes(); }
-  /// Bytes the fields will hold once they follow a collection of `tsdf_blocks` blocks of
-  /// `layer`'s geometry (one field block per TSDF block), or what they hold when more, plus
-  /// the integrators' working memory: what a memory cap counts, so that the fields' lag
-  /// behind integration cannot overrun it.
-  size_t projectedBytes(size_t tsdf_blocks, const LayerConfig& layer) const {
-    // The working block and its snapshot's record; the voxels are shared.
-    const size_t per_block =
-        2 * sizeof(EsdfBlock) + static_cast<size_t>(layer.voxels_per_side) *
-                                    static_cast<size_t>(layer.voxels_per_side) *
-                                    static_cast<size_t>(layer.voxels_per_side) * sizeof(EsdfVoxel);
-    return std::max(fieldBytes(), tsdf_blocks * per_block) + workingBytes();
+  /// The two integrators' working memory alone. O(1).
+  size_t workingBytes() const {
+    return working_bytes_.load(std::memory_order_relaxed) +
+           active_working_bytes_.load(std::memory_order_relaxed);
   }
+  /// Bytes the fields will hold once they follow a collection of `tsdf_blocks` blocks of
+  /// `layer`'s geometry (one field block per TSDF block, and band blocks in the proportion
+  /// the computed fields have them), or what they hold when more, plus the integrators'
+  /// working memory: what a memory cap counts, so that the fields' lag behind integration
+  /// cannot overrun it. O(1).
+  size_t projectedBytes(size_t tsdf_blocks, const LayerConfig& layer) const;
 
  private:
   struct Field {
@@ -188,8 +189,10 @@ class PlanningMap {
     std::mutex update_mutex;   // guards work and revision
     EsdfLayer work;            // the integrators' layer; queries read its snapshots
     uint64_t revision = 0;     // Submap::revision() when last computed
-    std::mutex bytes_mutex;    // guards counted_bytes and dropped
+    std::mutex bytes_mutex;    // guards counted_* and dropped
     size_t counted_bytes = 0;  // this field's share of memory_bytes_
+    size_t counted_blocks = 0;       // ... of field_blocks_
+    size_t counted_band_blocks = 0;  // ... of band_blocks_
     bool dropped = false;      // its subvolume left the collection
   };
   /// One field as the queries see it: its latest snapshot, its pose and the bounding box of
@@ -230,13 +233,11 @@ class PlanningMap {
   std::map<SubmapId, IndexEntry> index_;
 
   std::atomic<size_t> memory_bytes_{0};
+  std::atomic<size_t> field_blocks_{0};  // published blocks over all fields
+  std::atomic<size_t> band_blocks_{0};   // of them, band blocks
   std::atomic<size_t> working_bytes_{0};         // integrator_.workingBytes()
   std::atomic<size_t> active_working_bytes_{0};  // active_integrator_.workingBytes()
   size_t fieldBytes() const { return memory_bytes_.load(std::memory_order_relaxed); }
-  size_t workingBytes() const {
-    return working_bytes_.load(std::memory_order_relaxed) +
-           active_working_bytes_.load(std::memory_order_relaxed);
-  }
   std::atomic<uint64_t> updates_{0}, rebuilds_{0};
 };
 

@@ -226,7 +226,7 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
 
   const YAML::Node planning = root["planning"];
   requireKnownKeys(planning, "planning",
-                   {"enabled", "max_distance_m", "min_weight", "refresh_period_s",
+                   {"enabled", "max_distance_m", "min_weight", "band_blocks", "refresh_period_s",
                     "query_queue_capacity", "query_threads", "local_grid_period_s",
                     "local_grid_size_m",
                     "local_grid_resolution_m"});
@@ -234,6 +234,14 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
     readOptional(planning, "planning", "enabled", &m.planning.enabled);
     readOptional(planning, "planning", "max_distance_m", &m.planning.esdf.max_distance_m);
     readOptional(planning, "planning", "min_weight", &m.planning.esdf.min_weight);
+    if (planning["band_blocks"]) {
+      int64_t band = 0;
+      readOptional(planning, "planning", "band_blocks", &band);
+      if (band < 0 || band > 2) {
+        throw ConfigError("planning.band_blocks: must be in [0, 2], got " + std::to_string(band));
+      }
+      m.planning.esdf.band_blocks = static_cast<int>(band);
+    }
     readOptional(planning, "planning", "refresh_period_s", &m.planning.refresh_period_s);
     PlanningServiceConfig& service = m.planning.service;
     if (planning["query_queue_capacity"]) {

@@ -319,19 +319,80 @@ TEST(EsdfIntegratorTest, AVanishedObstacleLeavesNoDistanceBehind) {
 TEST(EsdfIntegratorTest, BlocksArrivingOneByOneGiveTheRebuiltField) {
   const Sdf scene = esdf_test::unite(esdf_test::planeX(-0.5f),
                                      esdf_test::box({0.1f, -0.2f, -0.1f}, {0.3f, 0.35f, 0.2f}));
-  TsdfLayer tsdf(geometry());
-  EsdfLayer esdf(geometry(), 1.0f);
-  EsdfIntegrator integrator(fieldConfig());
-  // Slabs along x, as a camera moving along the room would add them.
-  for (float x = -0.7f; x < 1.1f; x += 0.3f) {
-    esdf_test::writeTsdf(&tsdf, scene, {x, -0.5f, -0.5f}, {x + 0.29f, 0.5f, 0.5f}, kTruncation);
-    const EsdfUpdateStats stats = integrator.update(tsdf, &esdf);
-    EXPECT_FALSE(stats.rebuilt);
+  for (const int band : {0, 1}) {
+    SCOPED_TRACE(band);
+    EsdfConfig config = fieldConfig();
+    config.band_blocks = band;
+    TsdfLayer tsdf(geometry());
+    EsdfLayer esdf(geometry(), 1.0f);
+    EsdfIntegrator integrator(config);
+    // Slabs along x, as a camera moving along the room would add them (with a band, each
+    // slab turns the previous one's band blocks into observed ones).
+    for (float x = -0.7f; x < 1.1f; x += 0.3f) {
+      esdf_test::writeTsdf(&tsdf, scene, {x, -0.5f, -0.5f}, {x + 0.29f, 0.5f, 0.5f},
+                           kTruncation);
+      const EsdfUpdateStats stats = integrator.update(tsdf, &esdf);
+      EXPECT_FALSE(stats.rebuilt);
+    }
+    EsdfLayer rebuilt(geometry(), 1.0f);
+    EsdfIntegrator(config).rebuild(tsdf, &rebuilt);
+    expectSameField(esdf, rebuilt, 0.1f);
+    EXPECT_LT(compare(esdf, scene).max(), 0.7f);
   }
-  EsdfLayer rebuilt(geometry(), 1.0f);
-  EsdfIntegrator(fieldConfig()).rebuild(tsdf, &rebuilt);
-  expectSameField(esdf, rebuilt, 0.1f);
-  EXPECT_LT(compare(esdf, scene).max(), 0.7f);
+}
+
+TEST(EsdfIntegratorTest, ABandCarriesTheDistanceToTheObstaclesPastTheTsdfBlocks) {
+  // A ball of radius 0.2 at the origin, observed over blocks -1..0 per axis (0.8 m cube).
+  TsdfLayer tsdf(geometry());
+  const Sdf ball = esdf_test::ball({0.0f, 0.0f, 0.0f}, 0.2f);
+  esdf_test::writeTsdf(&tsdf, ball, {-0.4f, -0.4f, -0.4f}, {0.39f, 0.39f, 0.39f}, kTruncation);
+  ASSERT_EQ(tsdf.numBlocks(), 8u);
+  EsdfConfig config = fieldConfig();
+  config.band_blocks = 1;
+  EsdfLayer esdf(geometry(), 1.0f);
+  const EsdfUpdateStats stats = EsdfIntegrator(config).update(tsdf, &esdf);
+  // Blocks -2..1 per axis: the 8 observed ones and 56 band blocks around them.
+  EXPECT_EQ(esdf.numBlocks(), 64u);
+  EXPECT_EQ(stats.esdf_blocks_added, 64u);
+  EXPECT_EQ(stats.tsdf_blocks_read, 8u);
+  size_t band_voxels = 0;
+  for (const auto& [key, block] : esdf.blocks()) {
+    if (!block->isBand()) continue;
+    for (int i = 0; i < esdf.voxelsPerBlock(); ++i) {
+      const GlobalVoxelIndex global = block->index * 8 + GridIndex(i & 7, (i >> 3) & 7, i >> 6);
+      const Eigen::Vector3f centre = esdf.globalVoxelCenter(global);
+      VoxelState state;
+      float distance;
+      ASSERT_TRUE(voxelDistance(esdf, global, &state, &distance));
+      ASSERT_EQ(state, VoxelState::kUnknown);  // no band voxel is observed
+      // The distance to the ball, as in observed space: within a fraction of a voxel,
+      // never under it, up to the cap.
+      const float truth = std::min(ball(centre), 1.0f);
+      ASSERT_GE(distance, truth - 0.1f * kVoxel) << centre.transpose();
+      ASSERT_LE(distance, truth + 0.5f * kVoxel) << centre.transpose();
+      ++band_voxels;
+    }
+  }
+  EXPECT_EQ(band_voxels, 56u * 512u);
+  // The band is unknown space: a query there answers unknown, with the ball's distance as
+  // its bound.
+  const DistanceSample s = queryInterpolated(esdf, {0.6f, 0.0f, 0.0f});
+  EXPECT_EQ(s.state, VoxelState::kUnknown);
+  EXPECT_TRUE(std::isnan(s.distance));
+  EXPECT_NEAR(s.bound, 0.4f, 0.5f * kVoxel);
+  // A removed TSDF block rebuilds the field and its band.
+  ASSERT_TRUE(tsdf.removeBlock(BlockIndex(0, 0, 0)));
+  EsdfIntegrator integrator(config);
+  EXPECT_TRUE(integrator.update(tsdf, &esdf).rebuilt);
+  // (0, 0, 0) is now a band block; (1, 1, 1) touched only it and is gone.
+  EXPECT_EQ(esdf.numBlocks(), 63u);
+  EXPECT_EQ(esdf.getBlock(BlockIndex(1, 1, 1)), nullptr);
+  ASSERT_NE(esdf.getBlock(BlockIndex(0, 0, 0)), nullptr);
+  EXPECT_TRUE(esdf.getBlock(BlockIndex(0, 0, 0))->isBand());
+  EXPECT_EQ(queryNearest(esdf, {0.1f, 0.1f, 0.1f}).state, VoxelState::kUnknown);
+  EsdfConfig bad = config;
+  bad.band_blocks = 3;
+  EXPECT_THROW(EsdfIntegrator{bad}, std::invalid_argument);
 }
 
 TEST(EsdfIntegratorTest, AnUnchangedLayerIsNotReadAgain) {

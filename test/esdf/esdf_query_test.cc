@@ -68,9 +68,25 @@ TEST_F(EsdfQueryTest, UnknownSpaceIsAnAnswerWithoutADistance) {
     for (const DistanceSample& s : {queryNearest(esdf_, p), queryInterpolated(esdf_, p)}) {
       EXPECT_EQ(s.state, VoxelState::kUnknown);
       EXPECT_TRUE(std::isnan(s.distance));
-      EXPECT_FALSE(s.has_gradient);
     }
   }
+  // Outside every block nothing is known, not even a bound.
+  const DistanceSample outside = queryInterpolated(esdf_, {5.0f, 5.0f, 5.0f});
+  EXPECT_TRUE(std::isnan(outside.bound));
+  EXPECT_FALSE(outside.has_gradient);
+  // Inside the wall the wave carried the nearest occupied voxel (centre 0.175, counted at
+  // -1 voxel): the voxel centred at -0.175 holds 0.35 - 0.05, the one at -0.225 0.40 - 0.05;
+  // -0.2 lies halfway. The bound decreases towards the surface.
+  const DistanceSample nearest = queryNearest(esdf_, {-0.2f, 0.0f, 0.0f});
+  EXPECT_NEAR(nearest.bound, 0.30f, 1e-5f);
+  EXPECT_FALSE(nearest.has_gradient);
+  const DistanceSample inside = queryInterpolated(esdf_, {-0.2f, 0.0f, 0.0f});
+  EXPECT_NEAR(inside.bound, 0.325f, 1e-5f);
+  ASSERT_TRUE(inside.has_gradient);
+  EXPECT_NEAR(inside.gradient.x(), -1.0f, 1e-4f);
+  EXPECT_NEAR(inside.gradient.y(), 0.0f, 1e-4f);
+  // Observed answers have no bound.
+  EXPECT_TRUE(std::isnan(queryInterpolated(esdf_, {0.52f, 0.0f, 0.0f}).bound));
   // Interpolation next to unknown space falls back to the nearest voxel, without gradient.
   const DistanceSample edge = queryInterpolated(esdf_, {0.16f, 0.0f, 0.0f});
   EXPECT_FALSE(edge.has_gradient);

@@ -134,6 +134,55 @@ TEST_F(PlanningMapTest, OverlappingSubvolumesAnswerTheNearestObstacleAndOccupied
   EXPECT_EQ(answers[2].state, VoxelState::kUnknown);
 }
 
+TEST_F(PlanningMapTest, AnotherSubvolumesObstacleBoundsAFreeAnswerBesideItsBlocks) {
+  // Subvolume 2 observed free space (no obstacle within its cap) beside the wall's blocks,
+  // which end at y = 0.8: the wall's subvolume never observed it.
+  const std::shared_ptr<Submap> open = collection_.createSubmap(Transformationd(), 2, 2);
+  esdf_test::writeTsdf(open->mutableLayer(), esdf_test::planeX(-5.0f), {-0.4f, 0.85f, -0.4f},
+                       {1.59f, 1.55f, 0.39f}, kTruncation);
+  open->refreshStatistics();
+  const Eigen::Vector3d p(0.5, 0.9, 0.0);
+  // Without a band only the subvolume that observed the point answers: the cap.
+  PlanningMap unbanded(fieldConfig());
+  unbanded.refresh(collection_, PlanningMap::Scope::kAll);
+  const DistanceAnswer far = unbanded.query(p);
+  ASSERT_EQ(far.state, VoxelState::kFree);
+  EXPECT_FLOAT_EQ(far.distance, 1.0);
+  EXPECT_EQ(far.submap, static_cast<int64_t>(open->id()));
+  // With one ring of band blocks the wall's field carries its obstacle there. The wall's
+  // observed edge (0.31, 0.8) is 0.215 m away; the voxels around p hold 0.23-0.28 through
+  // the surface voxels' centres, so the answer is within a voxel of it.
+  EsdfConfig banded_config = fieldConfig();
+  banded_config.band_blocks = 1;
+  PlanningMap banded(banded_config);
+  banded.refresh(collection_, PlanningMap::Scope::kAll);
+  const DistanceAnswer near = banded.query(p);
+  ASSERT_EQ(near.state, VoxelState::kFree);  // still observed free space
+  EXPECT_GT(near.distance, 0.215);
+  EXPECT_LT(near.distance, 0.215 + kVoxel);
+  EXPECT_EQ(near.submap, static_cast<int64_t>(wall_->id()));
+  ASSERT_TRUE(near.has_gradient);  // away from the wall's edge: +x, +y
+  EXPECT_GT(near.gradient.x(), 0.3);
+  EXPECT_GT(near.gradient.y(), 0.3);
+  // Unknown space stays unknown whatever obstacle is known near it; the band is no
+  // observation and does not widen the map's bounds.
+  EXPECT_EQ(banded.query({0.5, 1.9, 0.0}).state, VoxelState::kUnknown);
+  EXPECT_EQ(banded.query({0.5, 1.0, 0.6}).state, VoxelState::kUnknown);
+  EXPECT_TRUE(banded.boundsG().isApprox(unbanded.boundsG()));
+  EXPECT_GT(banded.stats().blocks, unbanded.stats().blocks);
+  // A memory cap's projection for twice the TSDF blocks: twice the fields' blocks, band
+  // included (a working block and a snapshot record each).
+  const size_t tsdf_blocks = wall_->numBlocks() + ball_->numBlocks() + open->numBlocks();
+  const size_t per_block = 2 * sizeof(EsdfBlock) + 512 * sizeof(EsdfVoxel);
+  const size_t projected =
+      banded.projectedBytes(2 * tsdf_blocks, collectionConfig().layer) - banded.workingBytes();
+  EXPECT_LE(projected, 2 * banded.stats().blocks * per_block);
+  EXPECT_GE(projected, (2 * banded.stats().blocks - 1) * per_block);
+  EXPECT_EQ(unbanded.projectedBytes(2 * tsdf_blocks, collectionConfig().layer) -
+                unbanded.workingBytes(),
+            2 * tsdf_blocks * per_block);
+}
+
 TEST_F(PlanningMapTest, FollowsChangedAndRemovedSubvolumes) {
   // The periodic scope leaves the active subvolume (1) alone: no field, its space unknown.
   planning_.refresh(collection_, PlanningMap::Scope::kFinished);

@@ -309,7 +309,7 @@ EsdfUpdateStats EsdfIntegrator::stage(const TsdfLayer& tsdf, EsdfLayer* esdf) {
       changed.push_back(block);
     }
   }
-  // The band around the blocks the TSDF gained.
+  // The band around the blocks the TSDF gained (or a band block that became observed).
   const int band = config_.band_blocks;
   std::vector<EsdfBlock*> band_added;
   for (const EsdfBlock* block : grown) {

@@ -53,7 +53,9 @@ MapperConfig validated(const MapperConfig& config) {
 // The planning map of `config`, null when it is off.
 std::unique_ptr<PlanningMap> makePlanningMap(const MapperConfig& config) {
   if (!config.planning.enabled) return nullptr;
-  return std::make_unique<PlanningMap>(config.planning.esdf);
+  EsdfConfig esdf = config.planning.esdf;
+  esdf.band_blocks = config.planning.bandBlocks(config.integrator.projective_carving_depth_m);
+  return std::make_unique<PlanningMap>(esdf);
 }
 
 }  // namespace

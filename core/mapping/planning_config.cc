@@ -35,7 +35,9 @@ std::string PlanningServiceConfig::validate() const {
 }
 
 std::string PlanningConfig::validate() const {
-  if (const std::string e = esdf.validate(); !e.empty()) return "planning." + e;
+  EsdfConfig resolved = esdf;
+  resolved.band_blocks = bandBlocks(0.0);
+  if (const std::string e = resolved.validate(); !e.empty()) return "planning." + e;
   if (!std::isfinite(refresh_period_s) || !(refresh_period_s > 0.0)) {
     return "planning.refresh_period_s must be finite and > 0, got " +
            std::to_string(refresh_period_s);

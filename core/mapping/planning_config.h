@@ -41,9 +41,22 @@ struct PlanningConfig {
   /// while the memory cap's RSS bound is not kept with it on (a 1 cm map's first frames
   /// overshoot the cap, and each block then costs its field too).
   bool enabled = false;
-  /// The fields' settings; one band ring (EsdfConfig::band_blocks), so that a subvolume's
-  /// obstacles bound the free answers of the others next to its blocks.
-  EsdfConfig esdf{.band_blocks = 1};
+  /// esdf.band_blocks value (the default) that the mapper resolves to 1 band ring when its
+  /// integrator carves free space (IntegratorConfig::projective_carving_depth_m > 0), else
+  /// to 0 (bandBlocks()).
+  static constexpr int kBandAuto = -1;
+  /// The fields' settings; band_blocks may be kBandAuto.
+  EsdfConfig esdf{.band_blocks = kBandAuto};
+
+  /// esdf.band_blocks, kBandAuto resolved for an integrator carving up to
+  /// `carving_depth_m` metres. A subvolume that carved free space can see far past its
+  /// neighbours' obstacles, so that only their band bounds its free answers there; without
+  /// carving, free space is observed only next to surfaces, where the band hardly changes
+  /// an answer but still multiplies the fields' blocks (BENCHMARKS.md).
+  int bandBlocks(double carving_depth_m) const {
+    if (esdf.band_blocks != kBandAuto) return esdf.band_blocks;
+    return carving_depth_m > 0.0 ? 1 : 0;
+  }
   /// The fields follow the map every this many seconds, on the fusion/export worker
   /// (PlanningMap::refresh); finite and > 0.
   double refresh_period_s = 0.5;

@@ -329,6 +329,7 @@ PlanningMapStats PlanningMap::stats() const {
     ++stats.fields;
     if (entry.layer) stats.blocks += entry.layer->numBlocks();
   }
+  stats.band_blocks = band_blocks_.load(std::memory_order_relaxed);
   stats.memory_bytes = memoryBytes();
   stats.updates = updates_.load(std::memory_order_relaxed);
   stats.rebuilds = rebuilds_.load(std::memory_order_relaxed);

@@ -75,6 +75,7 @@ struct LocalGrid {
 struct PlanningMapStats {
   size_t fields = 0;        ///< subvolumes with a distance field
   size_t blocks = 0;        ///< distance-field blocks over all fields
+  size_t band_blocks = 0;   ///< of them, band blocks (EsdfConfig::band_blocks)
   size_t memory_bytes = 0;  ///< bytes the fields hold
   uint64_t updates = 0;     ///< field updates (incremental or rebuilt)
   uint64_t rebuilds = 0;    ///< of those, whole-field rebuilds

@@ -235,12 +235,15 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
     readOptional(planning, "planning", "max_distance_m", &m.planning.esdf.max_distance_m);
     readOptional(planning, "planning", "min_weight", &m.planning.esdf.min_weight);
     if (planning["band_blocks"]) {
-      int64_t band = 0;
+      std::string band;
       readOptional(planning, "planning", "band_blocks", &band);
-      if (band < 0 || band > 2) {
-        throw ConfigError("planning.band_blocks: must be in [0, 2], got " + std::to_string(band));
+      if (band == "auto") {
+        m.planning.esdf.band_blocks = PlanningConfig::kBandAuto;
+      } else if (band == "0" || band == "1" || band == "2") {
+        m.planning.esdf.band_blocks = band[0] - '0';
+      } else {
+        throw ConfigError("planning.band_blocks: must be auto, 0, 1 or 2, got '" + band + "'");
       }
-      m.planning.esdf.band_blocks = static_cast<int>(band);
     }
     readOptional(planning, "planning", "refresh_period_s", &m.planning.refresh_period_s);
     PlanningServiceConfig& service = m.planning.service;

@@ -41,7 +41,8 @@
 //                           [--q-min 3e3,1e4,3e4,1e5] [--most-shared-q-min Q,...]
 //                           [--anchors-q-min Q,...]
 //                           [--revisit-overlap-q-min Q,... [--revisit-keyframe-gap 30]]
-//                           [--planning-samples N] [--carving-depth D] [--out DIR]
+//                           [--planning-samples N] [--carving-depth D] [--band-blocks B]
+//                           [--out DIR]
 //
 // Mappers integrate every frame (no time budget, waited for) so the comparison does not
 // depend on the machine's load; with --sync-slam (the default) the SLAM's local mapping and
@@ -59,7 +60,8 @@
 // points; distance_field_accuracy.h): error, the unsafe count, observed free space answered
 // unknown; maps made with the tracker's poses are queried through the trajectory alignment.
 // --carving-depth D: the projective integrator also maps the free space in front of the
-// surfaces up to depth D (IntegratorConfig::projective_carving_depth_m).
+// surfaces up to depth D (IntegratorConfig::projective_carving_depth_m). --band-blocks B:
+// the fields' band rings (planning.band_blocks; default auto: 1 with carving, else 0).
 
 #include <algorithm>
 #include <chrono>
@@ -128,6 +130,7 @@ struct Variant {
   double rmse_m = 0.0, median_m = 0.0;
   FusionSchedulerStats fusion;
   std::optional<DistanceFieldAccuracy> planning;  // with --planning-samples
+  PlanningMapStats planning_stats;                // when planning was scored
 };
 
 MapperConfig baseConfig(float voxel, const std::filesystem::path& out, bool deterministic) {
@@ -183,6 +186,7 @@ void scorePlanningMaps(const TriangleMeshRaycaster& truth, const std::vector<Dep
     }
     std::vector<DistanceAnswer> answers;
     v->mapper->planningMap()->queryBatch(points, &answers);
+    v->planning_stats = v->mapper->planningMap()->stats();
     std::vector<FieldAnswer> field(answers.size());
     for (size_t i = 0; i < answers.size(); ++i) {
       field[i] = FieldAnswer{answers[i].state, answers[i].distance};
@@ -195,18 +199,20 @@ void scorePlanningMaps(const TriangleMeshRaycaster& truth, const std::vector<Dep
       "surface, answered free farther than one voxel; observed free = a depth image saw "
       "through the point more than truncation + one voxel before the surface; nearest surface "
       "seen = a depth image saw the surface point closest to the point:\n"
-      "| map | free / occupied / unknown answers | compared | error median (voxels) | p99 | max "
-      "| nearest surface seen: compared | error median | p99 | max | unsafe (of near) | of them "
-      "over by > 1 voxel | observed free answered unknown | far answered occupied |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+      "| map | field blocks (band) | field MiB | free / occupied / unknown answers | compared | "
+      "error median (voxels) | p99 | max | nearest surface seen: compared | error median | p99 | "
+      "max | unsafe (of near) | of them over by > 1 voxel | observed free answered unknown | far "
+      "answered occupied |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
       samples, max_distance, voxel);
   for (const auto& v : *variants) {
     if (!v->planning) continue;
     const DistanceFieldAccuracy& a = *v->planning;
     std::printf(
-        "| %s | %zu / %zu / %zu | %zu | %.3f | %.3f | %.2f | %zu | %.3f | %.3f | %.2f | "
-        "%zu (of %zu) | %zu | %zu of %zu (%.1f %%) | %zu |\n",
-        v->name.c_str(), a.answered_free, a.answered_occupied, a.answered_unknown, a.compared,
+        "| %s | %zu (%zu) | %.1f | %zu / %zu / %zu | %zu | %.3f | %.3f | %.2f | %zu | %.3f | "
+        "%.3f | %.2f | %zu (of %zu) | %zu | %zu of %zu (%.1f %%) | %zu |\n",
+        v->name.c_str(), v->planning_stats.blocks, v->planning_stats.band_blocks,
+        static_cast<double>(v->planning_stats.memory_bytes) / (1024.0 * 1024.0), a.answered_free, a.answered_occupied, a.answered_unknown, a.compared,
         a.error_median_voxels, a.error_p99_voxels, a.error_max_voxels, a.compared_seen,
         a.seen_error_median_voxels, a.seen_error_p99_voxels, a.seen_error_max_voxels, a.unsafe,
         a.near_obstacle, a.unsafe_by_a_voxel, a.observed_free_unknown, a.observed_free,
@@ -243,6 +249,7 @@ int run(int argc, char** argv) {
   std::vector<double> anchors_sweep;
   int revisit_keyframe_gap = FusionSchedulerConfig{}.revisit_keyframe_gap;
   size_t planning_samples = 0;
+  int band_blocks = PlanningConfig{}.esdf.band_blocks;
   float carving_depth = IntegratorConfig{}.projective_carving_depth_m;
 #ifdef CBLOX_DEFAULT_VOCABULARY
   vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
@@ -349,6 +356,11 @@ int run(int argc, char** argv) {
                  "the projective integrator maps free space up to this depth, metres "
                  "(integrator.projective_carving_depth_m; 0: the surfaces' band only)")
       ->capture_default_str();
+  app.add_option("--band-blocks", band_blocks,
+                 "rings of band blocks around each field's TSDF blocks (planning.band_blocks; "
+                 "-1: auto, 1 with --carving-depth, else 0)")
+      ->check(CLI::Range(-1, 2))
+      ->capture_default_str();
   app.add_option("--out", out_dir, "writes DIR/maintenance_<scene>.json and the sweep picture")
       ->type_name("DIR");
   app.add_option("--vocabulary", vocabulary_path, "vocabulary file")->capture_default_str();
@@ -439,6 +451,7 @@ int run(int argc, char** argv) {
     MapperConfig config = baseConfig(voxel, work, sync_slam);
     config.planning.enabled = planning_samples > 0;
     config.integrator.projective_carving_depth_m = carving_depth;
+    config.planning.esdf.band_blocks = band_blocks;
     if (kind == Kind::kGroundTruth || kind == Kind::kNaive) {
       config.pose_source = PoseSource::kGroundTruth;          // poses fed as given, never corrected
       config.creation.max_keyframes_per_subvolume = 1 << 30;  // one volume
@@ -923,6 +936,9 @@ int run(int argc, char** argv) {
       if (v->planning) {
         const DistanceFieldAccuracy& a = *v->planning;
         json["maps"].back()["planning"] = {{"samples", a.samples},
+                                           {"field_blocks", v->planning_stats.blocks},
+                                           {"band_blocks", v->planning_stats.band_blocks},
+                                           {"field_bytes", v->planning_stats.memory_bytes},
                                            {"answered_free", a.answered_free},
                                            {"answered_occupied", a.answered_occupied},
                                            {"answered_unknown", a.answered_unknown},

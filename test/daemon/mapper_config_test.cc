@@ -223,6 +223,9 @@ TEST(MapperConfigTest, ReadsThePlanningSectionAndItsChannels) {
   EXPECT_EQ(config.distance_request_channel, "DQ");
   EXPECT_EQ(config.distance_reply_channel, "DR");
   EXPECT_EQ(config.local_grid_channel, "LG");
+  EXPECT_EQ(loadMapperConfig(YAML::Load("planning: {band_blocks: auto}\n"))
+                .mapper.planning.esdf.band_blocks,
+            PlanningConfig::kBandAuto);
 }
 
 TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
@@ -268,6 +271,7 @@ TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"checkpoint: {resume: maybe}\n", "checkpoint.resume"},
       {"planning: {max_distance_m: 0}\n", "planning."},
       {"planning: {band_blocks: 3}\n", "planning.band_blocks"},
+      {"planning: {band_blocks: -1}\n", "planning.band_blocks"},
       {"planning: {query_queue_capacity: -1}\n", "planning.query_queue_capacity"},
       {"planning: {query_queue_capacity: 100000}\n", "planning.query_queue_capacity"},
       {"planning: {query_threads: 0}\n", "service.query_threads"},

@@ -341,7 +341,7 @@ TEST(EsdfIntegratorTest, BlocksArrivingOneByOneGiveTheRebuiltField) {
   }
 }
 
-TEST(EsdfIntegratorTest, ABandCarriesTheDistanceToTheObstaclesPastTheTsdfBlocks) {
+TEST(EsdfIntegratorTest, ABandCarriesTheDistanceToTheObstaclesBesideTheTsdfBlocks) {
   // A ball of radius 0.2 at the origin, observed over blocks -1..0 per axis (0.8 m cube).
   TsdfLayer tsdf(geometry());
   const Sdf ball = esdf_test::ball({0.0f, 0.0f, 0.0f}, 0.2f);

@@ -162,8 +162,8 @@ TEST(MapperTest, ThePlanningMapAnswersTheRoomsDistancesAndFollowsPoseBatches) {
   ASSERT_NE(planning, nullptr);
   const MapperStatus s = mapper.status();
   EXPECT_EQ(s.planning.fields, s.num_submaps);
-  // One field block per TSDF block, and the band ring around each subvolume's blocks.
-  EXPECT_GT(s.planning.blocks, s.num_blocks);
+  // One field block per TSDF block; no band without carving (planning.band_blocks auto).
+  EXPECT_EQ(s.planning.blocks, s.num_blocks);
   EXPECT_EQ(s.memory_bytes, mapper.collection().memoryBytes() + planning->memoryBytes());
   EXPECT_GT(s.esdf_ms_median, 0.0f);
   // Nothing changed since: a refresh computes no field again.

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include "core/mapping/planning_config.h"
 #include "test/esdf/esdf_test_scenes.h"
 
 namespace cblox {
@@ -169,7 +170,9 @@ TEST_F(PlanningMapTest, AnotherSubvolumesObstacleBoundsAFreeAnswerBesideItsBlock
   EXPECT_EQ(banded.query({0.5, 1.9, 0.0}).state, VoxelState::kUnknown);
   EXPECT_EQ(banded.query({0.5, 1.0, 0.6}).state, VoxelState::kUnknown);
   EXPECT_TRUE(banded.boundsG().isApprox(unbanded.boundsG()));
-  EXPECT_GT(banded.stats().blocks, unbanded.stats().blocks);
+  EXPECT_EQ(banded.stats().blocks - banded.stats().band_blocks, unbanded.stats().blocks);
+  EXPECT_GT(banded.stats().band_blocks, 0u);
+  EXPECT_EQ(unbanded.stats().band_blocks, 0u);
   // A memory cap's projection for twice the TSDF blocks: twice the fields' blocks, band
   // included (a working block and a snapshot record each).
   const size_t tsdf_blocks = wall_->numBlocks() + ball_->numBlocks() + open->numBlocks();
@@ -345,6 +348,23 @@ TEST(PlanningMapConfigTest, RefusesABadField) {
   EsdfConfig bad;
   bad.max_distance_m = -1.0f;
   EXPECT_THROW(PlanningMap{bad}, std::invalid_argument);
+  EsdfConfig auto_band;
+  auto_band.band_blocks = PlanningConfig::kBandAuto;  // a PlanningConfig value, unresolved
+  EXPECT_THROW(PlanningMap{auto_band}, std::invalid_argument);
+}
+
+TEST(PlanningMapConfigTest, TheAutomaticBandFollowsCarving) {
+  PlanningConfig config;
+  EXPECT_EQ(config.esdf.band_blocks, PlanningConfig::kBandAuto);
+  EXPECT_EQ(config.validate(), "");
+  EXPECT_EQ(config.bandBlocks(0.0), 0);
+  EXPECT_EQ(config.bandBlocks(3.0), 1);
+  config.esdf.band_blocks = 2;
+  EXPECT_EQ(config.bandBlocks(0.0), 2);
+  config.esdf.band_blocks = 0;
+  EXPECT_EQ(config.bandBlocks(3.0), 0);
+  config.esdf.band_blocks = 3;
+  EXPECT_NE(config.validate().find("planning.band_blocks"), std::string::npos);
 }
 
 }  // namespace

@@ -110,6 +110,36 @@ bool EsdfIntegrator::stale(const EsdfLayer& esdf, const VoxelRef& ref,
          std::max(0.0f, centre_distance_[sq] + siteDistance(site->own_distance));
 }
 
+float EsdfIntegrator::gradientNorm(const Block& tsdf, int linear) const {
+  const int last = voxels_per_side_ - 1;
+  const int local[3] = {linear & last, (linear >> voxels_per_side_log2_) & last,
+                        linear >> (2 * voxels_per_side_log2_)};
+  const auto observed = [this](const TsdfVoxel& t) {
+    return t.weight > 0.0f && t.weight >= config_.min_weight;
+  };
+  const float centre = tsdf.voxel(linear).distance;
+  float sq = 0.0f;
+  int step = 1;
+  for (int a = 0; a < 3; ++a, step <<= voxels_per_side_log2_) {
+    // Central difference inside the block, one-sided at its border or beside unobserved
+    // voxels; an axis without an observed neighbour adds nothing.
+    const TsdfVoxel* lo = local[a] > 0 ? &tsdf.voxel(linear - step) : nullptr;
+    const TsdfVoxel* hi = local[a] < last ? &tsdf.voxel(linear + step) : nullptr;
+    if (lo != nullptr && !observed(*lo)) lo = nullptr;
+    if (hi != nullptr && !observed(*hi)) hi = nullptr;
+    float derivative = 0.0f;
+    if (lo != nullptr && hi != nullptr) {
+      derivative = 0.5f * (hi->distance - lo->distance);
+    } else if (hi != nullptr) {
+      derivative = hi->distance - centre;
+    } else if (lo != nullptr) {
+      derivative = centre - lo->distance;
+    }
+    sq += derivative * derivative;
+  }
+  return std::max(1.0f, std::sqrt(sq) / voxel_size_);
+}
+
 void EsdfIntegrator::readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStats* stats) {
   const Block& tsdf = *block->tsdf;
   EsdfVoxel* const voxels = block->mutableVoxels();
@@ -121,23 +151,24 @@ void EsdfIntegrator::readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStat
               : t.distance <= 0.0f ? VoxelState::kOccupied
                                    : VoxelState::kFree;
     if (observed && t.distance < voxel_size_) {
+      const float value = t.distance > 0.0f ? t.distance / gradientNorm(tsdf, linear) : t.distance;
       if (!v.isSite()) {
         v.flags = EsdfVoxel::kSite;
         setSite(&v, Eigen::Vector3i::Zero());
         push(0, block, linear);
         ++stats->sites_added;
-        v.own_distance = t.distance;
-      } else if (std::abs(t.distance - v.own_distance) * kKeySteps > voxel_size_ ||
-                 (t.distance <= 0.0f) != (v.own_distance <= 0.0f)) {
+        v.own_distance = value;
+      } else if (std::abs(value - v.own_distance) * kKeySteps > voxel_size_ ||
+                 (value <= 0.0f) != (v.own_distance <= 0.0f)) {
         // Moved by more than a key step: its wave may now win voxels that another site has;
         // when its distance grew, the voxels that took it were computed through a nearer
         // surface than there is now, and are raised first. A smaller move that keeps its
         // side of the surface is not taken: the site keeps the value its voxels were
         // computed with.
-        if (siteDistance(t.distance) > siteDistance(v.own_distance)) {
+        if (siteDistance(value) > siteDistance(v.own_distance)) {
           v.flags = static_cast<uint8_t>(v.flags | EsdfVoxel::kSiteMoved);
         }
-        v.own_distance = t.distance;
+        v.own_distance = value;
         push(0, block, linear);
       }
       continue;

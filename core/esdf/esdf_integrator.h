@@ -33,13 +33,19 @@ struct EsdfUpdateStats {
 ///   - sites: observed voxels whose TSDF distance is below one voxel size: every occupied
 ///     voxel and the free side's voxels next to the surface, so that every surface point has
 ///     a site within half a voxel diagonal (also at convex corners and edges, where the
-///     nearest occupied voxel centre can be a voxel away). Sites answer their TSDF distance
-///     (negative inside obstacles). Occupied voxels are sites whatever their value: a
-///     projective TSDF seen at a grazing angle has no voxel within one voxel of zero.
+///     nearest occupied voxel centre can be a voxel away). Occupied sites answer their TSDF
+///     distance (<= 0). Free-side sites answer theirs divided by the norm of the TSDF's
+///     gradient there when it exceeds 1 (differences of the observed voxels of the same
+///     block; 1 without them): a projective TSDF measures along the view ray, 1/cos(angle to
+///     the surface normal) times the distance across the surface, and its gradient grows by
+///     the same factor; where the TSDF is exact the quotient is the TSDF value, or below it
+///     by a fraction of a voxel on curved surfaces (never above it). Occupied voxels are sites
+///     whatever their value: a projective TSDF seen at a grazing angle has no voxel within
+///     one voxel of zero.
 ///   - every other voxel (free or unknown) carries a site s that minimises
 ///     |x - s| + max(tsdf(s), -voxel) as far as the wavefront knows, where |x - s| is the
-///     distance between voxel centres; it answers that value as the wave computed it (with
-///     s's TSDF value then; esdf_query.h reads it without looking s up), at least 0, capped
+///     distance between voxel centres and tsdf(s) the site's value (above); it answers that
+///     value as the wave computed it (with s's value then; esdf_query.h reads it without looking s up), at least 0, capped
 ///     at max_distance_m. A site whose value moves by less than a key step keeps the value
 ///     its voxels were computed with; one that grows by more raises the voxels that took it
 ///     through its neighbours, and a voxel that took it past neighbouring sites may keep the
@@ -116,6 +122,9 @@ class EsdfIntegrator {
   /// The voxel at `local` + `delta` (local may leave the block), or an empty ref.
   VoxelRef neighbour(EsdfLayer* esdf, EsdfBlock* block, const GridIndex& local,
                      const GridIndex& delta) const;
+  /// The norm of the TSDF's gradient at voxel `linear` of `tsdf` (differences of observed
+  /// voxels inside the block), in distance per distance, at least 1.
+  float gradientNorm(const Block& tsdf, int linear) const;
   /// Reads one TSDF block into its distance-field block: states, sites added and removed.
   void readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStats* stats);
   /// Pushes the sited voxels of `block`'s neighbours that touch it (it is new).

@@ -30,7 +30,8 @@ struct DistanceSample {
 };
 
 /// The field's value at one voxel: sites (occupied voxels and the free side's near-surface
-/// voxels) their TSDF distance; other voxels the distance the wave carried to them through
+/// voxels) their value (EsdfIntegrator: the TSDF distance, gradient-normalised on the free
+/// side); other voxels the distance the wave carried to them through
 /// their site (EsdfIntegrator), or maxDistance() without a site; capped at maxDistance()
 /// (see EsdfVoxel). No site is looked up: one voxel read per answer. Unknown voxels get the same
 /// value (the distance to the nearest obstacle known). False, with nothing written, when the

@@ -19,9 +19,10 @@ const char* voxelStateName(VoxelState state);
 /// One voxel of a distance field, 12 bytes. The distance a voxel answers is its own_distance
 /// (esdf_query.h reads no other voxel).
 ///   own_distance: sites (kSite: observed with TSDF distance below one voxel: every occupied
-///     voxel and the free side's voxels next to the surface): their TSDF distance as of its
-///     last change by more than 1/8 voxel or across zero (the value the voxels that took the
-///     site were computed with; within 1/8 voxel of the TSDF's, same sign). Other voxels with a
+///     voxel and the free side's voxels next to the surface): their value (EsdfIntegrator:
+///     the TSDF distance, on the free side divided by the TSDF gradient's norm when above 1)
+///     as of its last change by more than 1/8 voxel or across zero (the value the voxels that
+///     took the site were computed with; within 1/8 voxel of the current one, same sign). Other voxels with a
 ///     site: the distance through it when the wave last assigned it (what it answers).
 ///     Voxels without a site: the layer's max distance.
 ///   site: offset in voxels from this voxel to the surface voxel nearest to it as far as the

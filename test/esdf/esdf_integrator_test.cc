@@ -120,7 +120,9 @@ TEST(EsdfIntegratorTest, SurfaceVoxelsOnBothSidesAnswerTheirTsdfDistance) {
   EsdfLayer esdf(geometry(), 1.0f);
   EsdfIntegrator(fieldConfig()).update(tsdf, &esdf);
   // Within one voxel of the surface, on either side, a voxel is a site and answers its own
-  // TSDF value: exact for this exact TSDF. Deeper inside, occupied voxels answer theirs too.
+  // TSDF value: exact for this exact TSDF inside; on the free side divided by the TSDF's
+  // gradient norm where above 1 (differences over the curved surface: at most 0.05 voxel
+  // below, never above). Deeper inside, occupied voxels answer theirs too.
   int sites = 0, deep = 0;
   for (const auto& [key, block] : esdf.blocks()) {
     for (int i = 0; i < esdf.voxelsPerBlock(); ++i) {
@@ -132,7 +134,12 @@ TEST(EsdfIntegratorTest, SurfaceVoxelsOnBothSidesAnswerTheirTsdfDistance) {
       if (std::abs(truth) < kVoxel) {
         EXPECT_TRUE(block->voxel(i).isSite());
         EXPECT_EQ(state, truth <= 0.0f ? VoxelState::kOccupied : VoxelState::kFree);
-        EXPECT_NEAR(distance, truth, 1e-6f);
+        if (truth <= 0.0f) {
+          EXPECT_NEAR(distance, truth, 1e-6f);
+        } else {
+          EXPECT_LE(distance, truth + 1e-6f);
+          EXPECT_GE(distance, truth - 0.05f * kVoxel);
+        }
         ++sites;
       } else if (truth < 0.0f && truth >= -kTruncation) {
         EXPECT_EQ(state, VoxelState::kOccupied);
@@ -314,6 +321,30 @@ TEST(EsdfIntegratorTest, AVanishedObstacleLeavesNoDistanceBehind) {
     }
   }
   EXPECT_EQ(queryNearest(esdf, {0.01f, 0.02f, 0.03f}).distance, 1.0f);
+}
+
+TEST(EsdfIntegratorTest, AProjectiveTsdfAnswersTheDistanceAcrossTheSurface) {
+  // A wall x < 0.31 seen at 48 degrees from its normal: the projective TSDF holds 1.5 times
+  // the distance across the surface (clamped at the truncation).
+  TsdfLayer tsdf(geometry());
+  const Sdf across = esdf_test::planeX(0.31f);
+  const Sdf along_ray = [&across](const Eigen::Vector3f& p) { return 1.5f * across(p); };
+  esdf_test::writeTsdf(&tsdf, along_ray, {-0.4f, -0.4f, -0.4f}, {1.59f, 0.39f, 0.39f},
+                       kTruncation);
+  EsdfLayer esdf(geometry(), 1.0f);
+  EsdfIntegrator(fieldConfig()).update(tsdf, &esdf);
+  // The free side answers the distance across the surface, not along the ray: the site at
+  // 0.325 (TSDF 0.0225, gradient 1.5), and every voxel farther out through it.
+  for (const float x : {0.325f, 0.375f, 0.525f, 0.975f}) {
+    VoxelState state;
+    float distance;
+    ASSERT_TRUE(voxelDistance(esdf, esdf.globalVoxelIndexFromPoint({x, 0.025f, 0.025f}), &state,
+                              &distance));
+    EXPECT_EQ(state, VoxelState::kFree);
+    EXPECT_NEAR(distance, x - 0.31f, 1e-5f) << x;
+  }
+  // The occupied side keeps its TSDF value.
+  EXPECT_NEAR(queryNearest(esdf, {0.28f, 0.0f, 0.0f}).distance, 1.5f * (0.275f - 0.31f), 1e-5f);
 }
 
 TEST(EsdfIntegratorTest, BlocksArrivingOneByOneGiveTheRebuiltField) {

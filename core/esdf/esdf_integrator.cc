@@ -9,6 +9,8 @@ namespace {
 
 // Queue keys are distances in 1/kKeySteps voxel.
 constexpr float kKeySteps = 8.0f;
+// A site's value is taken again once it grew by more than 1/kGrowSteps voxel.
+constexpr float kGrowSteps = 2.0f;
 // Entries' worth of queue storage kept between waves (over all buckets).
 constexpr size_t kKeepQueueEntries = size_t{1} << 14;
 
@@ -92,9 +94,21 @@ const EsdfVoxel* EsdfIntegrator::siteAt(const EsdfLayer& esdf, const EsdfBlock& 
                                         const GridIndex& local,
                                         const Eigen::Vector3i& offset) const {
   const GridIndex n = local + offset;
-  const EsdfVoxel* v = n.minCoeff() >= 0 && n.maxCoeff() < voxels_per_side_
-                           ? &block.voxel(esdf.linearIndex(n))
-                           : esdf.getVoxel(block.index * voxels_per_side_ + n);
+  // The site's block relative to `block` (arithmetic shifts: -1 below, 1 above); within one
+  // block of it, through the neighbour pointers.
+  const GridIndex b(n.x() >> voxels_per_side_log2_, n.y() >> voxels_per_side_log2_,
+                    n.z() >> voxels_per_side_log2_);
+  const EsdfVoxel* v = nullptr;
+  if ((b.array().abs() <= 1).all()) {
+    const EsdfBlock* other =
+        block.neighbours[static_cast<size_t>(EsdfBlock::neighbourSlot(b.x(), b.y(), b.z()))];
+    const int mask = voxels_per_side_ - 1;
+    if (other != nullptr) {
+      v = &other->voxel(esdf.linearIndex(GridIndex(n.x() & mask, n.y() & mask, n.z() & mask)));
+    }
+  } else {
+    v = esdf.getVoxel(block.index * voxels_per_side_ + n);
+  }
   return v != nullptr && v->isSite() ? v : nullptr;
 }
 
@@ -158,13 +172,16 @@ void EsdfIntegrator::readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStat
         push(0, block, linear);
         ++stats->sites_added;
         v.own_distance = value;
-      } else if (std::abs(value - v.own_distance) * kKeySteps > voxel_size_ ||
+      } else if ((v.own_distance - value) * kKeySteps > voxel_size_ ||
+                 (value - v.own_distance) * kGrowSteps > voxel_size_ ||
                  (value <= 0.0f) != (v.own_distance <= 0.0f)) {
-        // Moved by more than a key step: its wave may now win voxels that another site has;
-        // when its distance grew, the voxels that took it were computed through a nearer
-        // surface than there is now, and are raised first. A smaller move that keeps its
-        // side of the surface is not taken: the site keeps the value its voxels were
-        // computed with.
+        // Nearer by more than a key step: its wave may now win voxels that another site
+        // has. Farther by more than half a voxel: the voxels that took it were computed
+        // through a nearer surface than there is now, and are raised first. A smaller move
+        // that keeps its side of the surface is not taken: the site keeps the value its
+        // voxels were computed with (growth is let lag further than shrinking: its voxels
+        // then answer less than a rebuild would, the safe side, and a surface whose TSDF
+        // settles frame by frame raises no wave each frame).
         if (siteDistance(value) > siteDistance(v.own_distance)) {
           v.flags = static_cast<uint8_t>(v.flags | EsdfVoxel::kSiteMoved);
         }
@@ -275,15 +292,20 @@ void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
       site_distance = siteDistance(s->own_distance);
     }
     const bool interior = local.minCoeff() > 0 && local.maxCoeff() < voxels_per_side_ - 1;
+    const int log2 = voxels_per_side_log2_;
     for (size_t k = 0; k < neighbours_.size(); ++k) {
       const GridIndex& d = neighbours_[k];
-      VoxelRef n;
-      if (interior) {  // the common case: no block border to cross
+      VoxelRef n;  // n.local is not set: only the block and linear index are used here
+      if (interior) {  // no block border to cross
         n.block = block;
         n.linear = linear + neighbour_linear_[k];
       } else {
-        n = neighbour(esdf, block, local, d);
+        // Arithmetic shifts give the neighbour's block offset (-1, 0, 1) per axis.
+        const int nx = local.x() + d.x(), ny = local.y() + d.y(), nz = local.z() + d.z();
+        n.block = block->neighbours[static_cast<size_t>(
+            EsdfBlock::neighbourSlot(nx >> log2, ny >> log2, nz >> log2))];
         if (n.block == nullptr) continue;
+        n.linear = (nx & mask) | (((ny & mask) | ((nz & mask) << log2)) << log2);
       }
       const EsdfVoxel& nv = n.voxel();
       if (nv.isSite() || (nv.flags & EsdfVoxel::kRaise) != 0) continue;

@@ -45,11 +45,14 @@ struct EsdfUpdateStats {
 ///   - every other voxel (free or unknown) carries a site s that minimises
 ///     |x - s| + max(tsdf(s), -voxel) as far as the wavefront knows, where |x - s| is the
 ///     distance between voxel centres and tsdf(s) the site's value (above); it answers that
-///     value as the wave computed it (with s's value then; esdf_query.h reads it without looking s up), at least 0, capped
-///     at max_distance_m. A site whose value moves by less than a key step keeps the value
-///     its voxels were computed with; one that grows by more raises the voxels that took it
-///     through its neighbours, and a voxel that took it past neighbouring sites may keep the
-///     value it was computed with. Through a free-side site the
+///     value as the wave computed it (with s's value then; esdf_query.h reads it without
+///     looking s up), at least 0, capped at max_distance_m. A site keeps the value its
+///     voxels were computed with while its current value is at most a key step (1/8 voxel)
+///     below it or at most half a voxel above it, on the same side of zero: its voxels then
+///     answer at most 1/8 voxel more, or up to half a voxel less (the safe side), than a
+///     rebuild. A site that shrinks by more spreads a lower wave; one that grows by more
+///     raises the voxels that took it through its neighbours, and a voxel that took it past
+///     neighbouring sites may keep the value it was computed with. Through a free-side site the
 ///     formula is an upper bound of the true distance (triangle inequality), through an
 ///     occupied one it may undershoot; the minimum over the sites near the surface is within
 ///     a fraction of a voxel of the truth on exact TSDFs (the analytic tests bound it).

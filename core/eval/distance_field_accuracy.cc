@@ -167,8 +167,13 @@ DistanceFieldAccuracy scoreDistanceField(std::span<const DistanceTruthSample> tr
     if (near) {
       ++a.near_obstacle;
       if (f.state == VoxelState::kFree && f.distance_m > 1.01 * voxel_m) {
+        const bool by_a_voxel = f.distance_m - t.signed_distance_m > voxel_m;
         ++a.unsafe;
-        if (f.distance_m - t.signed_distance_m > voxel_m) ++a.unsafe_by_a_voxel;
+        if (by_a_voxel) ++a.unsafe_by_a_voxel;
+        if (t.nearest_surface_seen) {
+          ++a.unsafe_seen;
+          if (by_a_voxel) ++a.unsafe_seen_by_a_voxel;
+        }
       }
     }
     if (t.signed_distance_m > max_distance_m && f.state == VoxelState::kOccupied) {

@@ -113,6 +113,10 @@ struct DistanceFieldAccuracy {
   /// fraction of a voxel of interpolation at a point just inside one voxel of the surface,
   /// but a surface the field misplaced or missed.
   size_t unsafe_by_a_voxel = 0;
+  /// The two above at the points whose nearest surface some view saw (elsewhere no field
+  /// built from the views can know the obstacle).
+  size_t unsafe_seen = 0;
+  size_t unsafe_seen_by_a_voxel = 0;
   /// Points the views observed as free space, and those of them answered unknown.
   size_t observed_free = 0;
   size_t observed_free_unknown = 0;

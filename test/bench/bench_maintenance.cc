@@ -201,21 +201,22 @@ void scorePlanningMaps(const TriangleMeshRaycaster& truth, const std::vector<Dep
       "seen = a depth image saw the surface point closest to the point:\n"
       "| map | field blocks (band) | field MiB | free / occupied / unknown answers | compared | "
       "error median (voxels) | p99 | max | nearest surface seen: compared | error median | p99 | "
-      "max | unsafe (of near) | of them over by > 1 voxel | observed free answered unknown | far "
-      "answered occupied |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+      "max | unsafe (of near) | of them over by > 1 voxel | unsafe, nearest surface seen (over by "
+      "> 1 voxel) | observed free answered unknown | far answered occupied |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
       samples, max_distance, voxel);
   for (const auto& v : *variants) {
     if (!v->planning) continue;
     const DistanceFieldAccuracy& a = *v->planning;
     std::printf(
         "| %s | %zu (%zu) | %.1f | %zu / %zu / %zu | %zu | %.3f | %.3f | %.2f | %zu | %.3f | "
-        "%.3f | %.2f | %zu (of %zu) | %zu | %zu of %zu (%.1f %%) | %zu |\n",
+        "%.3f | %.2f | %zu (of %zu) | %zu | %zu (%zu) | %zu of %zu (%.1f %%) | %zu |\n",
         v->name.c_str(), v->planning_stats.blocks, v->planning_stats.band_blocks,
         static_cast<double>(v->planning_stats.memory_bytes) / (1024.0 * 1024.0), a.answered_free, a.answered_occupied, a.answered_unknown, a.compared,
         a.error_median_voxels, a.error_p99_voxels, a.error_max_voxels, a.compared_seen,
         a.seen_error_median_voxels, a.seen_error_p99_voxels, a.seen_error_max_voxels, a.unsafe,
-        a.near_obstacle, a.unsafe_by_a_voxel, a.observed_free_unknown, a.observed_free,
+        a.near_obstacle, a.unsafe_by_a_voxel, a.unsafe_seen, a.unsafe_seen_by_a_voxel,
+        a.observed_free_unknown, a.observed_free,
         a.observed_free > 0 ? 100.0 * static_cast<double>(a.observed_free_unknown) /
                                   static_cast<double>(a.observed_free)
                             : 0.0,
@@ -951,6 +952,8 @@ int run(int argc, char** argv) {
                                            {"seen_error_max_voxels", a.seen_error_max_voxels},
                                            {"near_obstacle", a.near_obstacle},
                                            {"unsafe", a.unsafe},
+                                           {"unsafe_seen", a.unsafe_seen},
+                                           {"unsafe_seen_by_a_voxel", a.unsafe_seen_by_a_voxel},
                                            {"unsafe_by_a_voxel", a.unsafe_by_a_voxel},
                                            {"observed_free", a.observed_free},
                                            {"observed_free_unknown", a.observed_free_unknown},

@@ -184,6 +184,8 @@ TEST(DistanceFieldAccuracyTest, TheFiguresCountWhatAPlannerWouldMeet) {
   EXPECT_EQ(a.near_obstacle, 4u);
   EXPECT_EQ(a.unsafe, 2u);
   EXPECT_EQ(a.unsafe_by_a_voxel, 1u);
+  EXPECT_EQ(a.unsafe_seen, 1u);  // the point at 0.09; the one inside is beside an unseen face
+  EXPECT_EQ(a.unsafe_seen_by_a_voxel, 0u);
   EXPECT_EQ(a.observed_free, 3u);
   EXPECT_EQ(a.observed_free_unknown, 1u);
   EXPECT_EQ(a.far_answered_occupied, 1u);

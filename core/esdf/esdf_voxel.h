@@ -23,9 +23,9 @@ const char* voxelStateName(VoxelState state);
 ///     the TSDF distance, on the free side divided by the TSDF gradient's norm when above 1)
 ///     as of its last decrease by more than 1/8 voxel, increase by more than half a voxel, or
 ///     change across zero (the value the voxels that took the site were computed with; at
-///     most 1/8 voxel above the current one or at most half a voxel below, same sign). Other voxels with a
-///     site: the distance through it when the wave last assigned it (what it answers).
-///     Voxels without a site: the layer's max distance.
+///     most 1/8 voxel above the current one or at most half a voxel below, same sign).
+///     Other voxels with a site: the distance through it when the wave last assigned it
+///     (what it answers). Voxels without a site: the layer's max distance.
 ///   site: offset in voxels from this voxel to the surface voxel nearest to it as far as the
 ///     wavefront knows; meaningful only with kHasSite. Surface voxels are their own site
 ///     (offset 0).

@@ -212,11 +212,12 @@ void scorePlanningMaps(const TriangleMeshRaycaster& truth, const std::vector<Dep
         "| %s | %zu (%zu) | %.1f | %zu / %zu / %zu | %zu | %.3f | %.3f | %.2f | %zu | %.3f | "
         "%.3f | %.2f | %zu (of %zu) | %zu | %zu (%zu) | %zu of %zu (%.1f %%) | %zu |\n",
         v->name.c_str(), v->planning_stats.blocks, v->planning_stats.band_blocks,
-        static_cast<double>(v->planning_stats.memory_bytes) / (1024.0 * 1024.0), a.answered_free, a.answered_occupied, a.answered_unknown, a.compared,
-        a.error_median_voxels, a.error_p99_voxels, a.error_max_voxels, a.compared_seen,
-        a.seen_error_median_voxels, a.seen_error_p99_voxels, a.seen_error_max_voxels, a.unsafe,
-        a.near_obstacle, a.unsafe_by_a_voxel, a.unsafe_seen, a.unsafe_seen_by_a_voxel,
-        a.observed_free_unknown, a.observed_free,
+        static_cast<double>(v->planning_stats.memory_bytes) / (1024.0 * 1024.0), a.answered_free,
+        a.answered_occupied, a.answered_unknown, a.compared, a.error_median_voxels,
+        a.error_p99_voxels, a.error_max_voxels, a.compared_seen, a.seen_error_median_voxels,
+        a.seen_error_p99_voxels, a.seen_error_max_voxels, a.unsafe, a.near_obstacle,
+        a.unsafe_by_a_voxel, a.unsafe_seen, a.unsafe_seen_by_a_voxel, a.observed_free_unknown,
+        a.observed_free,
         a.observed_free > 0 ? 100.0 * static_cast<double>(a.observed_free_unknown) /
                                   static_cast<double>(a.observed_free)
                             : 0.0,

@@ -74,22 +74,6 @@ uint32_t EsdfIntegrator::keyOf(float distance) const {
   return steps >= static_cast<float>(max_key_) ? max_key_ : static_cast<uint32_t>(steps);
 }
 
-EsdfIntegrator::VoxelRef EsdfIntegrator::neighbour(EsdfLayer* esdf, EsdfBlock* block,
-                                                   const GridIndex& local,
-                                                   const GridIndex& delta) const {
-  const GridIndex n = local + delta;
-  const int mask = voxels_per_side_ - 1;
-  const auto side = [this](int c) { return c < 0 ? -1 : (c >= voxels_per_side_ ? 1 : 0); };
-  VoxelRef ref;
-  ref.block = block->neighbours[static_cast<size_t>(
-      EsdfBlock::neighbourSlot(side(n.x()), side(n.y()), side(n.z())))];
-  if (ref.block != nullptr) {
-    ref.local = GridIndex(n.x() & mask, n.y() & mask, n.z() & mask);
-    ref.linear = esdf->linearIndex(ref.local);
-  }
-  return ref;
-}
-
 const EsdfVoxel* EsdfIntegrator::siteAt(const EsdfLayer& esdf, const EsdfBlock& block,
                                         const GridIndex& local,
                                         const Eigen::Vector3i& offset) const {
@@ -292,20 +276,15 @@ void EsdfIntegrator::finish(EsdfLayer* esdf, EsdfUpdateStats* stats) {
       site_distance = siteDistance(s->own_distance);
     }
     const bool interior = local.minCoeff() > 0 && local.maxCoeff() < voxels_per_side_ - 1;
-    const int log2 = voxels_per_side_log2_;
     for (size_t k = 0; k < neighbours_.size(); ++k) {
       const GridIndex& d = neighbours_[k];
-      VoxelRef n;  // n.local is not set: only the block and linear index are used here
-      if (interior) {  // no block border to cross
+      VoxelRef n;
+      if (interior) {  // no block border to cross (n.local is not needed below)
         n.block = block;
         n.linear = linear + neighbour_linear_[k];
       } else {
-        // Arithmetic shifts give the neighbour's block offset (-1, 0, 1) per axis.
-        const int nx = local.x() + d.x(), ny = local.y() + d.y(), nz = local.z() + d.z();
-        n.block = block->neighbours[static_cast<size_t>(
-            EsdfBlock::neighbourSlot(nx >> log2, ny >> log2, nz >> log2))];
+        n = neighbour(esdf, block, local, d);
         if (n.block == nullptr) continue;
-        n.linear = (nx & mask) | (((ny & mask) | ((nz & mask) << log2)) << log2);
       }
       const EsdfVoxel& nv = n.voxel();
       if (nv.isSite() || (nv.flags & EsdfVoxel::kRaise) != 0) continue;

@@ -122,9 +122,22 @@ class EsdfIntegrator {
   void prepare(const EsdfLayer& esdf);
   // Clears `esdf` and stages it whole.
   EsdfUpdateStats restage(const TsdfLayer& tsdf, EsdfLayer* esdf);
-  /// The voxel at `local` + `delta` (local may leave the block), or an empty ref.
+  /// The voxel at `local` + `delta` (local may leave the block by one), or an empty ref.
+  /// Inline: the waves call it for every neighbour of a voxel on a block's border.
   VoxelRef neighbour(EsdfLayer* esdf, EsdfBlock* block, const GridIndex& local,
-                     const GridIndex& delta) const;
+                     const GridIndex& delta) const {
+    const GridIndex n = local + delta;
+    const int log2 = voxels_per_side_log2_, mask = voxels_per_side_ - 1;
+    VoxelRef ref;
+    // Arithmetic shifts give the neighbour's block offset (-1, 0, 1) per axis.
+    ref.block = block->neighbours[static_cast<size_t>(
+        EsdfBlock::neighbourSlot(n.x() >> log2, n.y() >> log2, n.z() >> log2))];
+    if (ref.block != nullptr) {
+      ref.local = GridIndex(n.x() & mask, n.y() & mask, n.z() & mask);
+      ref.linear = esdf->linearIndex(ref.local);
+    }
+    return ref;
+  }
   /// The norm of the TSDF's gradient at voxel `linear` of `tsdf` (differences of observed
   /// voxels inside the block), in distance per distance, at least 1.
   float gradientNorm(const Block& tsdf, int linear) const;

@@ -325,10 +325,12 @@ bool PlanningMap::localGrid(const Eigen::Vector3d& min_G, const Eigen::Vector3d&
 
 PlanningMapStats PlanningMap::stats() const {
   PlanningMapStats stats;
-  for (const IndexEntry& entry : indexSnapshot()) {
-    ++stats.fields;
-    if (entry.layer) stats.blocks += entry.layer->numBlocks();
+  {
+    std::lock_guard<std::mutex> lock(index_mutex_);
+    stats.fields = index_.size();
   }
+  // Counted as each field publishes (updateField), as its bytes are.
+  stats.blocks = field_blocks_.load(std::memory_order_relaxed);
   stats.band_blocks = band_blocks_.load(std::memory_order_relaxed);
   stats.memory_bytes = memoryBytes();
   stats.updates = updates_.load(std::memory_order_relaxed);

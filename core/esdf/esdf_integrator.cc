@@ -11,6 +11,8 @@ namespace {
 constexpr float kKeySteps = 8.0f;
 // A site's value is taken again once it grew by more than 1/kGrowSteps voxel.
 constexpr float kGrowSteps = 2.0f;
+// Free voxels whose TSDF distance is below this many voxels may be sites.
+constexpr float kSiteTsdfVoxels = 4.0f;
 // Entries' worth of queue storage kept between waves (over all buckets).
 constexpr size_t kKeepQueueEntries = size_t{1} << 14;
 
@@ -148,8 +150,13 @@ void EsdfIntegrator::readBlock(EsdfLayer* esdf, EsdfBlock* block, EsdfUpdateStat
     v.state = !observed            ? VoxelState::kUnknown
               : t.distance <= 0.0f ? VoxelState::kOccupied
                                    : VoxelState::kFree;
-    if (observed && t.distance < voxel_size_) {
-      const float value = t.distance > 0.0f ? t.distance / gradientNorm(tsdf, linear) : t.distance;
+    // A free voxel up to kSiteTsdfVoxels from the surface is a site when its value (TSDF
+    // distance over the gradient's norm) is below one voxel.
+    float value = t.distance;
+    if (observed && t.distance > 0.0f && t.distance < kSiteTsdfVoxels * voxel_size_) {
+      value = t.distance / gradientNorm(tsdf, linear);
+    }
+    if (observed && value < voxel_size_) {
       if (!v.isSite()) {
         v.flags = EsdfVoxel::kSite;
         setSite(&v, Eigen::Vector3i::Zero());

@@ -30,18 +30,20 @@ struct EsdfUpdateStats {
 /// Per voxel:
 ///   - state: unknown when the TSDF weight is 0 or below min_weight; occupied when observed
 ///     with TSDF distance <= 0; free otherwise.
-///   - sites: observed voxels whose TSDF distance is below one voxel size: every occupied
-///     voxel and the free side's voxels next to the surface, so that every surface point has
-///     a site within half a voxel diagonal (also at convex corners and edges, where the
-///     nearest occupied voxel centre can be a voxel away). Occupied sites answer their TSDF
-///     distance (<= 0). Free-side sites answer theirs divided by the norm of the TSDF's
-///     gradient there when it exceeds 1 (differences of the observed voxels of the same
-///     block; 1 without them): a projective TSDF measures along the view ray, 1/cos(angle to
-///     the surface normal) times the distance across the surface, and its gradient grows by
-///     the same factor; where the TSDF is exact the quotient is the TSDF value, or below it
-///     by a fraction of a voxel on curved surfaces (never above it). Occupied voxels are sites
-///     whatever their value: a projective TSDF seen at a grazing angle has no voxel within
-///     one voxel of zero.
+///   - sites: every occupied voxel, and the free voxels whose value is below one voxel size,
+///     so that every surface point has a site within half a voxel diagonal (also at convex
+///     corners and edges, where the nearest occupied voxel centre can be a voxel away).
+///     Occupied sites answer their TSDF distance (<= 0). A free voxel's value is its TSDF
+///     distance divided by the norm of the TSDF's gradient there when it exceeds 1
+///     (differences of the observed voxels of the same block; 1 without them), computed for
+///     TSDF distances below 4 voxels: a projective TSDF measures along the view ray,
+///     1/cos(angle to the surface normal) times the distance across the surface, and its
+///     gradient grows by the same factor, so a voxel within one voxel of a surface seen at a
+///     grazing angle, or beside a convex edge that rays pass, is a site although its TSDF
+///     distance exceeds a voxel. Where the TSDF is exact the quotient is the TSDF value, or
+///     below it by a fraction of a voxel on curved surfaces (never above it). Occupied
+///     voxels are sites whatever their value: a projective TSDF seen at a grazing angle has
+///     no voxel within one voxel of zero.
 ///   - every other voxel (free or unknown) carries a site s that minimises
 ///     |x - s| + max(tsdf(s), -voxel) as far as the wavefront knows, where |x - s| is the
 ///     distance between voxel centres and tsdf(s) the site's value (above); it answers that

@@ -18,9 +18,9 @@ const char* voxelStateName(VoxelState state);
 
 /// One voxel of a distance field, 12 bytes. The distance a voxel answers is its own_distance
 /// (esdf_query.h reads no other voxel).
-///   own_distance: sites (kSite: observed with TSDF distance below one voxel: every occupied
-///     voxel and the free side's voxels next to the surface): their value (EsdfIntegrator:
-///     the TSDF distance, on the free side divided by the TSDF gradient's norm when above 1)
+///   own_distance: sites (kSite: every occupied voxel and the free voxels whose value is
+///     below one voxel, see EsdfIntegrator): their value (the TSDF distance, on the free side
+///     divided by the TSDF gradient's norm when above 1)
 ///     as of its last decrease by more than 1/8 voxel, increase by more than half a voxel, or
 ///     change across zero (the value the voxels that took the site were computed with; at
 ///     most 1/8 voxel above the current one or at most half a voxel below, same sign).

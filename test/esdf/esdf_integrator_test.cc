@@ -362,6 +362,30 @@ TEST(EsdfIntegratorTest, AProjectiveTsdfAnswersTheDistanceAcrossTheSurface) {
   EXPECT_NEAR(queryNearest(esdf, {0.28f, 0.0f, 0.0f}).distance, 1.5f * (0.275f - 0.31f), 1e-5f);
 }
 
+TEST(EsdfIntegratorTest, AVoxelWithinOneVoxelAcrossTheSurfaceIsASiteWhateverItsRayDistance) {
+  // A wall x < 0.335 seen at 60 degrees from its normal: the TSDF holds twice the distance
+  // across. The voxel at 0.375 lies 0.04 across but 0.08 (over a voxel) along the ray: it is
+  // a site answering 0.04, not a voxel reached through the occupied site at 0.325 (which
+  // would give 0.05 - 0.02 = 0.03).
+  TsdfLayer tsdf(geometry());
+  const Sdf across = esdf_test::planeX(0.335f);
+  const Sdf along_ray = [&across](const Eigen::Vector3f& p) { return 2.0f * across(p); };
+  esdf_test::writeTsdf(&tsdf, along_ray, {-0.4f, -0.4f, -0.4f}, {1.59f, 0.39f, 0.39f}, 0.3f);
+  EsdfLayer esdf(geometry(), 1.0f);
+  EsdfIntegrator(fieldConfig()).update(tsdf, &esdf);
+  for (const float x : {0.375f, 0.425f, 0.675f}) {
+    VoxelState state;
+    float distance;
+    ASSERT_TRUE(voxelDistance(esdf, esdf.globalVoxelIndexFromPoint({x, 0.025f, 0.025f}), &state,
+                              &distance));
+    EXPECT_EQ(state, VoxelState::kFree);
+    EXPECT_NEAR(distance, x - 0.335f, 1e-5f) << x;
+  }
+  const GlobalVoxelIndex at = esdf.globalVoxelIndexFromPoint({0.375f, 0.025f, 0.025f});
+  EXPECT_TRUE(esdf.getVoxel(at)->isSite());
+  EXPECT_FALSE(esdf.getVoxel(at + GlobalVoxelIndex(1, 0, 0))->isSite());
+}
+
 TEST(EsdfIntegratorTest, BlocksArrivingOneByOneGiveTheRebuiltField) {
   const Sdf scene = esdf_test::unite(esdf_test::planeX(-0.5f),
                                      esdf_test::box({0.1f, -0.2f, -0.1f}, {0.3f, 0.35f, 0.2f}));

@@ -14,6 +14,10 @@ std::string EsdfConfig::validate() const {
   if (band_blocks < 0 || band_blocks > 2) {
     return "band_blocks must be in [0, 2], got " + std::to_string(band_blocks);
   }
+  if (!std::isfinite(surface_margin_voxels) || surface_margin_voxels < 0.0f ||
+      surface_margin_voxels > 1.0f) {
+    return "surface_margin_voxels must be in [0, 1], got " + std::to_string(surface_margin_voxels);
+  }
   return {};
 }
 

@@ -18,6 +18,12 @@ struct EsdfConfig {
   /// bounds such an answer by it). 0 = the TSDF's blocks only (a single volume needs no
   /// band). Each ring costs about as many blocks as a surface's own. In [0, 2].
   int band_blocks = 0;
+  /// Free answers beside an obstacle are lowered by this many voxels (PlanningMap, see
+  /// lowerBesideSurface()): a field sampled at voxel centres, from a TSDF that rounds convex
+  /// edges off, overstates the distance beside a surface by up to about half a voxel; with
+  /// the margin a point within one voxel of an observed surface is not answered farther
+  /// than one voxel. 0 answers the field's own values. Finite, in [0, 1].
+  float surface_margin_voxels = 0.5f;
 
   /// Empty when valid, otherwise a message naming the offending field. Thread-safe.
   std::string validate() const;

@@ -128,4 +128,19 @@ DistanceSample queryInterpolated(const EsdfLayer& layer, const Eigen::Vector3f& 
   return sample;
 }
 
+double lowerBesideSurface(double distance, double voxel, double margin_voxels, double* slope) {
+  const double margin = margin_voxels * voxel;
+  const double full_until = voxel + margin;  // lowered by the whole margin up to here
+  double lowered = distance;
+  double rate = 1.0;
+  if (distance <= full_until) {
+    lowered = distance - margin;
+  } else if (distance < full_until + voxel) {
+    lowered = distance - margin * (full_until + voxel - distance) / voxel;
+    rate = 1.0 + margin_voxels;
+  }
+  if (slope != nullptr) *slope = rate;
+  return std::max(0.0, lowered);
+}
+
 }  // namespace cblox

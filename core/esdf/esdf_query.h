@@ -49,4 +49,14 @@ DistanceSample queryNearest(const EsdfLayer& layer, const Eigen::Vector3f& point
 /// voxels are in blocks, its bound is the interpolation of their values, with its gradient.
 DistanceSample queryInterpolated(const EsdfLayer& layer, const Eigen::Vector3f& point);
 
+/// A free answer lowered beside an obstacle by a margin of m voxels (EsdfConfig::
+/// surface_margin_voxels): distance d (metres, voxel size h) becomes d - m h up to
+/// (1 + m) h, then less and less, linearly, down to d at (2 + m) h and beyond; never below 0.
+/// So an answer of at most (1 + m) voxels becomes one of at most one voxel, and the answer
+/// keeps growing with d. *slope (when not null) receives d answer / d d: 1 + m in the
+/// tapering voxel, 1 elsewhere (also where the answer is held at 0, so that a gradient keeps
+/// its direction). Thread-safe (pure).
+double lowerBesideSurface(double distance, double voxel, double margin_voxels,
+                          double* slope = nullptr);
+
 }  // namespace cblox

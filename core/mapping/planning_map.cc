@@ -217,12 +217,13 @@ Eigen::AlignedBox3d PlanningMap::boundsG() const {
 }
 
 DistanceAnswer PlanningMap::sample(const std::vector<IndexEntry>& index,
-                                   const Eigen::Vector3d& p_G) {
+                                   const Eigen::Vector3d& p_G) const {
   DistanceAnswer answer;
   if (!p_G.allFinite()) return answer;
   // The smallest bound of the fields that cover the point without having observed it.
   DistanceSample bound;
   const IndexEntry* bound_entry = nullptr;
+  float voxel = 0.0f;  // of the field that gave the answer
   for (const IndexEntry& entry : index) {
     const Eigen::Vector3f p_M = (entry.T_M_G * p_G).cast<float>();
     if (entry.box_M.isEmpty() || !entry.box_M.contains(p_M)) continue;
@@ -247,6 +248,7 @@ DistanceAnswer PlanningMap::sample(const std::vector<IndexEntry>& index,
                           ? Eigen::Vector3d(entry.R_G_M * s.gradient.cast<double>())
                           : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
     answer.submap = static_cast<int64_t>(entry.id);
+    voxel = entry.layer->voxelSize();
   }
   if (answer.state == VoxelState::kFree && bound_entry != nullptr &&
       static_cast<double>(bound.bound) < answer.distance) {
@@ -256,6 +258,13 @@ DistanceAnswer PlanningMap::sample(const std::vector<IndexEntry>& index,
                           ? Eigen::Vector3d(bound_entry->R_G_M * bound.gradient.cast<double>())
                           : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
     answer.submap = static_cast<int64_t>(bound_entry->id);
+    voxel = bound_entry->layer->voxelSize();
+  }
+  if (answer.state == VoxelState::kFree) {
+    double slope = 1.0;
+    answer.distance = lowerBesideSurface(answer.distance, static_cast<double>(voxel),
+                                         static_cast<double>(config_.surface_margin_voxels), &slope);
+    if (answer.has_gradient) answer.gradient *= slope;
   }
   return answer;
 }

@@ -39,9 +39,13 @@ namespace cblox {
 ///     know: the smallest of their answers (negative inside an obstacle), capped at
 ///     max_distance_m. A free answer is also at most the bound of every subvolume whose
 ///     field covers the point without having observed it (DistanceSample::bound: the
-///     distance to an obstacle that subvolume observed nearby). NaN when unknown.
+///     distance to an obstacle that subvolume observed nearby). A free answer is then
+///     lowered beside the obstacle by EsdfConfig::surface_margin_voxels of the answering
+///     field's voxels (lowerBesideSurface(): by the whole margin up to 1 + margin voxels,
+///     by less over the next voxel, never below 0). NaN when unknown.
 ///   gradient: of the answering subvolume's field, rotated into G (about unit length,
-///     pointing away from the obstacle); only with has_gradient.
+///     pointing away from the obstacle; 1 + margin times that where the margin tapers off);
+///     only with has_gradient.
 ///   submap: the subvolume whose field gave the distance (or the bound); -1 when unknown.
 struct DistanceAnswer {
   VoxelState state = VoxelState::kUnknown;
@@ -222,7 +226,9 @@ class PlanningMap {
   // Adds the time since `start` to refreshMs().
   void recordRefresh(std::chrono::steady_clock::time_point start);
   std::vector<IndexEntry> indexSnapshot() const;
-  static DistanceAnswer sample(const std::vector<IndexEntry>& index, const Eigen::Vector3d& p_G);
+  // The answer at p_G over `index`; a free one lowered by config_.surface_margin_voxels of
+  // the answering field's voxels (lowerBesideSurface).
+  DistanceAnswer sample(const std::vector<IndexEntry>& index, const Eigen::Vector3d& p_G) const;
 
   const EsdfConfig config_;
   EsdfIntegrator integrator_;           // refresh()'s

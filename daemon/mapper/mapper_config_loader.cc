@@ -226,7 +226,8 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
 
   const YAML::Node planning = root["planning"];
   requireKnownKeys(planning, "planning",
-                   {"enabled", "max_distance_m", "min_weight", "band_blocks", "refresh_period_s",
+                   {"enabled", "max_distance_m", "min_weight", "band_blocks", "surface_margin_voxels",
+                    "refresh_period_s",
                     "query_queue_capacity", "query_threads", "local_grid_period_s",
                     "local_grid_size_m",
                     "local_grid_resolution_m"});
@@ -245,6 +246,8 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
         throw ConfigError("planning.band_blocks: must be auto, 0, 1 or 2, got '" + band + "'");
       }
     }
+    readOptional(planning, "planning", "surface_margin_voxels",
+                 &m.planning.esdf.surface_margin_voxels);
     readOptional(planning, "planning", "refresh_period_s", &m.planning.refresh_period_s);
     PlanningServiceConfig& service = m.planning.service;
     if (planning["query_queue_capacity"]) {

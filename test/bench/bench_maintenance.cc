@@ -42,6 +42,7 @@
 //                           [--anchors-q-min Q,...]
 //                           [--revisit-overlap-q-min Q,... [--revisit-keyframe-gap 30]]
 //                           [--planning-samples N] [--carving-depth D] [--band-blocks B]
+//                           [--surface-margin M]
 //                           [--out DIR]
 //
 // Mappers integrate every frame (no time budget, waited for) so the comparison does not
@@ -62,6 +63,8 @@
 // --carving-depth D: the projective integrator also maps the free space in front of the
 // surfaces up to depth D (IntegratorConfig::projective_carving_depth_m). --band-blocks B:
 // the fields' band rings (planning.band_blocks; default auto: 1 with carving, else 0).
+// --surface-margin M: free answers beside obstacles lowered by M voxels
+// (planning.surface_margin_voxels; 0: the fields' own values).
 
 #include <algorithm>
 #include <chrono>
@@ -252,6 +255,7 @@ int run(int argc, char** argv) {
   int revisit_keyframe_gap = FusionSchedulerConfig{}.revisit_keyframe_gap;
   size_t planning_samples = 0;
   int band_blocks = PlanningConfig{}.esdf.band_blocks;
+  float surface_margin = PlanningConfig{}.esdf.surface_margin_voxels;
   float carving_depth = IntegratorConfig{}.projective_carving_depth_m;
 #ifdef CBLOX_DEFAULT_VOCABULARY
   vocabulary_path = CBLOX_DEFAULT_VOCABULARY;
@@ -363,6 +367,11 @@ int run(int argc, char** argv) {
                  "-1: auto, 1 with --carving-depth, else 0)")
       ->check(CLI::Range(-1, 2))
       ->capture_default_str();
+  app.add_option("--surface-margin", surface_margin,
+                 "free answers beside obstacles are lowered by this many voxels "
+                 "(planning.surface_margin_voxels)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   app.add_option("--out", out_dir, "writes DIR/maintenance_<scene>.json and the sweep picture")
       ->type_name("DIR");
   app.add_option("--vocabulary", vocabulary_path, "vocabulary file")->capture_default_str();
@@ -454,6 +463,7 @@ int run(int argc, char** argv) {
     config.planning.enabled = planning_samples > 0;
     config.integrator.projective_carving_depth_m = carving_depth;
     config.planning.esdf.band_blocks = band_blocks;
+    config.planning.esdf.surface_margin_voxels = surface_margin;
     if (kind == Kind::kGroundTruth || kind == Kind::kNaive) {
       config.pose_source = PoseSource::kGroundTruth;          // poses fed as given, never corrected
       config.creation.max_keyframes_per_subvolume = 1 << 30;  // one volume

@@ -96,6 +96,7 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.planning.esdf.max_distance_m, b.planning.esdf.max_distance_m);
   EXPECT_EQ(a.planning.esdf.min_weight, b.planning.esdf.min_weight);
   EXPECT_EQ(a.planning.esdf.band_blocks, b.planning.esdf.band_blocks);
+  EXPECT_EQ(a.planning.esdf.surface_margin_voxels, b.planning.esdf.surface_margin_voxels);
   EXPECT_EQ(a.planning.refresh_period_s, b.planning.refresh_period_s);
   EXPECT_EQ(a.planning.service.queue_capacity, b.planning.service.queue_capacity);
   EXPECT_EQ(a.planning.service.query_threads, b.planning.service.query_threads);
@@ -204,7 +205,7 @@ TEST(MapperConfigTest, ReadsOverrides) {
 TEST(MapperConfigTest, ReadsThePlanningSectionAndItsChannels) {
   const MapperProcessConfig config = loadMapperConfig(YAML::Load(
       "planning: {enabled: true, max_distance_m: 1.5, min_weight: 0.01, band_blocks: 2,\n"
-      "  refresh_period_s: 2,\n"
+      "  surface_margin_voxels: 0.25, refresh_period_s: 2,\n"
       "  query_queue_capacity: 4, query_threads: 3, local_grid_period_s: 0.5,\n"
       "  local_grid_size_m: [4, 5, 1.5],\n"
       "  local_grid_resolution_m: 0.2}\n"
@@ -214,6 +215,7 @@ TEST(MapperConfigTest, ReadsThePlanningSectionAndItsChannels) {
   EXPECT_EQ(p.esdf.max_distance_m, 1.5f);
   EXPECT_EQ(p.esdf.min_weight, 0.01f);
   EXPECT_EQ(p.esdf.band_blocks, 2);
+  EXPECT_EQ(p.esdf.surface_margin_voxels, 0.25f);
   EXPECT_EQ(p.refresh_period_s, 2.0);
   EXPECT_EQ(p.service.queue_capacity, 4U);
   EXPECT_EQ(p.service.query_threads, 3);
@@ -272,6 +274,7 @@ TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"planning: {max_distance_m: 0}\n", "planning."},
       {"planning: {band_blocks: 3}\n", "planning.band_blocks"},
       {"planning: {band_blocks: -1}\n", "planning.band_blocks"},
+      {"planning: {surface_margin_voxels: 2}\n", "planning.surface_margin_voxels"},
       {"planning: {query_queue_capacity: -1}\n", "planning.query_queue_capacity"},
       {"planning: {query_queue_capacity: 100000}\n", "planning.query_queue_capacity"},
       {"planning: {query_threads: 0}\n", "service.query_threads"},

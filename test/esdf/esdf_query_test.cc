@@ -97,6 +97,34 @@ TEST_F(EsdfQueryTest, UnknownSpaceIsAnAnswerWithoutADistance) {
   EXPECT_EQ(queryNearest(esdf_, {INFINITY, 0.0f, 0.0f}).state, VoxelState::kUnknown);
 }
 
+TEST(EsdfQueryMarginTest, LowersByTheMarginThenLessOverOneVoxel) {
+  // Margin 0.5 at 0.1 m voxels: the whole 0.05 m up to 0.15 m, tapering to nothing at 0.25 m.
+  double slope = 0.0;
+  EXPECT_DOUBLE_EQ(lowerBesideSurface(0.02, 0.1, 0.5, &slope), 0.0);  // held at 0
+  EXPECT_DOUBLE_EQ(slope, 1.0);
+  EXPECT_DOUBLE_EQ(lowerBesideSurface(0.1, 0.1, 0.5, &slope), 0.05);
+  EXPECT_DOUBLE_EQ(lowerBesideSurface(0.15, 0.1, 0.5, &slope), 0.1);  // (1 + m) voxels -> 1
+  EXPECT_DOUBLE_EQ(slope, 1.0);
+  EXPECT_NEAR(lowerBesideSurface(0.2, 0.1, 0.5, &slope), 0.175, 1e-15);
+  EXPECT_DOUBLE_EQ(slope, 1.5);
+  EXPECT_DOUBLE_EQ(lowerBesideSurface(0.25, 0.1, 0.5, &slope), 0.25);
+  EXPECT_DOUBLE_EQ(slope, 1.0);
+  EXPECT_DOUBLE_EQ(lowerBesideSurface(1.7, 0.1, 0.5), 1.7);
+  // Continuous and increasing across the taper's ends.
+  EXPECT_NEAR(lowerBesideSurface(0.15 + 1e-9, 0.1, 0.5), 0.1, 1e-8);
+  EXPECT_NEAR(lowerBesideSurface(0.25 - 1e-9, 0.1, 0.5), 0.25, 1e-8);
+  // No margin: the distance itself.
+  EXPECT_DOUBLE_EQ(lowerBesideSurface(0.12, 0.1, 0.0, &slope), 0.12);
+  EXPECT_DOUBLE_EQ(slope, 1.0);
+  // The config refuses a margin outside [0, 1].
+  EsdfConfig config;
+  EXPECT_TRUE(config.validate().empty());
+  config.surface_margin_voxels = 1.5f;
+  EXPECT_NE(config.validate().find("surface_margin_voxels"), std::string::npos);
+  config.surface_margin_voxels = NAN;
+  EXPECT_NE(config.validate().find("surface_margin_voxels"), std::string::npos);
+}
+
 TEST(EsdfVoxelTest, StatesHaveNames) {
   EXPECT_STREQ(voxelStateName(VoxelState::kUnknown), "unknown");
   EXPECT_STREQ(voxelStateName(VoxelState::kFree), "free");

@@ -2,6 +2,7 @@
 // exports confined to the output directory, pose batches, rejected and dropped frames, maps
 // saved and loaded over the command channel (save_map, load_map, and --load-map's loadMap).
 
+#include "core/esdf/esdf_query.h"
 #include "core/mapping/mapper.h"
 
 #include <algorithm>
@@ -203,14 +204,18 @@ TEST(MapperTest, ThePlanningMapAnswersTheRoomsDistancesAndFollowsPoseBatches) {
     // Free space whose nearest obstacle was never observed (the back of the pillar, seen
     // from an orbit inside the room) is answered with the nearest observed one: farther.
     if (a.distance > std::min(truth, 2.0) + kVoxel) ++farther;
-    if (truth < 0.15) near_errors.push_back(std::abs(a.distance - truth) / kVoxel);
+    // Against the truth as the map lowers its free answers beside obstacles.
+    const double lowered =
+        lowerBesideSurface(truth, kVoxel, mapper.config().planning.esdf.surface_margin_voxels);
+    if (truth < 0.15) near_errors.push_back(std::abs(a.distance - lowered) / kVoxel);
   }
   ASSERT_GT(known, points.size() / 4);
   EXPECT_LE(unsafe, known / 1000) << unsafe << " of " << known;
   EXPECT_LT(farther, known / 20) << farther << " of " << known;
   EXPECT_LT(wrongly_occupied, known / 100) << wrongly_occupied << " of " << known;
   ASSERT_GT(near_errors.size(), 50u);
-  EXPECT_LT(median(near_errors), 0.5);
+  // (0.38 voxel without the margin; its taper multiplies the error by 1.5 over a voxel.)
+  EXPECT_LT(median(near_errors), 0.6);
 
   // A pose batch moving every subvolume by the same T: the answers move with them exactly,
   // and no field is computed again.

@@ -90,6 +90,38 @@ TEST_F(PlanningMapTest, AnswersInTheGlobalFrameThroughEachSubvolumesPose) {
   EXPECT_EQ(planning_.query({NAN, 0.0, 0.0}).state, VoxelState::kUnknown);
 }
 
+TEST_F(PlanningMapTest, FreeAnswersBesideAnObstacleAreLoweredByTheMargin) {
+  // The wall x < 0.31 is exact at every point (straight sites, linear interpolation). With
+  // the default margin of half a voxel: lowered by half a voxel up to 1.5 voxels, by less
+  // over the next voxel (the gradient 1.5 times steeper there), never below 0.
+  ASSERT_EQ(fieldConfig().surface_margin_voxels, 0.5f);
+  planning_.refresh(collection_, PlanningMap::Scope::kAll);
+  EsdfConfig raw_config = fieldConfig();
+  raw_config.surface_margin_voxels = 0.0f;
+  PlanningMap raw(raw_config);
+  raw.refresh(collection_, PlanningMap::Scope::kAll);
+  struct Case {
+    double voxels;    // exact distance to the wall
+    double answered;  // voxels
+    double slope;
+  };
+  for (const Case& c : {Case{0.4, 0.0, 1.0}, Case{1.0, 0.5, 1.0}, Case{1.4, 0.9, 1.0},
+                        Case{2.0, 1.75, 1.5}, Case{2.6, 2.6, 1.0}, Case{8.2, 8.2, 1.0}}) {
+    SCOPED_TRACE(c.voxels);
+    const Eigen::Vector3d p(0.31 + c.voxels * kVoxel, 0.013, -0.02);
+    const DistanceAnswer a = planning_.query(p);
+    ASSERT_EQ(a.state, VoxelState::kFree);
+    EXPECT_NEAR(a.distance, c.answered * kVoxel, 1e-5);
+    ASSERT_TRUE(a.has_gradient);
+    EXPECT_NEAR(a.gradient.x(), c.slope, 1e-4);
+    const DistanceAnswer r = raw.query(p);
+    EXPECT_NEAR(r.distance, c.voxels * kVoxel, 1e-5);
+    EXPECT_NEAR(r.gradient.x(), 1.0, 1e-4);
+  }
+  // Occupied answers keep their value.
+  EXPECT_EQ(planning_.query({0.29, 0.0, 0.0}).distance, raw.query({0.29, 0.0, 0.0}).distance);
+}
+
 TEST_F(PlanningMapTest, APoseBatchMovesTheAnswersWithoutRecomputingAField) {
   planning_.refresh(collection_, PlanningMap::Scope::kAll);
   const uint64_t updates = planning_.stats().updates;

@@ -125,6 +125,14 @@ record_ack() {
     ack_gen=$g
   fi
 }
+# True while a checkpoint generation is being written: a subvolume file or a temporary
+# file newer than the manifest (the evidence victim_mapper_check counts as a write).
+checkpoint_writing() {
+  [[ -f $ckpt/$manifest ]] || return 1
+  [[ -n $(find "$ckpt" -maxdepth 1 \( -name 'submap_*' -o -name '*.tmp.*' \) \
+            -newer "$ckpt/$manifest" -print -quit 2> /dev/null) ]]
+}
+
 # wait_for_new_file GLOB: returns when a file matching GLOB appears in the checkpoint directory
 # that was not there when it was called (a checkpoint is being written), or after 8 s.
 wait_for_new_file() {
@@ -262,14 +270,23 @@ victim_mapper_arm() {
       # Just after the mapper accepted a pair, while the fusion has not finished (re-armed
       # when it finished before the kill); at most 45 s (a loaded machine makes keyframes, and
       # so subvolumes to fuse, slowly: CI once saw no fusion accepted in three 30 s waits).
-      local accepted done_ deadline=$(( $(now_ms) + 45000 ))
+      # A checkpoint being written then would make the kill count as one during a write
+      # (the evidence left behind decides), so the kill waits, while the fusion is still
+      # pending, for no write to be under way (with the test's pause before each file, writes
+      # fill most of the time when there are many subvolumes).
+      local accepted done_ fired=0 deadline=$(( $(now_ms) + 45000 ))
       accepted=$(grep -c "fusion accepted" "$mapper_log" || true)
-      while (( $(now_ms) < deadline )); do
+      while (( ! fired && $(now_ms) < deadline )); do
         if (( $(grep -c "fusion accepted" "$mapper_log" || true) > accepted )); then
           accepted=$(grep -c "fusion accepted" "$mapper_log" || true)
           sleep_ms "$(rand_ms 20 120)"
-          done_=$(grep -cE "fused subvolume|fusion of subvolume" "$mapper_log" || true)
-          (( done_ < accepted )) && break
+          while :; do
+            done_=$(grep -cE "fused subvolume|fusion of subvolume" "$mapper_log" || true)
+            (( done_ < accepted )) || break
+            if ! checkpoint_writing; then fired=1; break; fi
+            sleep 0.005
+          done
+          continue
         fi
         ack_if_due
         sleep 0.02

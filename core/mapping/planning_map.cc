@@ -262,8 +262,9 @@ DistanceAnswer PlanningMap::sample(const std::vector<IndexEntry>& index,
   }
   if (answer.state == VoxelState::kFree) {
     double slope = 1.0;
-    answer.distance = lowerBesideSurface(answer.distance, static_cast<double>(voxel),
-                                         static_cast<double>(config_.surface_margin_voxels), &slope);
+    answer.distance =
+        lowerBesideSurface(answer.distance, static_cast<double>(voxel),
+                           static_cast<double>(config_.surface_margin_voxels), &slope);
     if (answer.has_gradient) answer.gradient *= slope;
   }
   return answer;

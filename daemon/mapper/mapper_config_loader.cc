@@ -225,12 +225,11 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   }
 
   const YAML::Node planning = root["planning"];
-  requireKnownKeys(planning, "planning",
-                   {"enabled", "max_distance_m", "min_weight", "band_blocks", "surface_margin_voxels",
-                    "refresh_period_s",
-                    "query_queue_capacity", "query_threads", "local_grid_period_s",
-                    "local_grid_size_m",
-                    "local_grid_resolution_m"});
+  requireKnownKeys(
+      planning, "planning",
+      {"enabled", "max_distance_m", "min_weight", "band_blocks", "surface_margin_voxels",
+       "refresh_period_s", "query_queue_capacity", "query_threads", "local_grid_period_s",
+       "local_grid_size_m", "local_grid_resolution_m"});
   if (!isAbsent(planning)) {
     readOptional(planning, "planning", "enabled", &m.planning.enabled);
     readOptional(planning, "planning", "max_distance_m", &m.planning.esdf.max_distance_m);

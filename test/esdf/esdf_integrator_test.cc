@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <memory>
 #include <stdexcept>
 #include <vector>
@@ -338,26 +339,39 @@ TEST(EsdfIntegratorTest, AVanishedObstacleLeavesNoDistanceBehind) {
   EXPECT_EQ(queryNearest(esdf, {0.01f, 0.02f, 0.03f}).distance, 1.0f);
 }
 
-TEST(EsdfIntegratorTest, AProjectiveTsdfAnswersTheDistanceAcrossTheSurface) {
-  // A wall x < 0.31 seen at 48 degrees from its normal: the projective TSDF holds 1.5 times
-  // the distance across the surface (clamped at the truncation).
+/// The field of a wall x < `wall` seen obliquely: the projective TSDF holds `ray_factor`
+/// times the distance across the surface, clamped at `truncation`.
+void obliqueWallField(float wall, float ray_factor, float truncation, EsdfLayer* esdf) {
   TsdfLayer tsdf(geometry());
-  const Sdf across = esdf_test::planeX(0.31f);
-  const Sdf along_ray = [&across](const Eigen::Vector3f& p) { return 1.5f * across(p); };
+  const Sdf across = esdf_test::planeX(wall);
+  const Sdf along_ray = [&across, ray_factor](const Eigen::Vector3f& p) {
+    return ray_factor * across(p);
+  };
   esdf_test::writeTsdf(&tsdf, along_ray, {-0.4f, -0.4f, -0.4f}, {1.59f, 0.39f, 0.39f},
-                       kTruncation);
-  EsdfLayer esdf(geometry(), 1.0f);
-  EsdfIntegrator(fieldConfig()).update(tsdf, &esdf);
-  // The free side answers the distance across the surface, not along the ray: the site at
-  // 0.325 (TSDF 0.0225, gradient 1.5), and every voxel farther out through it.
-  for (const float x : {0.325f, 0.375f, 0.525f, 0.975f}) {
+                       truncation);
+  EsdfIntegrator(fieldConfig()).update(tsdf, esdf);
+}
+
+/// The voxels at (x, 0.025, 0.025) for x in `xs` are free and answer x - wall.
+void expectFreeAcross(const EsdfLayer& esdf, float wall, std::initializer_list<float> xs) {
+  for (const float x : xs) {
     VoxelState state;
     float distance;
     ASSERT_TRUE(voxelDistance(esdf, esdf.globalVoxelIndexFromPoint({x, 0.025f, 0.025f}), &state,
                               &distance));
     EXPECT_EQ(state, VoxelState::kFree);
-    EXPECT_NEAR(distance, x - 0.31f, 1e-5f) << x;
+    EXPECT_NEAR(distance, x - wall, 1e-5f) << x;
   }
+}
+
+TEST(EsdfIntegratorTest, AProjectiveTsdfAnswersTheDistanceAcrossTheSurface) {
+  // A wall x < 0.31 seen at 48 degrees from its normal: the projective TSDF holds 1.5 times
+  // the distance across the surface (clamped at the truncation).
+  EsdfLayer esdf(geometry(), 1.0f);
+  obliqueWallField(0.31f, 1.5f, kTruncation, &esdf);
+  // The free side answers the distance across the surface, not along the ray: the site at
+  // 0.325 (TSDF 0.0225, gradient 1.5), and every voxel farther out through it.
+  expectFreeAcross(esdf, 0.31f, {0.325f, 0.375f, 0.525f, 0.975f});
   // The occupied side keeps its TSDF value.
   EXPECT_NEAR(queryNearest(esdf, {0.28f, 0.0f, 0.0f}).distance, 1.5f * (0.275f - 0.31f), 1e-5f);
 }
@@ -367,20 +381,9 @@ TEST(EsdfIntegratorTest, AVoxelWithinOneVoxelAcrossTheSurfaceIsASiteWhateverItsR
   // across. The voxel at 0.375 lies 0.04 across but 0.08 (over a voxel) along the ray: it is
   // a site answering 0.04, not a voxel reached through the occupied site at 0.325 (which
   // would give 0.05 - 0.02 = 0.03).
-  TsdfLayer tsdf(geometry());
-  const Sdf across = esdf_test::planeX(0.335f);
-  const Sdf along_ray = [&across](const Eigen::Vector3f& p) { return 2.0f * across(p); };
-  esdf_test::writeTsdf(&tsdf, along_ray, {-0.4f, -0.4f, -0.4f}, {1.59f, 0.39f, 0.39f}, 0.3f);
   EsdfLayer esdf(geometry(), 1.0f);
-  EsdfIntegrator(fieldConfig()).update(tsdf, &esdf);
-  for (const float x : {0.375f, 0.425f, 0.675f}) {
-    VoxelState state;
-    float distance;
-    ASSERT_TRUE(voxelDistance(esdf, esdf.globalVoxelIndexFromPoint({x, 0.025f, 0.025f}), &state,
-                              &distance));
-    EXPECT_EQ(state, VoxelState::kFree);
-    EXPECT_NEAR(distance, x - 0.335f, 1e-5f) << x;
-  }
+  obliqueWallField(0.335f, 2.0f, 0.3f, &esdf);
+  expectFreeAcross(esdf, 0.335f, {0.375f, 0.425f, 0.675f});
   const GlobalVoxelIndex at = esdf.globalVoxelIndexFromPoint({0.375f, 0.025f, 0.025f});
   EXPECT_TRUE(esdf.getVoxel(at)->isSite());
   EXPECT_FALSE(esdf.getVoxel(at + GlobalVoxelIndex(1, 0, 0))->isSite());

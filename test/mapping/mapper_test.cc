@@ -2,7 +2,6 @@
 // exports confined to the output directory, pose batches, rejected and dropped frames, maps
 // saved and loaded over the command channel (save_map, load_map, and --load-map's loadMap).
 
-#include "core/esdf/esdf_query.h"
 #include "core/mapping/mapper.h"
 
 #include <algorithm>
@@ -27,6 +26,7 @@
 #include <sched.h>
 #include <sys/resource.h>
 
+#include "core/esdf/esdf_query.h"
 #include "core/io/ply_io.h"
 #include "core/mapping/map_epoch_key.h"
 #include "drivers/synthetic/scenes.h"

@@ -183,7 +183,7 @@ std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const Sour
   const size_t colon = spec.find(':');
   if (colon == std::string::npos) {
     setError(error, "source '" + spec +
-                        "' has no kind: use sim:room|hall|town|MESH, euroc:DIR, tum:DIR, "
+                        "' has no kind: use sim:room|hall|town|MESH, euroc:DIR, kitti:DIR, tum:DIR, "
                         "7scenes:DIR, v4l2:/dev/videoN, v4l2-stereo:/dev/videoL,/dev/videoR or "
                         "libcamera:CAMERA_ID");
     return nullptr;
@@ -200,6 +200,11 @@ std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const Sour
     if (!reader.has_value()) return nullptr;
     return std::make_unique<EurocSource>(std::move(*reader), options.max_frames);
   }
+  if (kind == "kitti") {
+    auto reader = KittiOdometryReader::open(what, error);
+    if (!reader.has_value()) return nullptr;
+    return std::make_unique<KittiSource>(std::move(*reader), options.max_frames);
+  }
   if (kind == "tum") {
     auto reader = TumRgbdReader::open(what, options.tum, error);
     if (!reader.has_value()) return nullptr;
@@ -213,7 +218,7 @@ std::unique_ptr<FrameSource> openFrameSource(const std::string& spec, const Sour
   if (kind == "v4l2" || kind == "v4l2-stereo") return openV4l2(kind, what, options, error);
   if (kind == "libcamera") return openLibcamera(what, options, error);
   setError(error, "unknown source kind '" + kind +
-                      "' (known: sim, euroc, tum, 7scenes, v4l2, v4l2-stereo, libcamera)");
+                      "' (known: sim, euroc, kitti, tum, 7scenes, v4l2, v4l2-stereo, libcamera)");
   return nullptr;
 }
 

@@ -44,6 +44,9 @@ struct SourceConfig {
 ///   sim:<mesh.ply|mesh.obj>          any triangle mesh; trajectory must be a TUM file or
 ///                                    "orbit" (around the mesh's bounding box)
 ///   euroc:<folder>                   EuRoC/ASL stereo folder (with or without mav0/)
+///   kitti:<folder>                   KITTI odometry grey stereo sequence (image_0/,
+///                                    image_1/, calib.txt, times.txt, poses.txt or
+///                                    ../../poses/NN.txt)
 ///   tum:<folder>                     TUM RGB-D folder
 ///   7scenes:<folder>                 7-Scenes frame folder
 ///   v4l2:/dev/videoN                 one V4L2 device; options.v4l2.mode says mono, depth

@@ -444,8 +444,8 @@ int main(int argc, char** argv) {
       "cblox-capture"};
   cblox::addDaemonOptions(app, &args.daemon, "config/capture.yaml");
   app.add_option("--source", args.source,
-                 "sim:room | sim:hall | sim:town | sim:MESH.ply|.obj | euroc:DIR | tum:DIR |\n"
-                 "7scenes:DIR | v4l2:/dev/videoN | v4l2-stereo:/dev/videoL,/dev/videoR |\n"
+                 "sim:room | sim:hall | sim:town | sim:MESH.ply|.obj | euroc:DIR | kitti:DIR |\n"
+                 "tum:DIR | 7scenes:DIR | v4l2:/dev/videoN | v4l2-stereo:/dev/videoL,/dev/videoR |\n"
                  "libcamera:CAMERA_ID")
       ->type_name("SPEC");
   app.add_option("--trajectory", args.trajectory,

@@ -23,6 +23,16 @@ SourceInfo eurocInfo(const EurocReader& reader) {
   return info;
 }
 
+SourceInfo kittiInfo(const KittiOdometryReader& reader) {
+  SourceInfo info;
+  info.name = "kitti:" + reader.folder();
+  info.rate_hz = reader.rateHz();
+  info.stereo = reader.calibration();
+  info.has_ground_truth = reader.hasGroundTruth();
+  info.notes = reader.notes();
+  return info;
+}
+
 SourceInfo tumInfo(const TumRgbdReader& reader) {
   SourceInfo info;
   info.name = "tum:" + reader.folder();
@@ -61,6 +71,18 @@ void fillDepthFrame(size_t i, int64_t timestamp_ns, DepthImage* depth, ColorImag
   frame->T_G_C = T_G_C;
 }
 
+/// A stereo frame (no depth): takes the images out of the reader's scratch frame.
+void fillStereoFrame(size_t i, int64_t timestamp_ns, GrayImage* left, GrayImage* right,
+                     const std::optional<Transformationd>& T_G_L, CaptureFrame* frame) {
+  frame->frame_id = static_cast<int64_t>(i);
+  frame->timestamp_ns = timestamp_ns;
+  std::swap(frame->left, *left);
+  std::swap(frame->right, *right);
+  frame->depth = DepthImage();
+  frame->color = ColorImage();
+  frame->T_G_C = T_G_L;
+}
+
 }  // namespace
 
 IndexedFrameSource::IndexedFrameSource(SourceInfo info, size_t available, size_t max_frames)
@@ -81,13 +103,19 @@ EurocSource::EurocSource(EurocReader reader, size_t max_frames)
 
 bool EurocSource::readFrame(size_t i, CaptureFrame* frame, std::string* error) {
   if (!reader_.read(i, &scratch_, error)) return false;
-  frame->frame_id = static_cast<int64_t>(i);
-  frame->timestamp_ns = scratch_.timestamp_ns;
-  std::swap(frame->left, scratch_.left);
-  std::swap(frame->right, scratch_.right);
-  frame->depth = DepthImage();
-  frame->color = ColorImage();
-  frame->T_G_C = scratch_.T_G_L;
+  fillStereoFrame(i, scratch_.timestamp_ns, &scratch_.left, &scratch_.right, scratch_.T_G_L,
+                  frame);
+  return true;
+}
+
+KittiSource::KittiSource(KittiOdometryReader reader, size_t max_frames)
+    : IndexedFrameSource(kittiInfo(reader), reader.size(), max_frames),
+      reader_(std::move(reader)) {}
+
+bool KittiSource::readFrame(size_t i, CaptureFrame* frame, std::string* error) {
+  if (!reader_.read(i, &scratch_, error)) return false;
+  fillStereoFrame(i, scratch_.timestamp_ns, &scratch_.left, &scratch_.right, scratch_.T_G_L,
+                  frame);
   return true;
 }
 

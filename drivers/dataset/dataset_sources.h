@@ -4,6 +4,7 @@
 #include <string>
 
 #include "drivers/dataset/euroc_reader.h"
+#include "drivers/dataset/kitti_odometry_reader.h"
 #include "drivers/dataset/seven_scenes_reader.h"
 #include "drivers/dataset/tum_rgbd_reader.h"
 #include "drivers/frame_source.h"
@@ -44,6 +45,20 @@ class EurocSource : public IndexedFrameSource {
 
   EurocReader reader_;
   EurocStereoFrame scratch_;
+};
+
+/// KITTI odometry grey stereo sequence: the rectified image_0 / image_1 pairs, times.txt's
+/// time stamps, camera 0's ground truth when the sequence has a pose file.
+class KittiSource : public IndexedFrameSource {
+ public:
+  /// max_frames = 0 plays all frames.
+  KittiSource(KittiOdometryReader reader, size_t max_frames);
+
+ private:
+  bool readFrame(size_t i, CaptureFrame* frame, std::string* error) override;
+
+  KittiOdometryReader reader_;
+  KittiStereoFrame scratch_;
 };
 
 /// TUM RGB-D folder: depth (metres) with the associated colour image, the dataset's time

@@ -40,6 +40,7 @@ using dataset_detail::at;
 using dataset_detail::isDirectory;
 using dataset_detail::isFile;
 using dataset_detail::join;
+using dataset_detail::parseDouble;
 using dataset_detail::setError;
 
 // Parses a non-negative integer of nanoseconds (digits only).
@@ -50,13 +51,6 @@ bool parseNanoseconds(const std::string& text, int64_t* value) {
   return ec == std::errc() && ptr == end && *value >= 0;
 }
 
-// Parses a finite double; the whole text must be the number.
-bool parseDouble(const std::string& text, double* value) {
-  if (text.empty()) return false;
-  char* end = nullptr;
-  *value = std::strtod(text.c_str(), &end);
-  return end == text.c_str() + text.size() && std::isfinite(*value);
-}
 
 // ---------------------------------------------------------------------------------------------
 // sensor.yaml

@@ -3,7 +3,9 @@
 // Small helpers shared by the dataset readers: error reporting and file-system checks that never
 // throw. Internal to cblox_dataset.
 
+#include <cmath>
 #include <cstddef>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <system_error>
@@ -38,6 +40,14 @@ inline std::string join(const std::string& a, const std::string& b) {
 /// state).
 inline std::string at(const std::string& path, size_t line) {
   return path + ":" + std::to_string(line) + ": ";
+}
+
+/// Parses a finite double; the whole text must be the number. Thread-safe (no shared state).
+inline bool parseDouble(const std::string& text, double* value) {
+  if (text.empty()) return false;
+  char* end = nullptr;
+  *value = std::strtod(text.c_str(), &end);
+  return end == text.c_str() + text.size() && std::isfinite(*value);
 }
 
 }  // namespace cblox::dataset_detail

@@ -174,6 +174,25 @@ TEST_F(OpenFrameSourceTest, DatasetFoldersFromSharedData) {
   EXPECT_EQ(frame.left.width, 752);
   EXPECT_TRUE(frame.depth.empty());
 
+  // KITTI: the grey pair, 10 Hz, camera 0's ground truth.
+  auto kitti = openFrameSource("kitti:" + kData + "/kitti-odometry-51", options, &error);
+  ASSERT_NE(kitti, nullptr) << error;
+  ASSERT_TRUE(kitti->info().stereo.has_value());
+  EXPECT_NEAR(kitti->info().stereo->baseline_m, 379.8145 / 707.0912, 1e-9);
+  EXPECT_TRUE(kitti->info().has_ground_truth);
+  EXPECT_NEAR(kitti->info().rate_hz, 10.0, 1e-9);
+  EXPECT_EQ(kitti->info().frame_count, 3u);  // options.max_frames
+  EXPECT_EQ(kitti->info().name, "kitti:" + kData + "/kitti-odometry-51");
+  ASSERT_EQ(kitti->next(&frame, &error), FrameSource::Status::kFrame) << error;
+  ASSERT_EQ(kitti->next(&frame, &error), FrameSource::Status::kFrame) << error;
+  EXPECT_EQ(frame.frame_id, 1);
+  EXPECT_EQ(frame.timestamp_ns, 100000000);
+  EXPECT_EQ(frame.left.width, kitti->info().stereo->intrinsics.width);
+  EXPECT_EQ(frame.right.height, kitti->info().stereo->intrinsics.height);
+  EXPECT_TRUE(frame.depth.empty());
+  ASSERT_TRUE(frame.T_G_C.has_value());
+  EXPECT_NEAR(frame.T_G_C->translation().z(), 1.198998, 1e-9);
+
   auto scenes = openFrameSource("7scenes:" + kData + "/7scenes-rgbd-50", options, &error);
   ASSERT_NE(scenes, nullptr) << error;
   ASSERT_EQ(scenes->next(&frame, &error), FrameSource::Status::kFrame);
@@ -223,6 +242,8 @@ TEST_F(OpenFrameSourceTest, RejectsUnknownSpecsAndMissingFolders) {
   EXPECT_NE(error.find("moon.ply"), std::string::npos) << error;
   EXPECT_EQ(openFrameSource("euroc:/nonexistent", SourceConfig{}, &error), nullptr);
   EXPECT_NE(error.find("/nonexistent"), std::string::npos) << error;
+  EXPECT_EQ(openFrameSource("kitti:/nonexistent", SourceConfig{}, &error), nullptr);
+  EXPECT_NE(error.find("/nonexistent: not a folder"), std::string::npos) << error;
   SourceConfig bad;
   bad.trajectory = "spiral";
   EXPECT_EQ(openFrameSource("sim:room", bad, &error), nullptr);

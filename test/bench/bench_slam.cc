@@ -6,9 +6,12 @@
 // SE(3)) of the frame poses as published and of the final keyframe poses, before the first loop
 // closure and at the end.
 //
-//   cblox-bench-slam [--scene room|hall|town] [--trajectory loop] [--laps 2] [--frames N]
-//                    [--rate HZ] [--one-core] [--vocabulary FILE] [--config TRACKER_YAML]
-//                    [--out DIR]
+//   cblox-bench-slam [--scene room|hall|town | --source SPEC] [--trajectory loop] [--laps 2]
+//                    [--frames N] [--rate HZ] [--one-core] [--vocabulary FILE]
+//                    [--config TRACKER_YAML] [--out DIR]
+//
+// --source plays a recorded stereo source with ground truth on every frame instead of a
+// scene (kitti:DIR, euroc:DIR); its folder's name takes the scene's place in the outputs.
 //
 // Frames are rendered first (progress printed), then fed at --rate (default: the source's
 // rate, so local mapping gets real-time slack; 0 = as fast as possible). --one-core
@@ -94,7 +97,8 @@ Ate ate(const StampedTrajectory& truth, const StampedTrajectory& estimate) {
 }
 
 int run(int argc, char** argv) {
-  std::string scene = "room", trajectory = "loop", vocabulary_path, out_dir, config_path;
+  std::string scene = "room", trajectory = "loop", vocabulary_path, out_dir, config_path,
+              source_spec;
   int laps = 2;
   size_t max_frames = 0;
   double rate = -1.0;
@@ -107,6 +111,10 @@ int run(int argc, char** argv) {
       "CPU, loops (false ones too) and ATE.",
       "cblox-bench-slam"};
   app.add_option("--scene", scene, "room | hall | town")->capture_default_str();
+  app.add_option("--source", source_spec,
+                 "a recorded stereo source with ground truth on every frame, instead of --scene "
+                 "(kitti:DIR, euroc:DIR)")
+      ->type_name("SPEC");
   app.add_option("--trajectory", trajectory, "trajectory kind")->capture_default_str();
   app.add_option("--laps", laps, "laps of the trajectory")->capture_default_str();
   app.add_option("--frames", max_frames, "frames at the most (0: all)")->capture_default_str();
@@ -132,18 +140,38 @@ int run(int argc, char** argv) {
   options.trajectory = trajectory;
   options.laps = laps;
   options.max_frames = max_frames;
-  auto source = openFrameSource("sim:" + scene, options, &error);
+  auto source = openFrameSource(source_spec.empty() ? "sim:" + scene : source_spec, options, &error);
   if (!source) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return 2;
   }
   const SourceInfo info = source->info();
+  if (!info.stereo) {
+    std::fprintf(stderr, "%s: not a stereo source\n", info.name.c_str());
+    return 2;
+  }
+  if (!source_spec.empty()) {
+    // The run's name in the outputs: the source folder's ("kitti:/d/seq/" gives "seq").
+    const std::filesystem::path folder =
+        std::filesystem::path(source_spec.substr(source_spec.find(':') + 1)).lexically_normal();
+    scene = (folder.has_filename() ? folder : folder.parent_path()).filename().string();
+  }
   if (rate < 0.0) rate = info.rate_hz;
   // Render everything first, so that rendering does not compete with SLAM for the cores.
   std::vector<CaptureFrame> frames;
   const auto render_start = Clock::now();
   CaptureFrame frame;
-  while (source->next(&frame, &error) == FrameSource::Status::kFrame) {
+  for (FrameSource::Status status; (status = source->next(&frame, &error)) !=
+                                   FrameSource::Status::kEnd;) {
+    if (status != FrameSource::Status::kFrame) {
+      std::fprintf(stderr, "%s: %s\n", info.name.c_str(), error.c_str());
+      return 1;
+    }
+    if (!frame.T_G_C) {
+      std::fprintf(stderr, "%s: frame %lld has no ground truth\n", info.name.c_str(),
+                   static_cast<long long>(frame.frame_id));
+      return 2;
+    }
     frame.depth = DepthImage();  // stereo SLAM: only the grey pair is kept
     frame.color = ColorImage();
     frames.push_back(std::move(frame));

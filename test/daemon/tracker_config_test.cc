@@ -302,6 +302,20 @@ TEST(TrackerConfigTest, StreetDriveExampleLoads) {
             TrackerConfig{}.max_frames_between_keyframes);
 }
 
+// The KITTI example: the street settings and ORB-SLAM2's feature count for KITTI.
+TEST(TrackerConfigTest, KittiExampleLoads) {
+  std::string error;
+  const std::optional<SlamSystemConfig> slam = loadSlamSettings(
+      std::string(CBLOX_CONFIG_DIR) + "/examples/tracker_kitti.yaml", &error);
+  ASSERT_TRUE(slam.has_value()) << error;
+  EXPECT_EQ(slam->frames.orb.num_features, 2000);
+  EXPECT_EQ(slam->tracker.reference_ratio, 0.5);
+  EXPECT_EQ(slam->tracker.close_points_min_frames, 16);
+  EXPECT_EQ(slam->tracker.close_points_turn_deg, 5.0);
+  EXPECT_EQ(slam->tracker.close_points_gap_min_inliers, 100);
+  EXPECT_EQ(slam->loop_closing.global_ba.first_pass_iterations, 30);
+}
+
 TEST(TrackerConfigTest, RejectsBadKeysAndValuesNamingThem) {
   struct Case {
     const char* yaml;

@@ -19,7 +19,10 @@
 #                                [--capture-config FILE]  (default config/capture.yaml; e.g.
 #                                 config/examples/sim_stereo_depth.yaml: depth from SGBM)
 #                                [--source SPEC]  a dataset instead of a scene, e.g.
-#                                 euroc:DIR (no exact scene: the mesh is written, not evaluated)
+#                                 euroc:DIR, kitti:DIR (no exact scene: the mesh is written
+#                                 and pictured by height, DIR/NAME_height.png, not evaluated)
+#                                [--up AXIS]  datasets: the axis of G that points up (default
+#                                 -y: the first camera's frame; z for a z-up ground truth)
 # Writes DIR/NAME.ply (the mapper's mesh), DIR/NAME_gt.ply (exact scene), DIR/NAME_eval.json
 # and DIR/NAME_error.png. Needs a build (scripts/build.sh); BUILD_DIR selects it.
 set -euo pipefail
@@ -27,7 +30,7 @@ cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 scene=room trajectory=orbit laps=1 rate=20 frames=0 out=out name="" mapper_config=config/mapper.yaml
 poses=tracker tracker_config=config/tracker.yaml capture_config=config/capture.yaml source=""
-slice="" query=""
+slice="" query="" up=-y
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --scene) scene=$2; shift 2 ;;
@@ -44,6 +47,7 @@ while [[ $# -gt 0 ]]; do
     --capture-config) capture_config=$2; shift 2 ;;
     --source) source=$2; shift 2 ;;
     --poses) poses=$2; shift 2 ;;
+    --up) up=$2; shift 2 ;;
     *) echo "run_pipeline: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
@@ -60,7 +64,8 @@ if [[ "${CBLOX_IN_NETNS:-}" != "1" ]]; then
   CBLOX_IN_NETNS=1 exec scripts/netns-run.sh "$0" --scene "$scene" --trajectory "$trajectory" --laps "$laps" \
     --rate "$rate" --frames "$frames" --out "$out" --name "$name" \
     --mapper-config "$mapper_config" --tracker-config "$tracker_config" --poses "$poses" \
-    --capture-config "$capture_config" ${source:+--source "$source"} ${slice:+--slice "$slice"} ${query:+--query "$query"}
+    --capture-config "$capture_config" ${source:+--source "$source"} ${slice:+--slice "$slice"} ${query:+--query "$query"} \
+    --up "$up"
 fi
 # A scene of the simulator (exact ground truth), or a dataset given with --source.
 sim=true
@@ -121,6 +126,7 @@ fi
 trap - EXIT
 if ! $sim; then
   echo "pipeline: mesh $out/$name.ply (no exact scene for $source; mapper log $out/${name}_mapper.log)"
+  "$bin/cblox-eval" --mesh "$out/$name.ply" --height-png "$out/${name}_height.png" --up "$up"
   exit 0
 fi
 "$bin/cblox-capture" --config "$capture_config" --source "$source" --write-scene "$out/${name}_gt.ply" > /dev/null

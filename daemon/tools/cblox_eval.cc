@@ -2,6 +2,7 @@
 //
 //   cblox-eval --gt-mesh room_gt.ply --mesh room.ply --json eval.json --error-png error.png
 //   cblox-eval --gt-trajectory gt.txt --trajectory est.txt --align se3 --trajectory-png traj.png
+//   cblox-eval --mesh street.ply --height-png street.png --up -y    # no ground truth needed
 //
 // Mesh part (both meshes given): accuracy of the reconstruction's vertices against the
 // ground-truth surface, completeness of the ground truth, and the surface block count
@@ -11,6 +12,8 @@
 // reconstruction first (it was built in the estimate's frame E); --no-mesh-align turns that
 // off. Prints a summary (mesh errors in mm) and writes one JSON object with the sections
 // "inputs", "mesh", "map" and "trajectory" (null when a part did not run).
+// --height-png renders the reconstruction coloured by height (--up: which axis of its frame
+// points up; -y for a camera's frame) and needs no ground truth.
 // Exit status 0 on success, 1 when an evaluation or an output fails, 2 on a usage error or an
 // input that cannot be read.
 
@@ -34,6 +37,7 @@
 
 #include "core/eval/mesh_accuracy.h"
 #include "core/eval/mesh_error_render.h"
+#include "core/eval/mesh_height.h"
 #include "core/eval/trajectory_metrics.h"
 #include "core/eval/trajectory_plot.h"
 #include "core/io/obj_io.h"
@@ -77,6 +81,8 @@ struct Options {
   std::string json;
   std::string error_png;
   std::string trajectory_png;
+  std::string height_png;
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   std::optional<MeshViewpoint> view;
   double max_error_m = 0.05;
   int threads = 2;
@@ -191,6 +197,21 @@ void addOptions(CLI::App& app, Options* options) {
   app.add_option("--trajectory-png", options->trajectory_png,
                  "top view of the ground truth and the aligned estimate")
       ->type_name("FILE");
+  app.add_option("--height-png", options->height_png,
+                 "the reconstruction coloured by height above its lowest vertex (0 .. its\n"
+                 "99th percentile, metres), seen from above and to the side, 1024x768; needs\n"
+                 "only --mesh")
+      ->type_name("FILE");
+  app.add_option_function<std::string>(
+         "--up",
+         [options](const std::string& text) {
+           const std::optional<Eigen::Vector3d> up = parseUpAxis(text);
+           if (!up) throw CLI::ValidationError("--up", "must be x, y, z, -x, -y or -z");
+           options->up = *up;
+         },
+         "height picture: the axis of the mesh's frame that points up (default z; -y for a\n"
+         "camera's frame, as the tracker's G when its first frame is the origin)")
+      ->type_name("AXIS");
   app.add_option_function<std::string>(
          "--view", [options](const std::string& text) { options->view = parseView(text); },
          "error picture: eye and look-at point in ground-truth coordinates (default: an\n"
@@ -204,9 +225,14 @@ void addOptions(CLI::App& app, Options* options) {
 /// Checks between options and that the inputs exist; throws UsageError.
 void checkOptions(Options* options) {
   options->threads = std::min(options->threads, 64);
-  if (options->gt_mesh.empty() != options->mesh.empty()) {
-    throw UsageError(options->mesh.empty() ? "--gt-mesh needs --mesh (the reconstruction)"
-                                           : "--mesh needs --gt-mesh (the ground truth)");
+  if (!options->gt_mesh.empty() && options->mesh.empty()) {
+    throw UsageError("--gt-mesh needs --mesh (the reconstruction)");
+  }
+  if (!options->height_png.empty() && options->mesh.empty()) {
+    throw UsageError("--height-png needs --mesh");
+  }
+  if (!options->mesh.empty() && options->gt_mesh.empty() && options->height_png.empty()) {
+    throw UsageError("--mesh needs --gt-mesh (the ground truth) or --height-png");
   }
   if (options->gt_trajectory.empty() != options->trajectory.empty()) {
     throw UsageError(options->trajectory.empty() ? "--gt-trajectory needs --trajectory"
@@ -217,13 +243,15 @@ void checkOptions(Options* options) {
         "nothing to evaluate: give --gt-mesh and --mesh, and/or --gt-trajectory and "
         "--trajectory (see --help)");
   }
-  if (!options->error_png.empty() && options->mesh.empty()) {
+  if (!options->error_png.empty() && options->gt_mesh.empty()) {
     throw UsageError("--error-png needs --gt-mesh and --mesh");
   }
   if (!options->trajectory_png.empty() && options->trajectory.empty()) {
     throw UsageError("--trajectory-png needs --gt-trajectory and --trajectory");
   }
-  if (options->view && options->error_png.empty()) throw UsageError("--view needs --error-png");
+  if (options->view && options->error_png.empty() && options->height_png.empty()) {
+    throw UsageError("--view needs --error-png or --height-png");
+  }
   LayerConfig grid;
   grid.voxel_size = static_cast<float>(options->voxel_size_m);
   grid.voxels_per_side = options->block_voxels;
@@ -292,6 +320,32 @@ void writeTextFile(const std::string& path, const std::string& text) {
   if (!out) throw EvaluationError(path + ": write failed");
 }
 
+// The reconstruction coloured by height (--height-png): turned so that --up is +z, heights
+// above the lowest vertex, the colours spread up to the 99th percentile (a few stray
+// vertices high above do not wash the picture out). Returns "" or what went wrong.
+std::string writeHeightPng(const Options& options, const Mesh& reconstruction) {
+  if (reconstruction.triangles.empty()) {
+    return options.height_png + ": cannot render " + options.mesh +
+           ": the reconstruction has no triangles (a point cloud)";
+  }
+  const Mesh turned = turnedUp(reconstruction, options.up);
+  const std::vector<double> heights = vertexHeights(turned, Eigen::Vector3d::UnitZ());
+  std::vector<double> sorted = heights;
+  const auto p99 = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() * 99 / 100);
+  std::nth_element(sorted.begin(), p99, sorted.end());
+  MeshErrorRenderConfig render;
+  render.max_error_m = std::max(*p99, 0.1);
+  render.millimetres = false;
+  render.viewpoint = options.view;
+  render.num_threads = options.threads;
+  render.title = "height above the lowest surface, m (" +
+                 std::filesystem::path(options.mesh).filename().string() + ")";
+  std::string error;
+  if (!writeMeshErrorPng(options.height_png, turned, heights, render, &error)) return error;
+  std::printf("wrote %s\n", options.height_png.c_str());
+  return {};
+}
+
 int run(const Options& options) {
   std::optional<TrajectoryEvaluation> trajectory_result;
   StampedTrajectory ground_truth_trajectory;
@@ -306,9 +360,9 @@ int run(const Options& options) {
     estimated_trajectory = loadTrajectory(options.trajectory);
   }
   Mesh ground_truth_mesh;
-  if (!options.mesh.empty()) {
+  if (!options.mesh.empty()) reconstruction = loadMesh(options.mesh, "reconstruction");
+  if (!options.gt_mesh.empty()) {
     ground_truth_mesh = loadMesh(options.gt_mesh, "ground-truth mesh");
-    reconstruction = loadMesh(options.mesh, "reconstruction");
     if (ground_truth_mesh.triangles.empty()) {
       throw UsageError(options.gt_mesh + ": the ground-truth mesh has no triangles");
     }
@@ -343,7 +397,7 @@ int run(const Options& options) {
         t.rpe.translation_m.count, t.rpe.translation_m.rmse, t.rpe.rotation_deg.rmse);
   }
 
-  if (!options.mesh.empty()) {
+  if (!options.gt_mesh.empty()) {
     std::string error;
     const std::unique_ptr<TriangleMeshRaycaster> truth =
         TriangleMeshRaycaster::create(ground_truth_mesh, &error);
@@ -457,6 +511,12 @@ int run(const Options& options) {
       error.clear();
     }
     if (!error.empty()) {
+      std::fprintf(stderr, "cblox-eval: %s\n", error.c_str());
+      if (failure.empty()) failure = error;
+    }
+  }
+  if (!options.height_png.empty()) {
+    if (const std::string error = writeHeightPng(options, reconstruction); !error.empty()) {
       std::fprintf(stderr, "cblox-eval: %s\n", error.c_str());
       if (failure.empty()) failure = error;
     }

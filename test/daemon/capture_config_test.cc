@@ -64,6 +64,11 @@ TEST(CaptureConfigTest, ExampleConfigsLoad) {
   ASSERT_TRUE(sim.stereo_depth.has_value());
   EXPECT_EQ(sim.stereo_depth->matcher, StereoMatcherType::kSgbm);
   EXPECT_EQ(sim.stereo_depth->min_depth_m, 0.4);
+  const CaptureConfig kitti = load("kitti_stereo_depth.yaml");
+  EXPECT_EQ(kitti.source, "kitti:../shared/data/kitti-odometry-51");
+  ASSERT_TRUE(kitti.stereo_depth.has_value());
+  EXPECT_EQ(kitti.stereo_depth->num_disparities, 96);
+  EXPECT_EQ(kitti.stereo_depth->max_depth_m, 30.0);
   const CaptureConfig pair = load("uvc_stereo_pair.yaml");
   EXPECT_EQ(pair.source, "v4l2-stereo:/dev/video0,/dev/video2");
   EXPECT_EQ(pair.source_config.v4l2.pixel_format, "GREY");

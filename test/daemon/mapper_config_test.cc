@@ -106,6 +106,16 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_TRUE(defaults.validate().empty()) << defaults.validate();
 }
 
+// The street example sets what it says and keeps the other defaults.
+TEST(MapperConfigTest, StreetExampleLoads) {
+  const MapperProcessConfig street = loadMapperConfig(
+      loadYamlFile(std::string(CBLOX_CONFIG_DIR) + "/examples/mapper_street.yaml"));
+  EXPECT_EQ(street.mapper.layer.voxel_size, 0.2f);
+  EXPECT_EQ(street.mapper.integrator.truncation_distance_m, 0.6f);
+  EXPECT_EQ(street.mapper.integrator.max_ray_length_m, 30.0f);
+  EXPECT_EQ(street.mapper.layer.voxels_per_side, MapperProcessConfig{}.mapper.layer.voxels_per_side);
+}
+
 TEST(MapperConfigTest, IntegratorNicenessAndMemoryCapAreRead) {
   const MapperProcessConfig config = loadMapperConfig(
       YAML::Load("integrator: {niceness: 7}\nmemory: {cap_mb: 0, near_only_fraction: 0.5, "

@@ -148,6 +148,18 @@ if(NOT trajectory_type STREQUAL "NULL" OR NOT self_rmse EQUAL 0)
   message(FATAL_ERROR "self evaluation: trajectory ${trajectory_type}, rmse ${self_rmse}")
 endif()
 
+# A mesh without ground truth, coloured by height: here a plane 5 mm up, seen with y up
+# (so the heights run along y, 0 .. 1 m).
+execute_process(COMMAND ${EVAL} --mesh ${WORK}/recon.ply --height-png ${WORK}/height.png --up y
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "wrote ${WORK}/height.png")
+  message(FATAL_ERROR "height picture: expected exit 0 and the file, got ${rc}: ${out}${err}")
+endif()
+file(READ ${WORK}/height.png signature LIMIT 8 HEX)
+if(NOT signature STREQUAL "89504e470d0a1a0a")
+  message(FATAL_ERROR "height.png is not a PNG (${signature})")
+endif()
+
 # Usage errors exit with status 2 and say what is wrong.
 function(expect_usage_error what pattern)
   execute_process(COMMAND ${EVAL} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out
@@ -161,6 +173,9 @@ expect_usage_error("nothing to do" "nothing to evaluate")
 expect_usage_error("missing file" "${WORK}/missing.ply: no such file"
                    --gt-mesh ${WORK}/missing.ply --mesh ${WORK}/recon.ply)
 expect_usage_error("unpaired mesh" "--mesh needs --gt-mesh" --mesh ${WORK}/recon.ply)
+expect_usage_error("height without mesh" "--height-png needs --mesh" --height-png ${WORK}/h.png)
+expect_usage_error("bad up axis" "--up: must be x, y, z, -x, -y or -z"
+                   --mesh ${WORK}/recon.ply --height-png ${WORK}/h.png --up w)
 expect_usage_error("bad number" "--threshold: needs a finite number"
                    --gt-mesh ${WORK}/gt.ply --mesh ${WORK}/recon.ply --threshold abc)
 expect_usage_error("bad alignment" "--align: must be none, se3 or sim3"

@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <set>
 #include <sstream>
 #include <system_error>
 #include <utility>
@@ -108,21 +107,22 @@ bool readRectifiedPair(const std::string& path,
   const auto zero = [eps](double v) { return std::abs(v) <= eps; };
   if (!zero(p0[1]) || !zero(p0[4]) || !zero(p0[8]) || !zero(p0[9]) ||
       std::abs(p0[10] - 1.0) > 1e-9) {
-    return setError(error, at(path, line0) + "P0 must be K [I | 0] with K = [fx 0 cx; 0 fy cy; 0 0 1]");
+    return setError(error,
+                    at(path, line0) + "P0 must be K [I | 0] with K = [fx 0 cx; 0 fy cy; 0 0 1]");
   }
   if (!zero(p0[3]) || !zero(p0[7]) || !zero(p0[11])) {
-    return setError(error, at(path, line0) +
-                               "P0 has a translation: camera 0 must be the rectified reference");
+    return setError(
+        error, at(path, line0) + "P0 has a translation: camera 0 must be the rectified reference");
   }
   for (const int k : {0, 1, 2, 4, 5, 6, 8, 9, 10}) {
     if (std::abs(p1[static_cast<size_t>(k)] - p0[static_cast<size_t>(k)]) > eps) {
-      return setError(error, at(path, line1) +
-                                 "P1's intrinsics differ from P0's: not a rectified pair");
+      return setError(error,
+                      at(path, line1) + "P1's intrinsics differ from P0's: not a rectified pair");
     }
   }
   if (!zero(p1[7]) || !zero(p1[11])) {
-    return setError(error, at(path, line1) +
-                               "P1's translation is not along x: not a rectified pair");
+    return setError(error,
+                    at(path, line1) + "P1's translation is not along x: not a rectified pair");
   }
   const double baseline = -p1[3] / fx;
   if (!(baseline > 0.0)) {
@@ -178,54 +178,61 @@ bool pairImages(const std::string& folder, size_t* count, std::string* error) {
                                       : std::string()));
     }
     if (i >= right.size() || right[i] != expected) {
-      return setError(error, join(dir1, imageName(i)) + ": missing (" +
-                                 join(dir0, imageName(i)) + " has no partner)");
+      return setError(error, join(dir1, imageName(i)) + ": missing (" + join(dir0, imageName(i)) +
+                                 " has no partner)");
     }
   }
   *count = left.size();
   return true;
 }
 
-bool readTimes(const std::string& path, size_t count, std::vector<int64_t>* times_ns,
-               std::string* error) {
+// Calls row(line number, tokens) for every non-blank line of `path` (false from it ends the
+// reading), then checks that there were `count` rows of `what`.
+template <typename RowFn>
+bool readRows(const std::string& path, size_t count, const char* what, std::string* error,
+              RowFn row) {
   std::ifstream in(path);
   if (!in) return setError(error, path + ": cannot open");
   std::string line;
-  size_t number = 0;
-  double previous = -1.0;
+  size_t number = 0, rows = 0;
   while (std::getline(in, line)) {
     ++number;
     const std::vector<std::string> fields = tokens(line);
     if (fields.empty()) continue;
-    double t = 0.0;
-    if (fields.size() != 1 || !parseDouble(fields[0], &t) || t < 0.0 || t > 1e9) {
-      return setError(error, at(path, number) + "expected one time in seconds (>= 0), got '" +
-                                 trimBlanks(line) + "'");
-    }
-    if (!(t > previous)) {
-      return setError(error, at(path, number) + "times must increase (" + trimBlanks(line) +
-                                 " after " + std::to_string(previous) + ")");
-    }
-    previous = t;
-    times_ns->push_back(std::llround(t * 1e9));
+    if (!row(number, fields)) return false;
+    ++rows;
   }
-  if (times_ns->size() != count) {
-    return setError(error, path + ": " + std::to_string(times_ns->size()) + " times for " +
+  if (rows != count) {
+    return setError(error, path + ": " + std::to_string(rows) + " " + what + " for " +
                                std::to_string(count) + " image pairs");
   }
   return true;
 }
 
+bool readTimes(const std::string& path, size_t count, std::vector<int64_t>* times_ns,
+               std::string* error) {
+  double previous = -1.0;
+  return readRows(path, count, "times", error, [&](size_t number, const auto& fields) {
+    double t = 0.0;
+    if (fields.size() != 1 || !parseDouble(fields[0], &t) || t < 0.0 || t > 1e9) {
+      std::string text;
+      for (const std::string& f : fields) text += (text.empty() ? "" : " ") + f;
+      return setError(error,
+                      at(path, number) + "expected one time in seconds (>= 0), got '" + text + "'");
+    }
+    if (!(t > previous)) {
+      return setError(error, at(path, number) + "times must increase (" + fields[0] + " after " +
+                                 std::to_string(previous) + ")");
+    }
+    previous = t;
+    times_ns->push_back(std::llround(t * 1e9));
+    return true;
+  });
+}
+
 bool readPoses(const std::string& path, size_t count, std::vector<Transformationd>* poses,
                std::string* error) {
-  std::ifstream in(path);
-  if (!in) return setError(error, path + ": cannot open");
-  std::string line;
-  size_t number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    const std::vector<std::string> fields = tokens(line);
-    if (fields.empty()) continue;
+  return readRows(path, count, "poses", error, [&](size_t number, const auto& fields) {
     Row12 row{};
     std::string what;
     if (!parseRow12(fields, &row, &what)) return setError(error, at(path, number) + what);
@@ -237,12 +244,8 @@ bool readPoses(const std::string& path, size_t count, std::vector<Transformation
       return setError(error, at(path, number) + invalid);
     }
     poses->push_back(Transformationd::fromMatrix(M));
-  }
-  if (poses->size() != count) {
-    return setError(error, path + ": " + std::to_string(poses->size()) + " poses for " +
-                               std::to_string(count) + " image pairs");
-  }
-  return true;
+    return true;
+  });
 }
 
 // An 8-bit grey image, or a message naming the file.
@@ -262,8 +265,9 @@ bool loadGray(const std::string& path, cv::Mat* image, std::string* error) {
 std::optional<KittiOdometryReader> KittiOdometryReader::open(const std::string& folder,
                                                              std::string* error) {
   if (!isDirectory(folder)) {
-    setError(error, folder + ": not a folder (a KITTI odometry sequence: image_0/, image_1/, "
-                             "calib.txt, times.txt)");
+    setError(error, folder +
+                        ": not a folder (a KITTI odometry sequence: image_0/, image_1/, "
+                        "calib.txt, times.txt)");
     return std::nullopt;
   }
   KittiOdometryReader reader;
@@ -306,34 +310,32 @@ std::optional<KittiOdometryReader> KittiOdometryReader::open(const std::string& 
   K.height = first.rows;
   if (!(K.cx >= 0.0 && K.cx <= K.width && K.cy >= 0.0 && K.cy <= K.height)) {
     setError(error, at(calib_path, rows.at("P0").second) + "principal point (" +
-                        std::to_string(K.cx) + ", " + std::to_string(K.cy) +
-                        ") lies outside the " + describeSize(K.width, K.height) + " images");
+                        std::to_string(K.cx) + ", " + std::to_string(K.cy) + ") lies outside the " +
+                        describeSize(K.width, K.height) + " images");
     return std::nullopt;
   }
   if (!readTimes(join(folder, "times.txt"), count, &reader.times_ns_, error)) return std::nullopt;
   if (count > 1) {
-    reader.rate_hz_ = static_cast<double>(count - 1) /
-                      (static_cast<double>(reader.times_ns_.back() - reader.times_ns_.front()) *
-                       1e-9);
+    reader.rate_hz_ =
+        static_cast<double>(count - 1) /
+        (static_cast<double>(reader.times_ns_.back() - reader.times_ns_.front()) * 1e-9);
   }
 
   // Ground truth: in the folder, or where KITTI's dataset/ layout keeps it.
   const std::filesystem::path sequence = std::filesystem::path(folder).lexically_normal();
-  const std::string name = (sequence.has_filename() ? sequence : sequence.parent_path())
-                               .filename()
-                               .string();
+  const std::string name =
+      (sequence.has_filename() ? sequence : sequence.parent_path()).filename().string();
   for (const std::string& candidate :
-       {join(folder, "poses.txt"), join(join(join(folder, ".."), ".."), "poses/" + name + ".txt")}) {
+       {join(folder, "poses.txt"),
+        join(join(join(folder, ".."), ".."), "poses/" + name + ".txt")}) {
     if (!isFile(candidate)) continue;
-    reader.ground_truth_path_ =
-        std::filesystem::path(candidate).lexically_normal().string();
+    reader.ground_truth_path_ = std::filesystem::path(candidate).lexically_normal().string();
     if (!readPoses(reader.ground_truth_path_, count, &reader.poses_, error)) return std::nullopt;
     reader.notes_.push_back("ground truth: " + reader.ground_truth_path_);
     break;
   }
   if (reader.poses_.empty()) {
-    reader.notes_.push_back("no ground truth (neither poses.txt nor ../../poses/" + name +
-                            ".txt)");
+    reader.notes_.push_back("no ground truth (neither poses.txt nor ../../poses/" + name + ".txt)");
   }
   return reader;
 }

@@ -144,7 +144,8 @@ TEST_F(KittiSyntheticTest, FindsTheGroundTruthInKittisDatasetLayout) {
   fs::rename(dir_.path() / "seq" / "poses.txt", root / "poses" / "seq.txt");
   fs::rename(dir_.path() / "seq", root / "sequences" / "seq");
   std::string error;
-  const auto reader = KittiOdometryReader::open((root / "sequences" / "seq").string() + "/", &error);
+  const auto reader =
+      KittiOdometryReader::open((root / "sequences" / "seq").string() + "/", &error);
   ASSERT_TRUE(reader.has_value()) << error;
   ASSERT_TRUE(reader->hasGroundTruth());
   EXPECT_EQ(reader->groundTruthPath(), (root / "poses" / "seq.txt").string());
@@ -197,24 +198,24 @@ TEST_F(KittiSyntheticTest, RefusesBadCalibration) {
       {"P0: 500 0 20 0 0 500 15 0 0 0 1 0\n", "calib.txt", "P1 is missing"},
       {"P0: 500 0 20 0 0 500 15 0 0 0 1 0\nP1: 500 0 20 -250 0 500 15 0 0 0 1\n", "calib.txt:2",
        "P1: expected 12 numbers, got 11"},
-      {"P0: 500 0 20 0 0 500 15 0 0 0 1 0\nP1: 500 0 20 -250 0 500 15 0 0 0 1 x\n",
-       "calib.txt:2", "'x' is not a finite number"},
-      {"P0: 500 0 20 0 0 500 15 0 0 0 1 0\nP1: 510 0 20 -250 0 510 15 0 0 0 1 0\n",
-       "calib.txt:2", "not a rectified pair"},
-      {"P0: 500 0 20 0 0 500 15 0 0 0 1 0\nP1: 500 0 20 -250 0 500 15 3 0 0 1 0\n",
-       "calib.txt:2", "translation is not along x"},
+      {"P0: 500 0 20 0 0 500 15 0 0 0 1 0\nP1: 500 0 20 -250 0 500 15 0 0 0 1 x\n", "calib.txt:2",
+       "'x' is not a finite number"},
+      {"P0: 500 0 20 0 0 500 15 0 0 0 1 0\nP1: 510 0 20 -250 0 510 15 0 0 0 1 0\n", "calib.txt:2",
+       "not a rectified pair"},
+      {"P0: 500 0 20 0 0 500 15 0 0 0 1 0\nP1: 500 0 20 -250 0 500 15 3 0 0 1 0\n", "calib.txt:2",
+       "translation is not along x"},
       {"P0: 500 0 20 0 0 500 15 0 0 0 1 0\nP1: 500 0 20 0 0 500 15 0 0 0 1 0\n", "calib.txt:2",
        "P1 has no baseline"},
-      {"P0: 500 0 20 0 0 500 15 0 0 0 1 0\nP1: 500 0 20 250 0 500 15 0 0 0 1 0\n",
-       "calib.txt:2", "P1 has no baseline"},
-      {"P0: 500 0 20 40 0 500 15 0 0 0 1 0\nP1: 500 0 20 -250 0 500 15 0 0 0 1 0\n",
-       "calib.txt:1", "P0 has a translation"},
-      {"P0: 500 2 20 0 0 500 15 0 0 0 1 0\nP1: 500 2 20 -250 0 500 15 0 0 0 1 0\n",
-       "calib.txt:1", "P0 must be K [I | 0]"},
-      {"P0: -500 0 20 0 0 500 15 0 0 0 1 0\nP1: -500 0 20 -250 0 500 15 0 0 0 1 0\n",
-       "calib.txt:1", "fx and fy must be > 0"},
-      {"P0: 500 0 90 0 0 500 15 0 0 0 1 0\nP1: 500 0 90 -250 0 500 15 0 0 0 1 0\n",
-       "calib.txt:1", "principal point"},
+      {"P0: 500 0 20 0 0 500 15 0 0 0 1 0\nP1: 500 0 20 250 0 500 15 0 0 0 1 0\n", "calib.txt:2",
+       "P1 has no baseline"},
+      {"P0: 500 0 20 40 0 500 15 0 0 0 1 0\nP1: 500 0 20 -250 0 500 15 0 0 0 1 0\n", "calib.txt:1",
+       "P0 has a translation"},
+      {"P0: 500 2 20 0 0 500 15 0 0 0 1 0\nP1: 500 2 20 -250 0 500 15 0 0 0 1 0\n", "calib.txt:1",
+       "P0 must be K [I | 0]"},
+      {"P0: -500 0 20 0 0 500 15 0 0 0 1 0\nP1: -500 0 20 -250 0 500 15 0 0 0 1 0\n", "calib.txt:1",
+       "fx and fy must be > 0"},
+      {"P0: 500 0 90 0 0 500 15 0 0 0 1 0\nP1: 500 0 90 -250 0 500 15 0 0 0 1 0\n", "calib.txt:1",
+       "principal point"},
       {"P0: 500 0 20 0 0 500 15 0 0 0 1 0\nP0: 500 0 20 0 0 500 15 0 0 0 1 0\n", "calib.txt:2",
        "P0 repeated"},
   };

@@ -22,8 +22,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   for (size_t i = 0; i < parts.size(); ++i) {
     if (i < 2 || !parts[i].empty()) writeScratchFile(dir, files[i], parts[i]);
   }
-  for (const char* image : {"image_0/000000.png", "image_0/000001.png", "image_1/000000.png",
-                            "image_1/000001.png"}) {
+  for (const char* image :
+       {"image_0/000000.png", "image_0/000001.png", "image_1/000000.png", "image_1/000001.png"}) {
     writeTinyImage(dir, image, TinyImage::kGray8);
   }
   std::string error;

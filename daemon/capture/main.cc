@@ -449,7 +449,8 @@ int main(int argc, char** argv) {
                  "libcamera:CAMERA_ID")
       ->type_name("SPEC");
   app.add_option("--trajectory", args.trajectory,
-                 "sim sources: loop | orbit | lawnmower | figure-eight | two-loops (town), or a "
+                 "sim sources: loop | orbit | lawnmower | figure-eight | two-loops | street-turn (town), "
+                 "or a "
                  "TUM trajectory file")
       ->type_name("KIND|FILE");
   app.add_option("--laps", args.laps, "laps of the trajectory (>= 1)")->type_name("N");

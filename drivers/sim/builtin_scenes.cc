@@ -371,6 +371,12 @@ BuiltinScene makeTown() {
       Vector3d(70, 70, 1.6),   Vector3d(70, 0, 1.6),    Vector3d(140, 0, 1.6),
       Vector3d(140, 210, 1.6), Vector3d(0, 210, 1.6),   Vector3d(0, 140, 1.6),
       Vector3d(140, 140, 1.6), Vector3d(140, 70, 1.6),  Vector3d(70, 70, 1.6)};
+  // East along y = 0 from the crossing at x = 0, left at (70, 0), north to y = 60: 130 m
+  // between the waypoints. A 22 m corner arc turns 90 degrees in 35 m, 2.9 degrees a frame at
+  // 11 m/s and 10 Hz, and keeps 2 m off the corner's tree and house.
+  scene.street_turn_waypoints = {Vector3d(0, 0, 1.6), Vector3d(70, 0, 1.6), Vector3d(70, 60, 1.6)};
+  scene.street_turn_speed_mps = 11.0;
+  scene.street_turn_radius_m = 22.0;
   scene.orbit_centre = Vector3d(105, 105, 12.0);
   scene.orbit_radius = 35.0;
   scene.orbit_look_at = Vector3d(105, 105, 0.0);
@@ -399,8 +405,10 @@ TrajectoryKind parseTrajectoryKind(const std::string& text) {
   if (text == "lawnmower" || text == "lawn-mower") return TrajectoryKind::kLawnMower;
   if (text == "figure-eight" || text == "figure8") return TrajectoryKind::kFigureEight;
   if (text == "two-loops") return TrajectoryKind::kTwoLoops;
-  throw std::invalid_argument("unknown trajectory '" + text +
-                              "' (known: loop, orbit, lawnmower, figure-eight, two-loops)");
+  if (text == "street-turn") return TrajectoryKind::kStreetTurn;
+  throw std::invalid_argument(
+      "unknown trajectory '" + text +
+      "' (known: loop, orbit, lawnmower, figure-eight, two-loops, street-turn)");
 }
 
 StampedTrajectory makeSceneTrajectory(const BuiltinScene& scene, TrajectoryKind kind,
@@ -428,6 +436,15 @@ StampedTrajectory makeSceneTrajectory(const BuiltinScene& scene, TrajectoryKind 
                                     "' has no two-loops route (the town has one)");
       }
       return followPath(scene.two_loop_waypoints, true, laps, motion);
+    case TrajectoryKind::kStreetTurn:
+      if (scene.street_turn_waypoints.empty()) {
+        throw std::invalid_argument("makeSceneTrajectory: scene '" + scene.name +
+                                    "' has no street-turn route (the town has one)");
+      }
+      motion.speed_mps = scene.street_turn_speed_mps;
+      motion.turn_radius_m = scene.street_turn_radius_m;
+      motion.arc_step_deg = 0.25;  // a car's heading turns smoothly, frame to frame
+      return followPath(scene.street_turn_waypoints, false, 1, motion);
   }
   throw std::invalid_argument("makeSceneTrajectory: unknown kind");
 }

@@ -24,6 +24,13 @@ struct BuiltinScene {
   /// and re-enters the small loop again from elsewhere (the second, wide-baseline closure),
   /// as the paper's city drives l0 / l1 do.
   std::vector<Eigen::Vector3d> two_loop_waypoints;
+  /// A street drive through one sharp turn at car speed (empty if the scene has none): a
+  /// straight, a 90-degree corner and a straight, driven once at street_turn_speed_mps with
+  /// the corner an arc of street_turn_radius_m (KITTI's sharp turns: about 90 degrees in
+  /// 40-50 m at 10-13 m/s).
+  std::vector<Eigen::Vector3d> street_turn_waypoints;
+  double street_turn_speed_mps = 0.0;
+  double street_turn_radius_m = 0.0;
   /// Orbit: centre of the circle (its z is the flying height) and the point looked at.
   Eigen::Vector3d orbit_centre = Eigen::Vector3d::Zero();
   double orbit_radius = 1.0;
@@ -61,18 +68,20 @@ BuiltinScene makeIndustrialHall();
 /// sides with house fronts with windows and roofs, trees; a car-like drive around two blocks that returns to its start.
 BuiltinScene makeTown();
 
-/// Trajectory kinds. Every built-in scene provides the first four; kTwoLoops only the
-/// scenes with two_loop_waypoints (the town).
-enum class TrajectoryKind { kLoop, kOrbit, kLawnMower, kFigureEight, kTwoLoops };
+/// Trajectory kinds. Every built-in scene provides the first four; kTwoLoops and
+/// kStreetTurn only the scenes with two_loop_waypoints / street_turn_waypoints (the town).
+enum class TrajectoryKind { kLoop, kOrbit, kLawnMower, kFigureEight, kTwoLoops, kStreetTurn };
 
 /// Parses "loop", "orbit", "lawnmower" / "lawn-mower", "figure-eight" / "figure8",
-/// "two-loops". Throws std::invalid_argument naming the accepted values otherwise.
+/// "two-loops", "street-turn". Throws std::invalid_argument naming the accepted values
+/// otherwise.
 /// Thread-safe.
 TrajectoryKind parseTrajectoryKind(const std::string& text);
 
 /// Samples the scene's path of that kind with the scene's motion profile (rate overridden
-/// by rate_hz), `laps` times for closed paths. Throws std::invalid_argument for kTwoLoops
-/// on a scene without two_loop_waypoints. Thread-safe (pure).
+/// by rate_hz), `laps` times for closed paths (kStreetTurn: once, at its own speed and
+/// corner radius). Throws std::invalid_argument for kTwoLoops or kStreetTurn on a scene
+/// without that route. Thread-safe (pure).
 StampedTrajectory makeSceneTrajectory(const BuiltinScene& scene, TrajectoryKind kind,
                                       double rate_hz, int laps = 1);
 

@@ -11,7 +11,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 /// The waypoint polyline with rounded corners, as a dense polyline (about 2 cm / 2 degrees).
 std::vector<Eigen::Vector3d> roundedPolyline(const std::vector<Eigen::Vector3d>& w, bool closed,
-                                             double radius) {
+                                             double radius, double arc_step_deg) {
   std::vector<Eigen::Vector3d> points;
   const size_t n = w.size();
   auto add_line = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
@@ -45,7 +45,8 @@ std::vector<Eigen::Vector3d> roundedPolyline(const std::vector<Eigen::Vector3d>&
     exit[i] = w[i] + b * tangent;
     const Eigen::Vector3d towards_centre = (b - b.dot(a) * a).normalized();
     const Eigen::Vector3d centre = entry[i] + towards_centre * r;
-    const int steps = std::max(2, static_cast<int>(std::ceil(turn / (2.0 * kPi / 180.0))));
+    const int steps =
+        std::max(2, static_cast<int>(std::ceil(turn / (arc_step_deg * kPi / 180.0))));
     const Eigen::Vector3d axis = a.cross(towards_centre);  // rotation axis of the turn
     for (int k = 1; k < steps; ++k) {
       const Eigen::AngleAxisd rotation(turn * k / steps, axis);
@@ -110,6 +111,9 @@ std::string MotionProfile::validate() const {
     return "accel_time_s must be >= 0, got " + std::to_string(accel_time_s);
   }
   if (!positive(turn_radius_m)) return "turn_radius_m must be > 0, got " + std::to_string(turn_radius_m);
+  if (!(arc_step_deg >= 0.05 && arc_step_deg <= 10.0)) {
+    return "arc_step_deg must be in [0.05, 10], got " + std::to_string(arc_step_deg);
+  }
   if (!(std::abs(pitch_down_rad) < kPi / 2)) return "pitch_down_rad must be in (-pi/2, pi/2)";
   if (!(max_bank_rad >= 0.0 && max_bank_rad < kPi / 2)) return "max_bank_rad must be in [0, pi/2)";
   if (!(bank_per_accel >= 0.0) || !std::isfinite(bank_per_accel)) return "bank_per_accel must be >= 0";
@@ -147,7 +151,8 @@ StampedTrajectory followPath(const std::vector<Eigen::Vector3d>& waypoints, bool
   if (waypoints.size() < 2) throw std::invalid_argument("followPath: need at least 2 waypoints");
   if (laps < 1) throw std::invalid_argument("followPath: laps must be >= 1");
   if (!closed && laps != 1) throw std::invalid_argument("followPath: laps > 1 needs a closed path");
-  const std::vector<Eigen::Vector3d> lap = roundedPolyline(waypoints, closed, motion.turn_radius_m);
+  const std::vector<Eigen::Vector3d> lap =
+      roundedPolyline(waypoints, closed, motion.turn_radius_m, motion.arc_step_deg);
   std::vector<Eigen::Vector3d> path = lap;
   for (int k = 1; k < laps; ++k) path.insert(path.end(), lap.begin() + 1, lap.end());
   std::vector<double> arc(path.size(), 0.0);

@@ -18,6 +18,9 @@ struct MotionProfile {
   double accel_time_s = 1.5;   ///< smooth ramp from rest to cruise speed and back
   double turn_radius_m = 1.0;  ///< corners of the waypoint polyline become arcs of this radius
                                ///< (smaller where the segments are short)
+  double arc_step_deg = 2.0;   ///< an arc is a polyline of this many degrees a segment, and
+                               ///< the camera looks along the segment it is on: the heading
+                               ///< turns in steps of this size
   double pitch_down_rad = 0.1; ///< camera tilt below the direction of travel
   double max_bank_rad = 0.15;  ///< roll into turns (a multirotor banks; 0 for a car)
   double bank_per_accel = 0.08;  ///< roll (rad) per m/s^2 of lateral acceleration

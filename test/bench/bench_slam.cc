@@ -8,8 +8,11 @@
 //
 //   cblox-bench-slam [--scene room|hall|town | --source SPEC] [--trajectory loop] [--laps 2]
 //                    [--frames N] [--rate HZ] [--one-core] [--vocabulary FILE]
-//                    [--config TRACKER_YAML] [--out DIR]
+//                    [--config TRACKER_YAML] [--capture-config CAPTURE_YAML] [--out DIR]
 //
+// --capture-config takes a capture.yaml's source settings (the simulator's rig, noise and
+// rate, e.g. config/examples/sim_kitti_rig.yaml) instead of the defaults; its source: is
+// not used (--scene / --source say what plays).
 // --source plays a recorded stereo source with ground truth on every frame instead of a
 // scene (kitti:DIR, euroc:DIR); its folder's name takes the scene's place in the outputs.
 //
@@ -47,7 +50,9 @@
 #include "core/eval/trajectory_plot.h"
 #include "core/io/tum_trajectory.h"
 #include "core/tracking/slam_system.h"
+#include "daemon/capture/capture_config.h"
 #include "daemon/common/cli.h"
+#include "daemon/common/yaml_config.h"
 #include "daemon/tracker/tracker_config.h"
 #include "daemon/tracker/tracker_node.h"
 #include "drivers/open_frame_source.h"
@@ -98,7 +103,7 @@ Ate ate(const StampedTrajectory& truth, const StampedTrajectory& estimate) {
 
 int run(int argc, char** argv) {
   std::string scene = "room", trajectory = "loop", vocabulary_path, out_dir, config_path,
-              source_spec;
+              source_spec, capture_config_path;
   int laps = 2;
   size_t max_frames = 0;
   double rate = -1.0;
@@ -124,6 +129,10 @@ int run(int argc, char** argv) {
   app.add_option("--config", config_path,
                  "a tracker.yaml: its SLAM settings replace the defaults (camera settings unused)")
       ->type_name("FILE");
+  app.add_option("--capture-config", capture_config_path,
+                 "a capture.yaml: its source settings (simulator rig, noise, rate) replace the "
+                 "defaults")
+      ->type_name("FILE");
   app.add_option("--out", out_dir,
                  "writes DIR/slam_<scene>.json, the trajectory picture, per-frame rows "
                  "(_frames.csv) and the final keyframes with the truth at their times "
@@ -137,6 +146,14 @@ int run(int argc, char** argv) {
     return 2;
   }
   SourceConfig options;
+  if (!capture_config_path.empty()) {
+    try {
+      options = loadCaptureConfig(loadYamlFile(capture_config_path)).source_config;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: %s\n", capture_config_path.c_str(), e.what());
+      return 2;
+    }
+  }
   options.trajectory = trajectory;
   options.laps = laps;
   options.max_frames = max_frames;

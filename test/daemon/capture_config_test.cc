@@ -64,6 +64,14 @@ TEST(CaptureConfigTest, ExampleConfigsLoad) {
   ASSERT_TRUE(sim.stereo_depth.has_value());
   EXPECT_EQ(sim.stereo_depth->matcher, StereoMatcherType::kSgbm);
   EXPECT_EQ(sim.stereo_depth->min_depth_m, 0.4);
+  const CaptureConfig car = load("sim_kitti_rig.yaml");
+  EXPECT_EQ(car.source, "sim:town");
+  EXPECT_EQ(car.source_config.sim.rate_hz, 10.0);
+  EXPECT_EQ(car.source_config.sim.renderer.rig.stereo.width, 1241);
+  EXPECT_EQ(car.source_config.sim.renderer.rig.stereo.height, 376);
+  EXPECT_EQ(car.source_config.sim.renderer.rig.stereo.fx, 718.856);
+  EXPECT_EQ(car.source_config.sim.renderer.rig.baseline_m, 0.5372);
+  EXPECT_GT(car.source_config.sim.noise.image_noise_sigma, 0.0);  // the realistic preset
   const CaptureConfig kitti = load("kitti_stereo_depth.yaml");
   EXPECT_EQ(kitti.source, "kitti:../shared/data/kitti-odometry-51");
   ASSERT_TRUE(kitti.stereo_depth.has_value());

@@ -136,5 +136,57 @@ TEST(BuiltinScenesTest, TownTwoLoopsRouteClosesTwoLoopsPerLap) {
   }
 }
 
+// The town's street turn: KITTI's sharp turns at car speed (90 degrees within 40-50 m at
+// 10-13 m/s, up to 3 degrees a frame at 10 Hz), clear of the houses. Only the town has it.
+TEST(BuiltinScenesTest, TownStreetTurnIsAKittiLikeCorner) {
+  const BuiltinScene town = makeTown();
+  const StampedTrajectory drive = makeSceneTrajectory(town, TrajectoryKind::kStreetTurn, 10.0);
+  ASSERT_GT(drive.size(), 50u);
+  double length = 0.0, max_speed = 0.0, max_turn_deg = 0.0, turn_deg = 0.0;
+  double turn_start = -1.0, turn_end = -1.0;  // path length where the heading turns
+  const auto heading = [](const StampedPose& p) {
+    const Eigen::Vector3d f = p.T_G_C.rotationMatrix().col(2);
+    return std::atan2(f.y(), f.x()) * 180.0 / M_PI;
+  };
+  for (size_t i = 1; i < drive.size(); ++i) {
+    const double step = (drive[i].T_G_C.translation() - drive[i - 1].T_G_C.translation()).norm();
+    length += step;
+    max_speed = std::max(max_speed, step * 10.0);
+    const double turn = std::abs(heading(drive[i]) - heading(drive[i - 1]));
+    max_turn_deg = std::max(max_turn_deg, turn);
+    turn_deg += turn;
+    if (turn > 0.1) {
+      if (turn_start < 0.0) turn_start = length - step;
+      turn_end = length;
+    }
+  }
+  // 130 m between the waypoints; the 22 m arc cuts 2 * 22 - 22 pi / 2 = 9.4 m.
+  EXPECT_NEAR(length, 130.0 - (44.0 - 11.0 * M_PI), 0.5);
+  EXPECT_NEAR(max_speed, 11.0, 0.05);
+  EXPECT_NEAR(turn_deg, 90.0, 0.5);
+  EXPECT_NEAR(max_turn_deg, 11.0 / 22.0 * 0.1 * 180.0 / M_PI, 0.26);  // 2.9, 0.25-degree steps
+  EXPECT_LE(max_turn_deg, 3.0 + 0.26);
+  EXPECT_NEAR(turn_end - turn_start, 11.0 * M_PI, 2.5);  // 35 m of corner, frames 1.1 m apart
+  // Drives at car height, level, on the road.
+  EXPECT_NEAR(drive.front().T_G_C.translation().z(), 1.6, 1e-9);
+  EXPECT_NEAR(drive.back().T_G_C.translation().head<2>().x(), 70.0, 1e-6);
+
+  std::string error;
+  const auto raycaster = TriangleMeshRaycaster::create(town.mesh, &error);
+  ASSERT_NE(raycaster, nullptr) << error;
+  double closest = 1e9;
+  for (const StampedPose& pose : drive) {
+    closest = std::min(closest, raycaster->closestPoint(pose.T_G_C.translation()).distance);
+  }
+  EXPECT_GT(closest, 1.5);
+
+  EXPECT_EQ(parseTrajectoryKind("street-turn"), TrajectoryKind::kStreetTurn);
+  for (const char* name : {"room", "hall", "yard"}) {
+    EXPECT_THROW(makeSceneTrajectory(makeBuiltinScene(name), TrajectoryKind::kStreetTurn, 10.0),
+                 std::invalid_argument)
+        << name;
+  }
+}
+
 }  // namespace
 }  // namespace cblox

@@ -46,6 +46,25 @@ TEST(BuiltinScenesTest, ScenesAreDeterministic) {
   }
 }
 
+/// The smallest distance from a pose of `trajectory` to `raycaster`'s mesh, metres.
+double closestApproach(const TriangleMeshRaycaster& raycaster,
+                       const StampedTrajectory& trajectory) {
+  double closest = 1e9;
+  for (const StampedPose& pose : trajectory) {
+    closest = std::min(closest, raycaster.closestPoint(pose.T_G_C.translation()).distance);
+  }
+  return closest;
+}
+
+/// `kind` is parsed from `text`, and the scenes other than the town have no such route.
+void expectTownOnly(const char* text, TrajectoryKind kind) {
+  EXPECT_EQ(parseTrajectoryKind(text), kind);
+  for (const char* name : {"room", "hall", "yard"}) {
+    EXPECT_THROW(makeSceneTrajectory(makeBuiltinScene(name), kind, 10.0), std::invalid_argument)
+        << name;
+  }
+}
+
 TEST(BuiltinScenesTest, EveryTrajectoryKeepsClearOfTheScene) {
   for (const std::string& name : builtinSceneNames()) {
     const BuiltinScene scene = makeBuiltinScene(name);
@@ -57,11 +76,8 @@ TEST(BuiltinScenesTest, EveryTrajectoryKeepsClearOfTheScene) {
                                 TrajectoryKind::kLawnMower, TrajectoryKind::kFigureEight}) {
       const StampedTrajectory trajectory = makeSceneTrajectory(scene, kind, 10.0);
       ASSERT_GT(trajectory.size(), 20u) << name;
-      double closest = 1e9;
-      for (const StampedPose& pose : trajectory) {
-        closest = std::min(closest, raycaster->closestPoint(pose.T_G_C.translation()).distance);
-      }
-      EXPECT_GT(closest, clearance) << name << " kind " << static_cast<int>(kind);
+      EXPECT_GT(closestApproach(*raycaster, trajectory), clearance)
+          << name << " kind " << static_cast<int>(kind);
     }
   }
 }
@@ -122,18 +138,8 @@ TEST(BuiltinScenesTest, TownTwoLoopsRouteClosesTwoLoopsPerLap) {
   std::string error;
   const auto raycaster = TriangleMeshRaycaster::create(town.mesh, &error);
   ASSERT_NE(raycaster, nullptr) << error;
-  double closest = 1e9;
-  for (const StampedPose& pose : lap) {
-    closest = std::min(closest, raycaster->closestPoint(pose.T_G_C.translation()).distance);
-  }
-  EXPECT_GT(closest, 0.8);
-
-  EXPECT_EQ(parseTrajectoryKind("two-loops"), TrajectoryKind::kTwoLoops);
-  for (const char* name : {"room", "hall", "yard"}) {
-    EXPECT_THROW(makeSceneTrajectory(makeBuiltinScene(name), TrajectoryKind::kTwoLoops, 10.0),
-                 std::invalid_argument)
-        << name;
-  }
+  EXPECT_GT(closestApproach(*raycaster, lap), 0.8);
+  expectTownOnly("two-loops", TrajectoryKind::kTwoLoops);
 }
 
 // The town's street turn: KITTI's sharp turns at car speed (90 degrees within 40-50 m at
@@ -174,18 +180,8 @@ TEST(BuiltinScenesTest, TownStreetTurnIsAKittiLikeCorner) {
   std::string error;
   const auto raycaster = TriangleMeshRaycaster::create(town.mesh, &error);
   ASSERT_NE(raycaster, nullptr) << error;
-  double closest = 1e9;
-  for (const StampedPose& pose : drive) {
-    closest = std::min(closest, raycaster->closestPoint(pose.T_G_C.translation()).distance);
-  }
-  EXPECT_GT(closest, 1.5);
-
-  EXPECT_EQ(parseTrajectoryKind("street-turn"), TrajectoryKind::kStreetTurn);
-  for (const char* name : {"room", "hall", "yard"}) {
-    EXPECT_THROW(makeSceneTrajectory(makeBuiltinScene(name), TrajectoryKind::kStreetTurn, 10.0),
-                 std::invalid_argument)
-        << name;
-  }
+  EXPECT_GT(closestApproach(*raycaster, drive), 1.5);
+  expectTownOnly("street-turn", TrajectoryKind::kStreetTurn);
 }
 
 }  // namespace

@@ -377,6 +377,7 @@ BuiltinScene makeTown() {
   scene.street_turn_waypoints = {Vector3d(0, 0, 1.6), Vector3d(70, 0, 1.6), Vector3d(70, 60, 1.6)};
   scene.street_turn_speed_mps = 11.0;
   scene.street_turn_radius_m = 22.0;
+  scene.street_turn_ease_m = 10.0;  // a driver eases into and out of the corner over ~1 s
   scene.orbit_centre = Vector3d(105, 105, 12.0);
   scene.orbit_radius = 35.0;
   scene.orbit_look_at = Vector3d(105, 105, 0.0);
@@ -444,6 +445,7 @@ StampedTrajectory makeSceneTrajectory(const BuiltinScene& scene, TrajectoryKind 
       motion.speed_mps = scene.street_turn_speed_mps;
       motion.turn_radius_m = scene.street_turn_radius_m;
       motion.arc_step_deg = 0.25;  // a car's heading turns smoothly, frame to frame
+      motion.ease_m = scene.street_turn_ease_m;
       return followPath(scene.street_turn_waypoints, false, 1, motion);
   }
   throw std::invalid_argument("makeSceneTrajectory: unknown kind");

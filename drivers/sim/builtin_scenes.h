@@ -31,6 +31,8 @@ struct BuiltinScene {
   std::vector<Eigen::Vector3d> street_turn_waypoints;
   double street_turn_speed_mps = 0.0;
   double street_turn_radius_m = 0.0;
+  /// The yaw rate ramps in and out of the corner over this much path (MotionProfile::ease_m).
+  double street_turn_ease_m = 0.0;
   /// Orbit: centre of the circle (its z is the flying height) and the point looked at.
   Eigen::Vector3d orbit_centre = Eigen::Vector3d::Zero();
   double orbit_radius = 1.0;

@@ -111,6 +111,9 @@ std::string MotionProfile::validate() const {
     return "accel_time_s must be >= 0, got " + std::to_string(accel_time_s);
   }
   if (!positive(turn_radius_m)) return "turn_radius_m must be > 0, got " + std::to_string(turn_radius_m);
+  if (!(ease_m >= 0.0 && ease_m <= 1000.0)) {
+    return "ease_m must be in [0, 1000], got " + std::to_string(ease_m);
+  }
   if (!(arc_step_deg >= 0.05 && arc_step_deg <= 10.0)) {
     return "arc_step_deg must be in [0.05, 10], got " + std::to_string(arc_step_deg);
   }
@@ -177,6 +180,29 @@ StampedTrajectory followPath(const std::vector<Eigen::Vector3d>& waypoints, bool
     }
     return sum.normalized();
   };
+  // With ease_m: the path averaged over a window of ease_m of arc length centred on s
+  // (narrower within ease_m / 2 of the path's ends, which it keeps), whose direction is the
+  // chord across the window: the yaw rate ramps over ease_m.
+  auto window = [&](double s) {
+    return std::clamp(std::min({0.5 * motion.ease_m, s, arc.back() - s}), 0.0, 0.5 * motion.ease_m);
+  };
+  auto eased_position = [&](double s) {
+    s = std::clamp(s, 0.0, arc.back());
+    const double lo = s - window(s), hi = s + window(s);
+    constexpr int kSamples = 33;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int k = 0; k < kSamples; ++k) {
+      sum += position_at(lo + (hi - lo) * (k + 0.5) / kSamples, nullptr);
+    }
+    return Eigen::Vector3d(sum / kSamples);
+  };
+  auto eased_heading = [&](double s) {
+    s = std::clamp(s, 0.0, arc.back());
+    const double lo = s - window(s), hi = s + window(s);
+    const Eigen::Vector3d chord = position_at(hi, nullptr) - position_at(lo, nullptr);
+    return chord.norm() > 1e-9 ? Eigen::Vector3d(chord.normalized()) : heading_at(s);
+  };
+  const bool eased = motion.ease_m > 0.0;
 
   const int count = static_cast<int>(std::floor(profile.duration() * motion.rate_hz)) + 1;
   StampedTrajectory trajectory;
@@ -184,15 +210,16 @@ StampedTrajectory followPath(const std::vector<Eigen::Vector3d>& waypoints, bool
   for (int k = 0; k < count; ++k) {
     const double t = k / motion.rate_hz;
     const double s = profile.distance(t);
-    const Eigen::Vector3d p = position_at(s, nullptr);
+    const Eigen::Vector3d p = eased ? eased_position(s) : position_at(s, nullptr);
     Transformationd pose;
     if (look_at.has_value()) {
       pose = cameraLookingAlong(p, *look_at - p);
     } else {
-      const Eigen::Vector3d f = heading_at(s);
+      const Eigen::Vector3d f = eased ? eased_heading(s) : heading_at(s);
       // Lateral acceleration = speed * yaw rate (from the heading change over 0.1 m of path).
       const double ds = 0.05;
-      const Eigen::Vector3d f0 = heading_at(s - ds), f1 = heading_at(s + ds);
+      const Eigen::Vector3d f0 = eased ? eased_heading(s - ds) : heading_at(s - ds);
+      const Eigen::Vector3d f1 = eased ? eased_heading(s + ds) : heading_at(s + ds);
       const double yaw_rate_per_m =
           std::atan2(f0.x() * f1.y() - f0.y() * f1.x(), f0.head<2>().dot(f1.head<2>())) / (2 * ds);
       const double speed = (profile.distance(t + 0.01) - profile.distance(t - 0.01)) / 0.02;

@@ -21,6 +21,9 @@ struct MotionProfile {
   double arc_step_deg = 2.0;   ///< an arc is a polyline of this many degrees a segment, and
                                ///< the camera looks along the segment it is on: the heading
                                ///< turns in steps of this size
+  double ease_m = 0.0;         ///< > 0: the path is averaged over this much arc length, so
+                               ///< the yaw rate ramps in and out of a turn over it (a car's
+                               ///< easement) instead of jumping; 0 = off
   double pitch_down_rad = 0.1; ///< camera tilt below the direction of travel
   double max_bank_rad = 0.15;  ///< roll into turns (a multirotor banks; 0 for a car)
   double bank_per_accel = 0.08;  ///< roll (rad) per m/s^2 of lateral acceleration

@@ -45,8 +45,7 @@ std::vector<Eigen::Vector3d> roundedPolyline(const std::vector<Eigen::Vector3d>&
     exit[i] = w[i] + b * tangent;
     const Eigen::Vector3d towards_centre = (b - b.dot(a) * a).normalized();
     const Eigen::Vector3d centre = entry[i] + towards_centre * r;
-    const int steps =
-        std::max(2, static_cast<int>(std::ceil(turn / (arc_step_deg * kPi / 180.0))));
+    const int steps = std::max(2, static_cast<int>(std::ceil(turn / (arc_step_deg * kPi / 180.0))));
     const Eigen::Vector3d axis = a.cross(towards_centre);  // rotation axis of the turn
     for (int k = 1; k < steps; ++k) {
       const Eigen::AngleAxisd rotation(turn * k / steps, axis);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
@@ -26,7 +27,7 @@ std::optional<Eigen::Vector3d> parseUpAxis(const std::string& text) {
 
 Mesh turnedUp(const Mesh& mesh, const Eigen::Vector3d& up) {
   Eigen::Matrix3d R;
-  const double pi = 3.14159265358979323846;
+  constexpr double pi = std::numbers::pi;
   if (up == Eigen::Vector3d::UnitZ()) {
     R.setIdentity();
   } else if (up == -Eigen::Vector3d::UnitZ()) {

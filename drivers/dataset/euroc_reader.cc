@@ -12,7 +12,6 @@
 #include <yaml-cpp/yaml.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/io/text_fields.h"
@@ -497,13 +496,8 @@ bool EurocReader::read(size_t i, EurocStereoFrame* frame, std::string* error) co
   out.timestamp_ns = files.timestamp_ns;
   out.T_G_L = files.T_G_L;
   const auto load = [&](const std::string& path, bool right, GrayImage* image) {
-    if (!isFile(path)) return setError(error, path + ": image is missing");
-    const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
-    if (raw.empty()) return setError(error, path + ": cannot read image");
-    if (raw.type() != CV_8UC1) {
-      return setError(error, path + ": image must be 8-bit single-channel (grey), got " +
-                                 describeImageType(raw));
-    }
+    cv::Mat raw;
+    if (!readGrayImage(path, &raw, error)) return false;
     if (!checkImageSize(path, raw, width, height, "sensor.yaml's resolution", error)) {
       return false;
     }

@@ -62,6 +62,17 @@ ColorImage colorFromBgr(const cv::Mat& bgr) {
   return color;
 }
 
+bool readGrayImage(const std::string& path, cv::Mat* image, std::string* error) {
+  if (!isFile(path)) return setError(error, path + ": image is missing");
+  *image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (image->empty()) return setError(error, path + ": cannot read image");
+  if (image->type() != CV_8UC1) {
+    return setError(error, path + ": image must be 8-bit single-channel (grey), got " +
+                               describeImageType(*image));
+  }
+  return true;
+}
+
 bool readColorImage(const std::string& path, int width, int height, const std::string& expected,
                     ColorImage* color, std::string* error) {
   if (!isFile(path)) return setError(error, path + ": colour image is missing");

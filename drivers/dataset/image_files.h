@@ -41,6 +41,12 @@ DepthImage depthFromUnits(const cv::Mat& units, double metres_per_unit, uint16_t
 /// Thread-safe (no shared state).
 ColorImage colorFromBgr(const cv::Mat& bgr);
 
+/// Reads an 8-bit single-channel (grey) image, as stored, into *image (non-null). Returns
+/// false and writes "<path>: image is missing", "<path>: cannot read image" or "<path>: image
+/// must be 8-bit single-channel (grey), got <type>" to *error (if non-null) otherwise.
+/// Thread-safe (no shared state).
+bool readGrayImage(const std::string& path, cv::Mat* image, std::string* error);
+
 /// Reads an 8-bit colour image of size width x height into *color (non-null) as RGB. Returns
 /// false, leaving *color untouched, and writes a message starting with the path to *error (if
 /// non-null) when the file is missing or unreadable as colour, or its size differs (the

@@ -12,7 +12,6 @@
 #include <utility>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "core/io/text_fields.h"
 #include "core/io/text_matrix.h"
@@ -248,18 +247,6 @@ bool readPoses(const std::string& path, size_t count, std::vector<Transformation
   });
 }
 
-// An 8-bit grey image, or a message naming the file.
-bool loadGray(const std::string& path, cv::Mat* image, std::string* error) {
-  if (!isFile(path)) return setError(error, path + ": image is missing");
-  *image = cv::imread(path, cv::IMREAD_UNCHANGED);
-  if (image->empty()) return setError(error, path + ": cannot read image");
-  if (image->type() != CV_8UC1) {
-    return setError(error, path + ": image must be 8-bit single-channel (grey), got " +
-                               describeImageType(*image));
-  }
-  return true;
-}
-
 }  // namespace
 
 std::optional<KittiOdometryReader> KittiOdometryReader::open(const std::string& folder,
@@ -304,7 +291,7 @@ std::optional<KittiOdometryReader> KittiOdometryReader::open(const std::string& 
   size_t count = 0;
   if (!pairImages(folder, &count, error)) return std::nullopt;
   cv::Mat first;
-  if (!loadGray(reader.leftImagePath(0), &first, error)) return std::nullopt;
+  if (!readGrayImage(reader.leftImagePath(0), &first, error)) return std::nullopt;
   PinholeIntrinsics& K = reader.calibration_.intrinsics;
   K.width = first.cols;
   K.height = first.rows;
@@ -359,7 +346,7 @@ bool KittiOdometryReader::read(size_t i, KittiStereoFrame* frame, std::string* e
   if (!poses_.empty()) out.T_G_L = poses_[i];
   const auto load = [&](const std::string& path, GrayImage* image) {
     cv::Mat raw;
-    if (!loadGray(path, &raw, error)) return false;
+    if (!readGrayImage(path, &raw, error)) return false;
     if (!checkImageSize(path, raw, width, height, "the first left image's", error)) return false;
     *image = GrayImage(width, height);
     cv::Mat view(height, width, CV_8UC1, image->data.data());

@@ -182,9 +182,8 @@ StampedTrajectory followPath(const std::vector<Eigen::Vector3d>& waypoints, bool
   // With ease_m: the path averaged over a window of ease_m of arc length centred on s
   // (narrower within ease_m / 2 of the path's ends, which it keeps), whose direction is the
   // chord across the window: the yaw rate ramps over ease_m.
-  auto window = [&](double s) {
-    return std::clamp(std::min({0.5 * motion.ease_m, s, arc.back() - s}), 0.0, 0.5 * motion.ease_m);
-  };
+  // Half the window at s (clamped to the path first, so never negative).
+  auto window = [&](double s) { return std::min({0.5 * motion.ease_m, s, arc.back() - s}); };
   auto eased_position = [&](double s) {
     s = std::clamp(s, 0.0, arc.back());
     const double lo = s - window(s), hi = s + window(s);

@@ -25,7 +25,7 @@ std::optional<Eigen::Vector3d> parseUpAxis(const std::string& text) {
   return negative ? Eigen::Vector3d(-up) : up;
 }
 
-Mesh turnedUp(const Mesh& mesh, const Eigen::Vector3d& up) {
+Eigen::Matrix3d upTurn(const Eigen::Vector3d& up) {
   Eigen::Matrix3d R;
   constexpr double pi = std::numbers::pi;
   if (up == Eigen::Vector3d::UnitZ()) {
@@ -41,11 +41,14 @@ Mesh turnedUp(const Mesh& mesh, const Eigen::Vector3d& up) {
     R = Eigen::AngleAxisd(up.x() > 0 ? -pi / 2 : pi / 2, Eigen::Vector3d::UnitY())
             .toRotationMatrix();
   } else {
-    throw std::invalid_argument("turnedUp: up must be one of the six axes");
+    throw std::invalid_argument("up must be one of the six axes");
   }
   // Exact signs (no 1e-17 from the angles' cosines).
-  R = R.array().round().matrix();
-  const Eigen::Matrix3f Rf = R.cast<float>();
+  return R.array().round().matrix();
+}
+
+Mesh turnedUp(const Mesh& mesh, const Eigen::Vector3d& up) {
+  const Eigen::Matrix3f Rf = upTurn(up).cast<float>();
   Mesh turned = mesh;
   for (Eigen::Vector3f& v : turned.vertices) v = Rf * v;
   for (Eigen::Vector3f& n : turned.normals) n = Rf * n;

@@ -17,10 +17,14 @@ namespace cblox {
 /// else. Thread-safe (pure).
 std::optional<Eigen::Vector3d> parseUpAxis(const std::string& text);
 
-/// `mesh` turned so that the unit axis `up` becomes +z: a rotation (about x for +-y, about y
-/// for +-x, a half turn about x for -z, none for +z), applied to vertices and normals;
-/// colours and triangles are kept. Throws std::invalid_argument when `up` is not one of the
-/// six axes. Thread-safe (pure).
+/// The rotation that turns the unit axis `up` into +z: about x for +-y, about y for +-x, a
+/// half turn about x for -z, none for +z; its entries are exactly 0, 1 or -1. Throws
+/// std::invalid_argument when `up` is not one of the six axes. Thread-safe (pure).
+Eigen::Matrix3d upTurn(const Eigen::Vector3d& up);
+
+/// `mesh` turned so that the unit axis `up` becomes +z (upTurn(up)), applied to vertices and
+/// normals; colours and triangles are kept. Throws std::invalid_argument when `up` is not one
+/// of the six axes. Thread-safe (pure).
 Mesh turnedUp(const Mesh& mesh, const Eigen::Vector3d& up);
 
 /// Per-vertex height along the unit vector `up` above the lowest vertex: up . v_i -

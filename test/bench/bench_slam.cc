@@ -9,6 +9,7 @@
 //   cblox-bench-slam [--scene room|hall|town | --source SPEC] [--trajectory loop] [--laps 2]
 //                    [--frames N] [--rate HZ] [--one-core] [--vocabulary FILE]
 //                    [--config TRACKER_YAML] [--capture-config CAPTURE_YAML] [--out DIR]
+//                    [--up AXIS]
 //
 // --capture-config takes a capture.yaml's source settings (the simulator's rig, noise and
 // rate, e.g. config/examples/sim_kitti_rig.yaml) instead of the defaults; its source: is
@@ -21,7 +22,9 @@
 // extracts the left and right images on the tracking thread (the "one core" figure).
 // --config takes the SLAM settings (frames, tracker, local_mapping, loop_closing, ...) of a
 // tracker.yaml instead of the defaults, so a setting can be measured before it is shipped.
-// --out writes DIR/slam_<scene>.json and DIR/slam_<scene>_trajectory.png.
+// --out writes DIR/slam_<scene>.json and DIR/slam_<scene>_trajectory.png, a top view: the
+// plane orthogonal to --up (default z for the simulator's z-up world, -y for a --source,
+// whose world is its first camera's frame, y down).
 // A loop is "false" when the constraint it added is wrong: the final estimated pose of the
 // query keyframe relative to the candidate differs from the true relative pose by more than
 // 0.5 m or 5 degrees. (Two keyframes metres apart that see the same street are a true loop;
@@ -47,6 +50,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/eval/trajectory_metrics.h"
+#include "core/eval/mesh_height.h"
 #include "core/eval/trajectory_plot.h"
 #include "core/io/tum_trajectory.h"
 #include "core/tracking/slam_system.h"
@@ -103,7 +107,7 @@ Ate ate(const StampedTrajectory& truth, const StampedTrajectory& estimate) {
 
 int run(int argc, char** argv) {
   std::string scene = "room", trajectory = "loop", vocabulary_path, out_dir, config_path,
-              source_spec, capture_config_path;
+              source_spec, capture_config_path, up_text;
   int laps = 2;
   size_t max_frames = 0;
   double rate = -1.0;
@@ -138,7 +142,17 @@ int run(int argc, char** argv) {
                  "(_frames.csv) and the final keyframes with the truth at their times "
                  "(_keyframes.tum, _keyframes_truth.tum)")
       ->type_name("DIR");
+  app.add_option("--up", up_text,
+                 "the world's up axis for the trajectory picture: x, y, z, -x, -y or -z (default "
+                 "z for --scene, -y for --source)")
+      ->type_name("AXIS");
   if (const std::optional<int> code = parseCommandLine(app, argc, argv)) return *code;
+  if (up_text.empty()) up_text = source_spec.empty() ? "z" : "-y";
+  const std::optional<Eigen::Vector3d> up = parseUpAxis(up_text);
+  if (!up) {
+    std::fprintf(stderr, "--up: expected x, y, z, -x, -y or -z, got \"%s\"\n", up_text.c_str());
+    return 2;
+  }
   std::string error;
   const auto vocabulary = BinaryVocabulary::load(vocabulary_path, &error);
   if (!vocabulary) {
@@ -199,13 +213,14 @@ int run(int argc, char** argv) {
   }
   std::fprintf(stderr, "\rrendered %zu frames\n", frames.size());
 
-  const RectifiedStereoCalibration& calibration = *info.stereo;
-  const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m);
   const std::optional<TrackerNodeConfig> node = loadTrackerNodeSettings(config_path, &error);
   if (!node) {
     std::fprintf(stderr, "%s\n", error.c_str());
     return 2;
   }
+  const RectifiedStereoCalibration& calibration = *info.stereo;
+  const TrackingCamera camera = makeTrackingCamera(calibration.intrinsics, calibration.baseline_m,
+                                                   node->close_depth_baselines);
   SlamSystemConfig config = node->slam;
   if (one_core) config.frames.parallel_stereo_extraction = false;
   // The SLAM threads at the niceness cblox-tracker gives them (tracker.yaml's
@@ -481,8 +496,17 @@ int run(int argc, char** argv) {
                   loops.size());
     plot.title = title;
     plot.estimate_label = "keyframes (final)";
-    if (!writeTrajectoryPlotPng(out_dir + "/slam_" + scene + "_trajectory.png", truth,
-                                keyframes_final, plot, &error)) {
+    // The plot is a top view of a z-up world: turn --up into +z.
+    const Eigen::Matrix3d turn = upTurn(*up);
+    const auto turned = [&turn](StampedTrajectory poses) {
+      for (StampedPose& pose : poses) {
+        pose.T_G_C = Transformationd(turn * pose.T_G_C.rotation().toRotationMatrix(),
+                                      turn * pose.T_G_C.translation());
+      }
+      return poses;
+    };
+    if (!writeTrajectoryPlotPng(out_dir + "/slam_" + scene + "_trajectory.png", turned(truth),
+                                turned(keyframes_final), plot, &error)) {
       std::fprintf(stderr, "plot: %s\n", error.c_str());
     }
   }

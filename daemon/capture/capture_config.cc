@@ -32,7 +32,7 @@ void readPose(const YAML::Node& node, const std::string& path, const std::string
 void loadRig(const YAML::Node& node, SimRigConfig* rig) {
   const std::string path = "sim.rig";
   requireKnownKeys(node, path,
-                   {"width", "height", "fx", "fy", "cx", "cy", "baseline_m", "depth_min_m",
+                   {"width", "height", "fx", "fy", "cx", "cy", "baseline_m", "right_cx_error_px", "depth_min_m",
                     "depth_max_m", "depth_width", "depth_height", "depth_fx", "depth_fy",
                     "depth_cx", "depth_cy", "T_L_D_position", "T_L_D_quaternion_wxyz"});
   if (isAbsent(node)) return;
@@ -43,6 +43,7 @@ void loadRig(const YAML::Node& node, SimRigConfig* rig) {
   readOptional(node, path, "cx", &rig->stereo.cx);
   readOptional(node, path, "cy", &rig->stereo.cy);
   readOptional(node, path, "baseline_m", &rig->baseline_m);
+  readOptional(node, path, "right_cx_error_px", &rig->right_cx_error_px);
   readOptional(node, path, "depth_min_m", &rig->depth_min_m);
   readOptional(node, path, "depth_max_m", &rig->depth_max_m);
   readOptional(node, path, "depth_width", &rig->depth.width);

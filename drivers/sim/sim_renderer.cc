@@ -81,7 +81,7 @@ void SimRenderer::render(const Transformationd& T_G_L, SimImages* images) const 
     renderView(T_G_L * rig.T_L_D, rig.depthIntrinsics(), nullptr, &images->color,
                &images->depth);
   }
-  renderView(T_G_L * T_L_R, rig.stereo, &images->right, nullptr, nullptr);
+  renderView(T_G_L * T_L_R, rig.rightIntrinsics(), &images->right, nullptr, nullptr);
 }
 
 void SimRenderer::renderView(const Transformationd& T_G_C, const PinholeIntrinsics& intrinsics,

@@ -9,6 +9,10 @@ std::string SimRigConfig::validate() const {
   if (!(baseline_m > 0.0) || !std::isfinite(baseline_m)) {
     return "baseline_m must be > 0, got " + std::to_string(baseline_m);
   }
+  if (!(std::abs(right_cx_error_px) <= 10.0)) {
+    return "right_cx_error_px must be in [-10, 10] pixels, got " +
+           std::to_string(right_cx_error_px);
+  }
   if (depth.width != 0) {
     if (std::string problem = cblox::validate(depth); !problem.empty()) return "depth: " + problem;
   }
@@ -31,6 +35,12 @@ bool SimRigConfig::depthIsLeftCamera() const {
   return d.fx == stereo.fx && d.fy == stereo.fy && d.cx == stereo.cx && d.cy == stereo.cy &&
          d.width == stereo.width && d.height == stereo.height &&
          T_L_D.isApprox(Transformationd::Identity(), 0.0);
+}
+
+PinholeIntrinsics SimRigConfig::rightIntrinsics() const {
+  PinholeIntrinsics right = stereo;
+  right.cx += right_cx_error_px;
+  return right;
 }
 
 RectifiedStereoCalibration SimRigConfig::stereoCalibration() const {

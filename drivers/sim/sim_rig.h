@@ -19,6 +19,12 @@ struct SimRigConfig {
   PinholeIntrinsics stereo{458.0, 458.0, 375.5, 239.5, 752, 480};
   /// Right camera at (+baseline_m, 0, 0) in L.
   double baseline_m = 0.11;
+  /// Calibration error, pixels in [-10, 10]: the right image is rendered with its principal
+  /// point this far right of the calibration's (cx + right_cx_error_px), which
+  /// stereoCalibration() does not know, as after a rectification whose right camera is off.
+  /// Every disparity is then this much smaller than fx * baseline_m / z: depths are too large,
+  /// by more the farther the point. 0 = exact calibration.
+  double right_cx_error_px = 0.0;
   /// Depth camera intrinsics; width == 0 means "the same as the stereo cameras".
   PinholeIntrinsics depth{0.0, 0.0, 0.0, 0.0, 0, 0};
   /// Depth camera pose in the left camera frame.
@@ -34,6 +40,9 @@ struct SimRigConfig {
   /// True when the depth camera coincides with the left camera (same intrinsics, identity
   /// extrinsics), so one render serves both. Thread-safe.
   bool depthIsLeftCamera() const;
+  /// The intrinsics the right image is rendered with: `stereo` with cx + right_cx_error_px.
+  /// Thread-safe.
+  PinholeIntrinsics rightIntrinsics() const;
   /// The stereo calibration of the rig (T_B_L = identity: the body is the left camera).
   RectifiedStereoCalibration stereoCalibration() const;
 };

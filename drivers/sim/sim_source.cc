@@ -79,7 +79,7 @@ FrameSource::Status SimSource::next(CaptureFrame* frame, std::string* /*error*/)
       const double ts = t + noise.exposure_time_s * ((s + 0.5) / noise.blur_samples - 0.5);
       const Transformationd T = poseAt(ts);
       renderer_.renderView(T, rig.stereo, &left, nullptr, nullptr);
-      renderer_.renderView(T * T_L_R, rig.stereo, &right, nullptr, nullptr);
+      renderer_.renderView(T * T_L_R, rig.rightIntrinsics(), &right, nullptr, nullptr);
       for (size_t i = 0; i < pixels; ++i) sum_left[i] += left.data[i];
       for (size_t i = 0; i < pixels; ++i) sum_right[i] += right.data[i];
     }

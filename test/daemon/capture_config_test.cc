@@ -34,6 +34,7 @@ TEST(CaptureConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.renderer.rig.stereo.cx, b.renderer.rig.stereo.cx);
   EXPECT_EQ(a.renderer.rig.stereo.cy, b.renderer.rig.stereo.cy);
   EXPECT_EQ(a.renderer.rig.baseline_m, b.renderer.rig.baseline_m);
+  EXPECT_EQ(a.renderer.rig.right_cx_error_px, b.renderer.rig.right_cx_error_px);
   EXPECT_EQ(a.renderer.rig.depth_min_m, b.renderer.rig.depth_min_m);
   EXPECT_EQ(a.renderer.rig.depth_max_m, b.renderer.rig.depth_max_m);
   EXPECT_FALSE(a.noise.any());
@@ -113,7 +114,8 @@ TEST(CaptureConfigTest, ReadsOverridesAndPresets) {
   const CaptureConfig config = loadCaptureConfig(YAML::Load(
       "source: euroc:/data\nrate: 10\nframes: 5\ndepth_encoding: f32\n"
       "channels: {stereo: S}\npublish: {depth: false}\n"
-      "sim: {rig: {width: 320, T_L_D_position: [0.05, 0, 0]}, noise: {preset: realistic, "
+      "sim: {rig: {width: 320, right_cx_error_px: 1.5, T_L_D_position: [0.05, 0, 0]}, "
+      "noise: {preset: realistic, "
       "image_noise_sigma: 3}}\n"));
   EXPECT_EQ(config.source, "euroc:/data");
   EXPECT_EQ(config.pacing, CapturePacing::kFixed);
@@ -124,6 +126,7 @@ TEST(CaptureConfigTest, ReadsOverridesAndPresets) {
   EXPECT_FALSE(config.publish_depth);
   EXPECT_EQ(config.source_config.sim.renderer.rig.stereo.width, 320);
   EXPECT_EQ(config.source_config.sim.renderer.rig.T_L_D.translation().x(), 0.05);
+  EXPECT_EQ(config.source_config.sim.renderer.rig.right_cx_error_px, 1.5);
   EXPECT_EQ(config.source_config.sim.noise.image_noise_sigma, 3.0);
   EXPECT_EQ(config.source_config.sim.noise.depth_noise_per_m2, 0.0012);  // from the preset
 }
@@ -140,6 +143,7 @@ TEST(CaptureConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"depth_encoding: u8\n", "depth_encoding"},
       {"sim: {noise: {preset: noisy}}\n", "noise preset"},
       {"sim: {rig: {baseline_m: -1}}\n", "baseline_m"},
+      {"sim: {rig: {right_cx_error_px: 11}}\n", "right_cx_error_px"},
       {"sim: {noise: {depth_hole_probability: 2}}\n", "depth_hole_probability"},
       {"channels: {sterio: X}\n", "sterio"},
       {"laps: 0\n", "laps"},

@@ -158,6 +158,30 @@ TEST(SimRendererTest, StereoPairHasDisparityFocalTimesBaselineOverDepth) {
   EXPECT_GE(same, total * 99 / 100);
 }
 
+TEST(SimRendererTest, RightPrincipalPointErrorLowersEveryDisparityByIt) {
+  // A calibration error of 3 px: the right image is rendered with cx + 3, the published
+  // calibration keeps cx, and the disparity of the wall becomes 16 - 3 = 13 px everywhere.
+  SimRendererConfig config = smallRig();
+  config.rig.right_cx_error_px = 3.0;
+  EXPECT_EQ(config.rig.stereoCalibration().intrinsics.cx, 159.5);
+  EXPECT_EQ(config.rig.rightIntrinsics().cx, 162.5);
+  const SimRenderer renderer(build(wallAt(2.5f)), config);
+  SimImages images;
+  renderer.render(Transformationd::Identity(), &images);
+  int same13 = 0, same16 = 0, total = 0;
+  for (int v = 0; v < 240; ++v) {
+    for (int u = 16; u < 320; ++u) {
+      ++total;
+      same13 += std::abs(images.left(u, v) - images.right(u - 13, v)) <= 1;
+      same16 += std::abs(images.left(u, v) - images.right(u - 16, v)) <= 1;
+    }
+  }
+  EXPECT_GE(same13, total * 99 / 100);
+  EXPECT_LT(same16, total / 2);
+  config.rig.right_cx_error_px = -10.5;
+  EXPECT_THROW(SimRenderer(build(wallAt(2.5f)), config), std::invalid_argument);
+}
+
 TEST(SimRendererTest, DepthCameraWithExtrinsicsRendersItsOwnView) {
   SimRendererConfig config = smallRig();
   config.rig.depth = PinholeIntrinsics{200.0, 200.0, 79.5, 59.5, 160, 120};

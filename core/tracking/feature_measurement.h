@@ -23,6 +23,22 @@ inline StereoMeasurement featureMeasurement(const FrameFeatures& f, size_t i,
   return m;
 }
 
+/// featureMeasurement() with a stereo-matched right column corrected by `correction_px`
+/// (the disparity correction in use) instead of the one `f` was built with: the matched
+/// column right_u + f.disparity_correction_px, minus correction_px. A column that would leave
+/// no positive disparity makes the measurement mono; RGB-D columns are unchanged.
+/// Thread-safe (pure).
+inline StereoMeasurement featureMeasurement(const FrameFeatures& f, size_t i,
+                                            const ScalePyramid& pyramid, float correction_px) {
+  StereoMeasurement m = featureMeasurement(f, i, pyramid);
+  if (!f.stereo_matched || m.u_right < 0.0 || correction_px == f.disparity_correction_px) {
+    return m;
+  }
+  const double corrected = m.u_right + f.disparity_correction_px - correction_px;
+  m.u_right = corrected >= 0.0 && corrected < m.u ? corrected : -1.0;
+  return m;
+}
+
 /// Feature i of `f` observing the world point p_G: one term of a motion-only pose
 /// optimisation. Thread-safe (pure).
 inline PoseObservation poseObservation(const FrameFeatures& f, size_t i,

@@ -82,7 +82,8 @@ void FrameBuilder::checkSize(int width, int height, const char* what) const {
 }
 
 std::shared_ptr<FrameFeatures> FrameBuilder::fromStereo(const GrayImage& left,
-                                                        const GrayImage& right) {
+                                                        const GrayImage& right,
+                                                        float disparity_correction_px) {
   checkSize(left.width, left.height, "left image");
   checkSize(right.width, right.height, "right image");
   ExtractedFeatures left_features, right_features;
@@ -108,9 +109,27 @@ std::shared_ptr<FrameFeatures> FrameBuilder::fromStereo(const GrayImage& left,
     left_features = left_.extract(left);
     right_features = right_.extract(right);
   }
-  const StereoDepth depth = matchStereo(left_features, right_features, camera_.intrinsics.fx,
-                                        camera_.baseline_m, config_.stereo);
-  return finish(std::move(left_features), depth);
+  StereoDepth depth = matchStereo(left_features, right_features, camera_.intrinsics.fx,
+                                  camera_.baseline_m, config_.stereo);
+  if (disparity_correction_px != 0.0f) {
+    const float bf = static_cast<float>(camera_.bf());
+    for (size_t i = 0; i < depth.right_u.size(); ++i) {
+      if (depth.right_u[i] < 0.0f) continue;
+      const float right_u = depth.right_u[i] - disparity_correction_px;
+      const float disparity = left_features.keypoints[i].u - right_u;
+      if (right_u >= 0.0f && disparity > 0.0f) {
+        depth.right_u[i] = right_u;
+        depth.depth[i] = bf / disparity;
+      } else {
+        depth.right_u[i] = -1.0f;
+        depth.depth[i] = -1.0f;
+      }
+    }
+  }
+  std::shared_ptr<FrameFeatures> f = finish(std::move(left_features), depth);
+  f->disparity_correction_px = disparity_correction_px;
+  f->stereo_matched = true;
+  return f;
 }
 
 std::shared_ptr<FrameFeatures> FrameBuilder::fromRgbd(const GrayImage& gray,

@@ -43,9 +43,12 @@ class FrameBuilder {
   FrameBuilder(const FrameBuilder&) = delete;
   FrameBuilder& operator=(const FrameBuilder&) = delete;
 
-  /// A rectified stereo pair of the camera's size. Throws std::invalid_argument when an
+  /// A rectified stereo pair of the camera's size. Every matched right column is corrected
+  /// by `disparity_correction_px` (see FrameFeatures::disparity_correction_px); a match whose
+  /// corrected disparity is not > 0 loses its depth. Throws std::invalid_argument when an
   /// image's size differs from the camera's.
-  std::shared_ptr<FrameFeatures> fromStereo(const GrayImage& left, const GrayImage& right);
+  std::shared_ptr<FrameFeatures> fromStereo(const GrayImage& left, const GrayImage& right,
+                                            float disparity_correction_px = 0.0f);
   /// A grey image and a depth image registered to it (metres), both of the camera's size.
   std::shared_ptr<FrameFeatures> fromRgbd(const GrayImage& gray, const DepthImage& depth);
 

@@ -22,6 +22,12 @@ struct FrameFeatures {
   std::vector<OrbDescriptor> descriptors;  ///< one per keypoint
   std::vector<float> right_u;              ///< stereo / virtual right u; < 0 when unknown
   std::vector<float> depth;                ///< metres along z; < 0 when unknown
+  /// Stereo matching only: the disparity correction c (pixels) applied when the frame was
+  /// built: right_u is the matched column minus c, and depth = bf / (u - right_u). The
+  /// matched (raw) column is right_u + c. 0 for RGB-D and uncorrected frames.
+  float disparity_correction_px = 0.0f;
+  /// True when right_u comes from stereo matching (false: from a depth image, RGB-D).
+  bool stereo_matched = false;
   FeatureGrid grid;                        ///< keypoints by image cell
   BowVector bow;                           ///< empty until computed
   FeatureVector feature_vector;            ///< empty until computed

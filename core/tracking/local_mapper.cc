@@ -32,19 +32,33 @@ std::string LocalMapperConfig::validate() const {
     error << "bundle_adjustment: " << e;
   } else if (std::string t = triangulation.validate(); !t.empty()) {
     error << "triangulation: " << t;
+  } else if (std::string d = disparity_correction.validate(); !d.empty()) {
+    error << "disparity_correction: " << d;
   }
   return error.str();
 }
 
+namespace {
+
+const LocalMapperConfig& validConfig(const LocalMapperConfig& config) {
+  if (std::string e = config.validate(); !e.empty()) {
+    throw std::invalid_argument("LocalMapper: " + e);
+  }
+  return config;
+}
+
+}  // namespace
+
 LocalMapper::LocalMapper(SparseMap* map, const TrackingCamera& camera, const ScalePyramid& pyramid,
                          const LocalMapperConfig& config)
-    : map_(map), camera_(camera), pyramid_(pyramid), config_(config) {
+    : map_(map),
+      camera_(camera),
+      pyramid_(pyramid),
+      config_(config),
+      disparity_correction_(validConfig(config).disparity_correction) {
   if (map == nullptr) throw std::invalid_argument("LocalMapper: map is null");
   if (std::string e = camera.validate(); !e.empty()) {
     throw std::invalid_argument("LocalMapper: camera: " + e);
-  }
-  if (std::string e = config.validate(); !e.empty()) {
-    throw std::invalid_argument("LocalMapper: " + e);
   }
 }
 
@@ -215,6 +229,7 @@ void LocalMapper::localBundleAdjustment(Keyframe* keyframe) {
   std::vector<Keyframe*> keyframes;
   std::vector<std::shared_ptr<Landmark>> landmarks;
   std::vector<std::pair<Keyframe*, uint32_t>> observation_of;  // per BA observation
+  const float correction_px = map_->disparityCorrectionPx();
   int change_index = 0;
   size_t window_size = 0;
   {
@@ -284,7 +299,7 @@ void LocalMapper::localBundleAdjustment(Keyframe* keyframe) {
         BaObservation o;
         o.keyframe = it->second;
         o.landmark = static_cast<int>(li);
-        static_cast<StereoMeasurement&>(o) = featureMeasurement(f, index, pyramid_);
+        static_cast<StereoMeasurement&>(o) = featureMeasurement(f, index, pyramid_, correction_px);
         problem.observations.push_back(o);
         observation_of.emplace_back(k, index);
       }
@@ -341,6 +356,51 @@ void LocalMapper::localBundleAdjustment(Keyframe* keyframe) {
     stats_.last_ba_observations = problem.observations.size();
   }
   if (on_poses_ && !changed.empty()) on_poses_(changed);
+  const DisparityCorrectionConfig& correction = config_.disparity_correction;
+  if (correction.enabled && !result.aborted &&
+      local_bas_done_++ % static_cast<uint64_t>(correction.every_keyframes) == 0) {
+    estimateDisparityOffset(problem, result, observation_of);
+  }
+}
+
+void LocalMapper::estimateDisparityOffset(
+    const BundleAdjustmentProblem& problem, const BundleAdjustmentResult& solution,
+    const std::vector<std::pair<Keyframe*, uint32_t>>& observation_of) {
+  const double start = threadCpuSeconds();
+  // The window at the BA's solution, its inliers only, with the raw (matched) right columns;
+  // a right column not from stereo matching (RGB-D's virtual one) leaves it mono.
+  BundleAdjustmentProblem raw;
+  raw.camera = problem.camera;
+  raw.keyframes = problem.keyframes;
+  for (size_t k = 0; k < raw.keyframes.size(); ++k) raw.keyframes[k].T_C_G = solution.T_C_G[k];
+  raw.landmarks = problem.landmarks;
+  for (size_t l = 0; l < raw.landmarks.size(); ++l) raw.landmarks[l].p_G = solution.p_G[l];
+  raw.observations.reserve(problem.observations.size());
+  bool any_stereo = false;
+  for (size_t o = 0; o < problem.observations.size(); ++o) {
+    if (solution.outlier[o]) continue;
+    BaObservation observation = problem.observations[o];
+    const FrameFeatures& f = observation_of[o].first->features();
+    if (observation.u_right >= 0.0) {
+      if (f.stereo_matched) {
+        observation.u_right = f.right_u[observation_of[o].second] + f.disparity_correction_px;
+        any_stereo = true;
+      } else {
+        observation.u_right = -1.0;
+      }
+    }
+    raw.observations.push_back(observation);
+  }
+  if (!any_stereo) return;
+  const DisparityOffsetEstimate estimate =
+      cblox::estimateDisparityOffset(raw, config_.disparity_correction.solver);
+  if (estimate.ok) {
+    disparity_correction_.addEstimate(estimate.offset_px);
+    map_->setDisparityCorrectionPx(disparity_correction_.correctionPx());
+  }
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  ++(estimate.ok ? stats_.disparity_offset_estimates : stats_.disparity_offset_failures);
+  stats_.disparity_offset_seconds += threadCpuSeconds() - start;
 }
 
 void LocalMapper::cullKeyframes(Keyframe* keyframe) {

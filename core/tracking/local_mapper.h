@@ -14,6 +14,7 @@
 
 #include "core/features/scale_pyramid.h"
 #include "core/optimization/bundle_adjustment.h"
+#include "core/tracking/disparity_correction.h"
 #include "core/tracking/keyframe_sink.h"
 #include "core/tracking/keyframe_triangulation.h"
 #include "core/tracking/keyframe_work_queue.h"
@@ -55,6 +56,9 @@ struct LocalMapperConfig {
   /// them only the tracker's close stereo features become landmarks.
   bool create_new_landmarks = true;
   KeyframeTriangulationConfig triangulation;
+  /// The stereo rig's disparity offset, estimated from local BA windows (with the landmarks
+  /// and poses the BA solved) and corrected in new frames: see DisparityCorrection.
+  DisparityCorrectionConfig disparity_correction;
 
   std::string validate() const;
 };
@@ -78,6 +82,10 @@ struct LocalMapperStats {
   size_t last_ba_fixed_keyframes = 0;
   size_t last_ba_landmarks = 0;
   size_t last_ba_observations = 0;
+  /// Disparity offset estimates: solves that gave one / gave none, their CPU seconds in all.
+  uint64_t disparity_offset_estimates = 0;
+  uint64_t disparity_offset_failures = 0;
+  double disparity_offset_seconds = 0.0;
   /// CPU seconds of the local mapping thread per step, summed over every keyframe (the
   /// thread's own clock: time spent waiting for the map's lock is not counted).
   struct StepSeconds {
@@ -147,6 +155,9 @@ class LocalMapper : public KeyframeSink {
   void waitUntilIdle();
 
   LocalMapperStats stats() const;
+  DisparityCorrectionStats disparityCorrectionStats() const {
+    return disparity_correction_.stats();
+  }
 
  private:
   void processNewKeyframe(Keyframe* keyframe);
@@ -154,6 +165,12 @@ class LocalMapper : public KeyframeSink {
   void triangulateNewLandmarks(Keyframe* keyframe);
   void fuseWithNeighbours(Keyframe* keyframe);
   void localBundleAdjustment(Keyframe* keyframe);
+  /// One window's disparity offset from the local BA `problem` at its `solution`, with
+  /// observation o made by feature observation_of[o]; the estimate goes to
+  /// disparity_correction_.
+  void estimateDisparityOffset(const BundleAdjustmentProblem& problem,
+                               const BundleAdjustmentResult& solution,
+                               const std::vector<std::pair<Keyframe*, uint32_t>>& observation_of);
   void cullKeyframes(Keyframe* keyframe);
 
   SparseMap* map_;
@@ -165,6 +182,8 @@ class LocalMapper : public KeyframeSink {
 
   KeyframeWorkQueue queue_;
   std::atomic<bool> abort_ba_{false};
+  DisparityCorrection disparity_correction_;
+  uint64_t local_bas_done_ = 0;  // local mapping thread only
 
   std::list<std::shared_ptr<Landmark>> recent_landmarks_;  // local mapping thread only
 

@@ -37,7 +37,8 @@ MapBaProblem buildMapBaProblem(const SparseMap& map, const TrackingCamera& camer
       BaObservation o;
       o.keyframe = it->second;
       o.landmark = li;
-      static_cast<StereoMeasurement&>(o) = featureMeasurement(k->features(), index, pyramid);
+      static_cast<StereoMeasurement&>(o) = featureMeasurement(k->features(), index, pyramid,
+                                                                 map.disparityCorrectionPx());
       problem.observations.push_back(o);
       any = true;
     }

@@ -91,7 +91,7 @@ void SlamSystem::waitUntilIdle() {
 TrackingResult SlamSystem::trackStereo(uint64_t frame_id, int64_t timestamp_ns,
                                        const GrayImage& left, const GrayImage& right,
                                        const std::optional<Transformationd>& T_C_G_initial) {
-  auto features = builder_.fromStereo(left, right);
+  auto features = builder_.fromStereo(left, right, map_.disparityCorrectionPx());
   return tracker_.track(frame_id, timestamp_ns, std::move(features), T_C_G_initial);
 }
 

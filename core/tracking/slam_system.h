@@ -103,6 +103,10 @@ class SlamSystem {
 
   const SparseMap& map() const { return map_; }
   LocalMapperStats localMappingStats() const { return local_mapper_.stats(); }
+  /// The online disparity correction (LocalMapperConfig::disparity_correction). Thread-safe.
+  DisparityCorrectionStats disparityCorrectionStats() const {
+    return local_mapper_.disparityCorrectionStats();
+  }
   /// Zero when loop closing is off.
   LoopCloserStats loopClosingStats() const {
     return loop_closer_ ? loop_closer_->stats() : LoopCloserStats{};

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <functional>
 #include <memory>
@@ -128,6 +129,15 @@ class SparseMap {
   /// exclusive to set.
   bool correctionPending() const { return correction_pending_; }
   void setCorrectionPending(bool pending) { correction_pending_ = pending; }
+  /// The stereo disparity correction in use, pixels (DisparityCorrection): new frames are
+  /// built with it, and bundle adjustments take every stored stereo column corrected by it
+  /// (featureMeasurement's correction). No lock needed (atomic).
+  float disparityCorrectionPx() const {
+    return disparity_correction_px_.load(std::memory_order_relaxed);
+  }
+  void setDisparityCorrectionPx(float px) {
+    disparity_correction_px_.store(px, std::memory_order_relaxed);
+  }
 
  private:
   mutable std::shared_mutex mutex_;
@@ -137,6 +147,7 @@ class SparseMap {
   LandmarkId next_landmark_id_ = 0;
   bool correction_pending_ = false;
   int change_index_ = 0;
+  std::atomic<float> disparity_correction_px_{0.0f};
 };
 
 }  // namespace cblox

@@ -147,11 +147,22 @@ void loadLocalMapping(const YAML::Node& node, LocalMapperConfig* m) {
                     {"create_new_landmarks", &m->create_new_landmarks},
                     {"triangulation_neighbours", &m->triangulation.neighbours},
                     {"local_ba_max_keyframes", &m->local_ba_max_keyframes}},
-                   {"bundle_adjustment", "niceness"})) {
+                   {"bundle_adjustment", "niceness", "disparity_correction"})) {
     return;
   }
   loadBundleAdjustment(node["bundle_adjustment"], path + ".bundle_adjustment",
                        &m->bundle_adjustment);
+  DisparityCorrectionConfig& d = m->disparity_correction;
+  readSection(node["disparity_correction"], path + ".disparity_correction",
+              {{"enabled", &d.enabled},
+               {"every_keyframes", &d.every_keyframes},
+               {"window", &d.window},
+               {"min_estimates", &d.min_estimates},
+               {"max_spread_px", &d.max_spread_px},
+               {"max_abs_px", &d.max_abs_px},
+               {"max_landmarks", &d.solver.max_landmarks},
+               {"min_stereo_observations", &d.solver.min_stereo_observations},
+               {"iterations", &d.solver.iterations}});
   throwIfInvalid(path, m->validate());
 }
 

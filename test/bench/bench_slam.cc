@@ -412,6 +412,14 @@ int run(int argc, char** argv) {
       "%.1f, fusion %.1f, local BA %.1f, keyframe culling %.1f s\n",
       steps.total(), steps.refresh, steps.cull_landmarks, steps.triangulate, steps.fuse,
       steps.bundle_adjustment, steps.cull_keyframes);
+  const DisparityCorrectionStats dc = slam.disparityCorrectionStats();
+  std::printf(
+      "  disparity correction: %.2f px in use (%lu updates; %lu window estimates, last %.2f px, "
+      "spread %.2f px; %lu solves without one, %lu refused); its solves %.2f s CPU\n",
+      dc.correction_px, static_cast<unsigned long>(dc.updates),
+      static_cast<unsigned long>(dc.estimates), dc.last_estimate_px, dc.spread_px,
+      static_cast<unsigned long>(lm.disparity_offset_failures),
+      static_cast<unsigned long>(dc.refused), lm.disparity_offset_seconds);
   std::printf(
       "  loops: %zu closed (%zu false), %lu rejected after verification (%lu candidates by "
       "the drift gate); correction median %.1f ms (essential graph %.1f ms, the map locked "

@@ -139,6 +139,16 @@ TEST(TrackerConfigTest, CommentedKeysOfTheShippedYamlAreTheDefaults) {
   EXPECT_EQ(m.fuse_radius, m0.fuse_radius);
   EXPECT_EQ(m.redundant_ratio, m0.redundant_ratio);
   EXPECT_EQ(m.local_ba_max_keyframes, m0.local_ba_max_keyframes);
+  const DisparityCorrectionConfig &d = m.disparity_correction, &d0 = m0.disparity_correction;
+  EXPECT_EQ(d.enabled, d0.enabled);
+  EXPECT_EQ(d.every_keyframes, d0.every_keyframes);
+  EXPECT_EQ(d.window, d0.window);
+  EXPECT_EQ(d.min_estimates, d0.min_estimates);
+  EXPECT_EQ(d.max_spread_px, d0.max_spread_px);
+  EXPECT_EQ(d.max_abs_px, d0.max_abs_px);
+  EXPECT_EQ(d.solver.max_landmarks, d0.solver.max_landmarks);
+  EXPECT_EQ(d.solver.min_stereo_observations, d0.solver.min_stereo_observations);
+  EXPECT_EQ(d.solver.iterations, d0.solver.iterations);
   expectSameBundleAdjustment(m.bundle_adjustment, m0.bundle_adjustment);
   const LoopCloserConfig &l = a.loop_closing, &l0 = b.loop_closing;
   EXPECT_EQ(l.min_keyframes_between_loops, l0.min_keyframes_between_loops);
@@ -169,7 +179,9 @@ TEST(TrackerConfigTest, ReadsOverrides) {
       "tracker: {min_features_to_initialize: 300, max_frames_between_keyframes: 10,\n"
       "          pnp_reprojection_error_px: 3.0, close_points_gap_min_inliers: 90}\n"
       "local_mapping: {cull_keyframes: true, local_ba_max_keyframes: 7,\n"
-      "                bundle_adjustment: {num_threads: 2, max_time_s: 0.2}}\n"
+      "                bundle_adjustment: {num_threads: 2, max_time_s: 0.2},\n"
+      "                disparity_correction: {enabled: false, window: 5, min_estimates: 3,\n"
+      "                                       max_landmarks: 300}}\n"
       "loop_closing: {enabled: false, seed: 7, pose_graph: {max_iterations: 30},\n"
       "               global_ba: {first_pass_iterations: 4}}\n"
       "input: {queue_capacity: 2, ground_truth_wait_s: 0.5, catch_up: false}\n"
@@ -213,6 +225,10 @@ TEST(TrackerConfigTest, ReadsOverrides) {
   EXPECT_EQ(t.slam.local_mapping.local_ba_max_keyframes, 7);
   EXPECT_EQ(t.slam.local_mapping.bundle_adjustment.solver.num_threads, 2);
   EXPECT_EQ(t.slam.local_mapping.bundle_adjustment.solver.max_time_s, 0.2);
+  EXPECT_FALSE(t.slam.local_mapping.disparity_correction.enabled);
+  EXPECT_EQ(t.slam.local_mapping.disparity_correction.window, 5);
+  EXPECT_EQ(t.slam.local_mapping.disparity_correction.min_estimates, 3);
+  EXPECT_EQ(t.slam.local_mapping.disparity_correction.solver.max_landmarks, 300);
   EXPECT_FALSE(t.slam.loop_closing_enabled);
   EXPECT_EQ(t.slam.loop_closing.seed, 7u);
   EXPECT_EQ(t.slam.loop_closing.pose_graph.max_iterations, 30);
@@ -332,6 +348,10 @@ TEST(TrackerConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"camera: {calibration: file, calibration_file: /nonexistent/cam.yaml}\n",
        "/nonexistent/cam.yaml"},
       {"camera: {close_depth_baselines: 0}\n", "close_depth_baselines"},
+      {"local_mapping: {disparity_correction: {windw: 3}}\n", "disparity_correction.windw"},
+      {"local_mapping: {disparity_correction: {window: 3, min_estimates: 4}}\n",
+       "min_estimates"},
+      {"local_mapping: {disparity_correction: {max_landmarks: 0}}\n", "max_landmarks"},
       {"camera: {rgbd_baseline_m: -0.1}\n", "rgbd_baseline_m"},
       {"camera: {focal: 3}\n", "camera.focal"},
       {"frames: {orb: {num_features: 0}}\n", "frames.orb"},

@@ -50,6 +50,21 @@ TEST(DisparityCorrectionTest, TheMedianOfTheWindowOnceItIsSettled) {
   EXPECT_NEAR(stats.spread_px, 1.4826 * 1.7, 1e-9);
   EXPECT_DOUBLE_EQ(stats.correction_px, 1.2);
 
+  // Medians within min_correction_px of 0 leave the calibration alone.
+  config.min_correction_px = 0.1;
+  DisparityCorrection small(config);
+  for (const double e : {0.08, 0.09, 0.05}) small.addEstimate(e);
+  EXPECT_EQ(small.correctionPx(), 0.0f);
+  EXPECT_EQ(small.stats().updates, 1u);
+  small.addEstimate(0.2);  // window median 0.085
+  small.addEstimate(0.3);  // 0.09
+  EXPECT_EQ(small.correctionPx(), 0.0f);
+  small.addEstimate(0.4);  // {0.09, 0.05, 0.2, 0.3, 0.4}: 0.2
+  EXPECT_FLOAT_EQ(small.correctionPx(), 0.2f);
+  config.min_correction_px = -1.0;
+  EXPECT_THROW(DisparityCorrection bad(config), std::invalid_argument);
+  config.min_correction_px = 0.0;
+
   config.enabled = false;
   DisparityCorrection off(config);
   for (int i = 0; i < 5; ++i) off.addEstimate(1.0);

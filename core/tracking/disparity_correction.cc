@@ -24,6 +24,9 @@ std::string DisparityCorrectionConfig::validate() const {
   if (every_keyframes < 1) {
     return "every_keyframes must be >= 1, got " + std::to_string(every_keyframes);
   }
+  if (settled_every_keyframes < 1) {
+    return "settled_every_keyframes must be >= 1, got " + std::to_string(settled_every_keyframes);
+  }
   if (window < 1) return "window must be >= 1, got " + std::to_string(window);
   if (min_estimates < 1 || min_estimates > window) {
     return "min_estimates must be in [1, window], got " + std::to_string(min_estimates);
@@ -59,6 +62,7 @@ void DisparityCorrection::addEstimate(double offset_px) {
   stats_.last_estimate_px = offset_px;
   recent_.push_back(offset_px);
   if (static_cast<int>(recent_.size()) > config_.window) recent_.pop_front();
+  settled_ = false;
   if (static_cast<int>(recent_.size()) < config_.min_estimates) return;
   const std::vector<double> values(recent_.begin(), recent_.end());
   const double m = median(values);
@@ -67,9 +71,19 @@ void DisparityCorrection::addEstimate(double offset_px) {
   for (const double v : values) deviations.push_back(std::abs(v - m));
   stats_.spread_px = 1.4826 * median(deviations);
   if (stats_.spread_px > config_.max_spread_px) return;
+  settled_ = static_cast<int>(recent_.size()) == config_.window;
   stats_.correction_px = std::abs(m) < config_.min_correction_px ? 0.0 : m;
   ++stats_.updates;
   correction_px_.store(static_cast<float>(stats_.correction_px), std::memory_order_relaxed);
+}
+
+bool DisparityCorrection::settled() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return settled_;
+}
+
+int DisparityCorrection::estimateInterval() const {
+  return settled() ? config_.settled_every_keyframes : config_.every_keyframes;
 }
 
 DisparityCorrectionStats DisparityCorrection::stats() const {

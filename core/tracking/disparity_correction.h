@@ -16,8 +16,11 @@ struct DisparityCorrectionConfig {
   /// Estimate the offset in local mapping and correct new frames' disparities by it (stereo
   /// only; an RGB-D frame's virtual disparities are never corrected).
   bool enabled = true;
-  /// An estimate from the local BA window of every this many keyframes, >= 1.
+  /// An estimate from the local BA window of every this many keyframes, >= 1, and once the
+  /// correction is settled (settled()) of every settled_every_keyframes: a calibration
+  /// drifts slowly, and a solve costs about as much as the local BA itself.
   int every_keyframes = 1;
+  int settled_every_keyframes = 10;
   /// The correction is the median of the last `window` estimates, once there are at least
   /// `min_estimates` of them and their spread (1.4826 x the median absolute deviation) is at
   /// most max_spread_px; until then it keeps its last value (0 at the start).
@@ -61,6 +64,12 @@ class DisparityCorrection {
   void addEstimate(double offset_px);
   /// The correction in use, pixels (0 until the window settles; always 0 when disabled).
   float correctionPx() const { return correction_px_.load(std::memory_order_relaxed); }
+  /// True once the window holds `window` estimates and the last one left the correction
+  /// set from it (spread within max_spread_px).
+  bool settled() const;
+  /// The configured interval between estimates, in keyframes: every_keyframes, or
+  /// settled_every_keyframes once settled().
+  int estimateInterval() const;
   DisparityCorrectionStats stats() const;
   const DisparityCorrectionConfig& config() const { return config_; }
 
@@ -69,6 +78,7 @@ class DisparityCorrection {
   std::atomic<float> correction_px_{0.0f};
   mutable std::mutex mutex_;
   std::deque<double> recent_;
+  bool settled_ = false;
   DisparityCorrectionStats stats_;
 };
 

@@ -356,9 +356,9 @@ void LocalMapper::localBundleAdjustment(Keyframe* keyframe) {
     stats_.last_ba_observations = problem.observations.size();
   }
   if (on_poses_ && !changed.empty()) on_poses_(changed);
-  const DisparityCorrectionConfig& correction = config_.disparity_correction;
-  if (correction.enabled && !result.aborted &&
-      local_bas_done_++ % static_cast<uint64_t>(correction.every_keyframes) == 0) {
+  if (config_.disparity_correction.enabled && !result.aborted &&
+      ++local_bas_since_estimate_ >= disparity_correction_.estimateInterval()) {
+    local_bas_since_estimate_ = 0;
     estimateDisparityOffset(problem, result, observation_of);
   }
 }

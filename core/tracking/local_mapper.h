@@ -183,7 +183,9 @@ class LocalMapper : public KeyframeSink {
   KeyframeWorkQueue queue_;
   std::atomic<bool> abort_ba_{false};
   DisparityCorrection disparity_correction_;
-  uint64_t local_bas_done_ = 0;  // local mapping thread only
+  // Local BAs since the last disparity offset estimate (local mapping thread only); the
+  // first local BA makes one.
+  int local_bas_since_estimate_ = 1 << 30;
 
   std::list<std::shared_ptr<Landmark>> recent_landmarks_;  // local mapping thread only
 

@@ -156,6 +156,7 @@ void loadLocalMapping(const YAML::Node& node, LocalMapperConfig* m) {
   readSection(node["disparity_correction"], path + ".disparity_correction",
               {{"enabled", &d.enabled},
                {"every_keyframes", &d.every_keyframes},
+               {"settled_every_keyframes", &d.settled_every_keyframes},
                {"window", &d.window},
                {"min_estimates", &d.min_estimates},
                {"max_spread_px", &d.max_spread_px},

@@ -142,6 +142,7 @@ TEST(TrackerConfigTest, CommentedKeysOfTheShippedYamlAreTheDefaults) {
   const DisparityCorrectionConfig &d = m.disparity_correction, &d0 = m0.disparity_correction;
   EXPECT_EQ(d.enabled, d0.enabled);
   EXPECT_EQ(d.every_keyframes, d0.every_keyframes);
+  EXPECT_EQ(d.settled_every_keyframes, d0.settled_every_keyframes);
   EXPECT_EQ(d.window, d0.window);
   EXPECT_EQ(d.min_estimates, d0.min_estimates);
   EXPECT_EQ(d.max_spread_px, d0.max_spread_px);

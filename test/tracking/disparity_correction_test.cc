@@ -31,8 +31,12 @@ TEST(DisparityCorrectionTest, TheMedianOfTheWindowOnceItIsSettled) {
   EXPECT_FLOAT_EQ(correction.correctionPx(), 1.1f);
   correction.addEstimate(3.0);  // one outlier does not move the median far
   EXPECT_FLOAT_EQ(correction.correctionPx(), 1.15f);
+  EXPECT_FALSE(correction.settled());  // four estimates in a window of five
+  EXPECT_EQ(correction.estimateInterval(), config.every_keyframes);
   correction.addEstimate(1.3);
   EXPECT_FLOAT_EQ(correction.correctionPx(), 1.2f);
+  EXPECT_TRUE(correction.settled());
+  EXPECT_EQ(correction.estimateInterval(), config.settled_every_keyframes);
   correction.addEstimate(9.0);  // beyond max_abs_px: refused
   DisparityCorrectionStats stats = correction.stats();
   EXPECT_EQ(stats.estimates, 5u);
@@ -47,6 +51,7 @@ TEST(DisparityCorrectionTest, TheMedianOfTheWindowOnceItIsSettled) {
   correction.addEstimate(4.0);
   stats = correction.stats();
   EXPECT_FLOAT_EQ(correction.correctionPx(), 1.2f);
+  EXPECT_FALSE(correction.settled());  // the window disagrees: estimate often again
   EXPECT_NEAR(stats.spread_px, 1.4826 * 1.7, 1e-9);
   EXPECT_DOUBLE_EQ(stats.correction_px, 1.2);
 

@@ -34,6 +34,9 @@ std::string DisparityCorrectionConfig::validate() const {
   if (!(max_spread_px > 0.0) || !std::isfinite(max_spread_px)) {
     return "max_spread_px must be > 0, got " + std::to_string(max_spread_px);
   }
+  if (!(settled_tolerance_px > 0.0) || !std::isfinite(settled_tolerance_px)) {
+    return "settled_tolerance_px must be > 0, got " + std::to_string(settled_tolerance_px);
+  }
   if (!(min_correction_px >= 0.0) || !std::isfinite(min_correction_px)) {
     return "min_correction_px must be >= 0, got " + std::to_string(min_correction_px);
   }
@@ -71,7 +74,8 @@ void DisparityCorrection::addEstimate(double offset_px) {
   for (const double v : values) deviations.push_back(std::abs(v - m));
   stats_.spread_px = 1.4826 * median(deviations);
   if (stats_.spread_px > config_.max_spread_px) return;
-  settled_ = static_cast<int>(recent_.size()) == config_.window;
+  settled_ = static_cast<int>(recent_.size()) == config_.window &&
+             std::abs(offset_px - m) <= config_.settled_tolerance_px;
   stats_.correction_px = std::abs(m) < config_.min_correction_px ? 0.0 : m;
   ++stats_.updates;
   correction_px_.store(static_cast<float>(stats_.correction_px), std::memory_order_relaxed);

@@ -28,6 +28,7 @@ struct DisparityCorrectionConfig {
   int window = 9;
   int min_estimates = 5;
   double max_spread_px = 0.3;  ///< > 0
+  double settled_tolerance_px = 0.1;  ///< > 0, see DisparityCorrection::settled()
   /// A median within this of 0 sets the correction to 0, >= 0: a calibration good to the
   /// sub-pixel stereo matcher's own accuracy (about 0.1 px on exact images, with a bias of a
   /// few hundredths that depends on the texture) is left alone rather than chased.
@@ -64,8 +65,10 @@ class DisparityCorrection {
   void addEstimate(double offset_px);
   /// The correction in use, pixels (0 until the window settles; always 0 when disabled).
   float correctionPx() const { return correction_px_.load(std::memory_order_relaxed); }
-  /// True once the window holds `window` estimates and the last one left the correction
-  /// set from it (spread within max_spread_px).
+  /// True once the window holds `window` estimates, the last one left the correction set
+  /// from it (spread within max_spread_px) and lay within settled_tolerance_px of it: a
+  /// window whose estimates still trend (a map whose first keyframes hold a wrong scale) is
+  /// not settled.
   bool settled() const;
   /// The configured interval between estimates, in keyframes: every_keyframes, or
   /// settled_every_keyframes once settled().

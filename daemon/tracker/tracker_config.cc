@@ -160,6 +160,7 @@ void loadLocalMapping(const YAML::Node& node, LocalMapperConfig* m) {
                {"window", &d.window},
                {"min_estimates", &d.min_estimates},
                {"max_spread_px", &d.max_spread_px},
+               {"settled_tolerance_px", &d.settled_tolerance_px},
                {"min_correction_px", &d.min_correction_px},
                {"max_abs_px", &d.max_abs_px},
                {"max_landmarks", &d.solver.max_landmarks},

@@ -146,6 +146,7 @@ TEST(TrackerConfigTest, CommentedKeysOfTheShippedYamlAreTheDefaults) {
   EXPECT_EQ(d.window, d0.window);
   EXPECT_EQ(d.min_estimates, d0.min_estimates);
   EXPECT_EQ(d.max_spread_px, d0.max_spread_px);
+  EXPECT_EQ(d.settled_tolerance_px, d0.settled_tolerance_px);
   EXPECT_EQ(d.min_correction_px, d0.min_correction_px);
   EXPECT_EQ(d.max_abs_px, d0.max_abs_px);
   EXPECT_EQ(d.solver.max_landmarks, d0.solver.max_landmarks);

@@ -23,6 +23,7 @@ TEST(DisparityCorrectionTest, TheMedianOfTheWindowOnceItIsSettled) {
   config.window = 5;
   config.min_estimates = 3;
   config.max_spread_px = 0.3;
+  config.settled_tolerance_px = 0.15;
   DisparityCorrection correction(config);
   correction.addEstimate(1.0);
   correction.addEstimate(1.2);
@@ -48,6 +49,7 @@ TEST(DisparityCorrectionTest, TheMedianOfTheWindowOnceItIsSettled) {
   // deviations {0.2, 1.7, 0, 3.3, 2.7}, spread 1.4826 x 1.7: kept at 1.2.
   correction.addEstimate(-2.0);
   EXPECT_FLOAT_EQ(correction.correctionPx(), 1.2f);
+  EXPECT_FALSE(correction.settled());  // the last estimate is 3.2 px from the correction
   correction.addEstimate(4.0);
   stats = correction.stats();
   EXPECT_FLOAT_EQ(correction.correctionPx(), 1.2f);

@@ -109,10 +109,9 @@ struct RoomFrame {
   RectifiedStereoCalibration calibration;
 };
 
-RoomFrame roomFrame(double right_cx_error_px) {
+RoomFrame roomFrame() {
   SourceConfig options;
   options.max_frames = 1;
-  options.sim.renderer.rig.right_cx_error_px = right_cx_error_px;
   std::string error;
   std::unique_ptr<FrameSource> source = openFrameSource("sim:room", options, &error);
   EXPECT_NE(source, nullptr) << error;
@@ -124,7 +123,7 @@ RoomFrame roomFrame(double right_cx_error_px) {
 }
 
 TEST(DisparityCorrectionTest, AFrameBuiltWithACorrectionHasItsDisparitiesGrownByIt) {
-  const RoomFrame room = roomFrame(0.0);
+  const RoomFrame room = roomFrame();
   const TrackingCamera camera =
       makeTrackingCamera(room.calibration.intrinsics, room.calibration.baseline_m);
   FrameBuilder builder(camera, FrameBuilderConfig{}, nullptr);

@@ -9,6 +9,7 @@
 #include <absl/container/flat_hash_map.h>
 #include <Eigen/Core>
 
+#include "core/mesh/block_mesher.h"
 #include "core/mesh/mesh.h"
 #include "core/tsdf/tsdf_layer.h"
 
@@ -81,25 +82,10 @@ class MeshIntegrator {
 
   const MeshConfig& config() const { return config_; }
 
-  /// Identity of a voxel-grid edge: global voxel index of its lower corner, and its axis.
-  struct EdgeKey {
-    int32_t x = 0, y = 0, z = 0, axis = 0;
-    friend bool operator==(const EdgeKey&, const EdgeKey&) = default;
-    template <typename H>
-    friend H AbslHashValue(H h, const EdgeKey& k) {
-      return H::combine(std::move(h), k.x, k.y, k.z, k.axis);
-    }
-  };
+  /// Identity of a voxel-grid edge (block_mesher.h).
+  using EdgeKey = MeshEdgeKey;
 
  private:
-  struct Scratch;
-  struct BlockResult {
-    Mesh mesh;
-    std::vector<EdgeKey> edge_keys;  // one per vertex of mesh
-  };
-
-  void meshBlock(const Block& block, Scratch* scratch, BlockResult* result) const;
-
   const TsdfLayer& layer_;
   MeshConfig config_;
   absl::flat_hash_map<uint64_t, Mesh> meshes_;

@@ -134,6 +134,16 @@ void Mapper::setCovarianceRequester(CovarianceRequester requester) {
   maintenance_.setCovarianceRequester(std::move(requester));
 }
 
+void Mapper::setMeshStreamSinks(MeshStreamer::UpdateSink on_update,
+                                MeshStreamer::SubvolumeSink on_subvolumes) {
+  if (!config_.mesh_stream.enabled || mesh_stream_) return;
+  mesh_stream_ = std::make_unique<MeshStreamer>(
+      config_.mesh_stream, config_.mesh, &collection_, [this] { return mapEpoch(); },
+      config_.integrator_niceness, std::move(on_update), std::move(on_subvolumes),
+      [this](const std::string& line) { this->log(line); });
+  worker_.addPeriodicTask(config_.mesh_stream.period_s, [this] { mesh_stream_->tick(); });
+}
+
 Mapper::~Mapper() { stop(); }
 
 bool Mapper::start(std::string* error) {
@@ -150,6 +160,7 @@ bool Mapper::start(std::string* error) {
   started_ = true;
   integration_.start();
   maintenance_.start();
+  if (mesh_stream_) mesh_stream_->start();
   worker_.start();
   if (active_field_) active_field_->start();
   return true;
@@ -161,6 +172,7 @@ void Mapper::stop() {
   stopped_ = true;
   if (active_field_) active_field_->stop();
   worker_.stop();  // the export in hand finishes; queued ones are answered "mapper stopping"
+  if (mesh_stream_) mesh_stream_->stop();  // after the worker: its tick may wait for a copy
   // The integrator first: in ground-truth mode it may wait for maintenance to apply a
   // keyframe. Maintenance then applies what is still queued, so the map's frames are final.
   integration_.stop();
@@ -328,11 +340,24 @@ void Mapper::onCommand(const MapperCommand& command, ReplyCallback reply) {
     if (reply) reply(statusReply(command));
     return;
   }
+  if (command.name == "mesh_refresh") {
+    if (!mesh_stream_) {
+      fail("no mesh stream (mesh_stream.enabled is false, or this process does not publish it)");
+      return;
+    }
+    mesh_stream_->requestRefresh();
+    MapperReply r;
+    r.id = command.id;
+    r.ok = true;
+    r.message = "the next mesh update period begins a full refresh";
+    if (reply) reply(r);
+    return;
+  }
   const bool planning_export =
       command.name == "export_distance_grid" || command.name == "export_distance_slice";
   if (command.name != "export_mesh" && command.name != "export_submap_meshes" &&
       command.name != "save_map" && command.name != "load_map" && !planning_export) {
-    fail("unknown command (known: status, export_mesh, export_submap_meshes, save_map, "
+    fail("unknown command (known: status, mesh_refresh, export_mesh, export_submap_meshes, save_map, "
          "load_map, export_distance_grid, export_distance_slice)");
     return;
   }
@@ -632,6 +657,7 @@ MapperStatus Mapper::status() const {
     s.planning = planning_->stats();
     s.memory_bytes += s.planning.memory_bytes;
   }
+  if (mesh_stream_) s.mesh_stream = mesh_stream_->stats();
   s.frames_received = frames_received_.load();
   s.frames_integrated = integration_.framesIntegrated();
   s.frames_cut_by_budget = integration_.framesCutByBudget();

@@ -42,6 +42,7 @@
 #include "core/mapping/mapper_config.h"
 #include "core/mapping/mapper_problems.h"
 #include "core/mapping/active_field_refresher.h"
+#include "core/mapping/mesh_streamer.h"
 #include "core/mapping/planning_map.h"
 #include "core/mapping/pose_buffer.h"
 #include "core/mesh/mesh_integrator.h"
@@ -95,6 +96,8 @@ struct MapperStatus {
   /// The planning map's refreshes that updated a field (on the worker), ms.
   float esdf_ms_median = 0.0f;
   float esdf_ms_p99 = 0.0f;
+  /// The mesh stream's counters (all zero without one: setMeshStreamSinks).
+  MeshStreamStats mesh_stream;
   std::array<uint64_t, kNumInputProblems> problems{};  ///< indexed by InputProblem
   uint64_t problem(InputProblem p) const { return problems[static_cast<size_t>(p)]; }
 };
@@ -164,6 +167,14 @@ class Mapper {
   /// Where covariance requests go (tracker mode). Without one, no request is made and no
   /// subvolume is fused. Call before start(). Not thread-safe.
   void setCovarianceRequester(CovarianceRequester requester);
+  /// Where the incremental mesh stream goes (cblox-mapper: CBLOX_MESH_UPDATE and
+  /// CBLOX_SUBVOLUMES): with config().mesh_stream.enabled, a MeshStreamer (mesh_streamer.h)
+  /// runs every mesh_stream.period_s on the fusion/export worker and calls the sinks there;
+  /// the command mesh_refresh asks it for a full refresh. Without this call (or with the
+  /// stream disabled) there is no stream and mesh_refresh is refused. Call before start(), at
+  /// most once. Not thread-safe.
+  void setMeshStreamSinks(MeshStreamer::UpdateSink on_update,
+                          MeshStreamer::SubvolumeSink on_subvolumes);
 
   /// Creates the output directory and starts the threads. Returns false with a message when
   /// the output directory cannot be created (nothing started). Call once. Thread-safe.
@@ -196,7 +207,8 @@ class Mapper {
   /// input clock (deterministic replay, the benches) after the last input, so pairs freed
   /// at the end are asked as the steady clock's tick would. Thread-safe.
   void maintenanceTick();
-  /// A command. "status" is answered at once on the calling thread; "export_mesh" {path},
+  /// A command. "status" and "mesh_refresh" (the next mesh stream period begins a full
+  /// refresh; refused without a stream) are answered at once on the calling thread; "export_mesh" {path},
   /// "export_submap_meshes" {path}, "save_map" {path} and "load_map" {path} are queued for
   /// the worker and answered from it; anything else is answered at once with ok = false.
   /// Paths of exports and save_map are confined to the output directory (resolveOutputPath;
@@ -329,6 +341,8 @@ class Mapper {
   // counted by integration_'s memory cap.
   std::unique_ptr<PlanningMap> planning_;
   std::unique_ptr<ActiveFieldRefresher> active_field_;  // with planning_: the active field
+  // The incremental mesh stream (null without setMeshStreamSinks); ticks on worker_.
+  std::unique_ptr<MeshStreamer> mesh_stream_;
   // Exports and accepted fusions, on its own low-priority thread; reports fusions to
   // maintenance_.
   FusionExportWorker worker_;

@@ -52,6 +52,11 @@ std::string MapperConfig::validate() const {
   if (std::string e = checkpoint.validate(); !e.empty()) return "checkpoint." + e;
   if (std::string e = memory_cap.validate(); !e.empty()) return "memory." + e;
   if (std::string e = planning.validate(); !e.empty()) return e;
+  if (std::string e = mesh_stream.validate(); !e.empty()) return "mesh_stream." + e;
+  if (mesh_stream.enabled && layer.voxels_per_side > 16) {
+    return "mesh_stream.enabled needs voxels_per_side <= 16 (a block's mesh is sent with 16-bit "
+           "vertex indices), got " + std::to_string(layer.voxels_per_side);
+  }
   return {};
 }
 

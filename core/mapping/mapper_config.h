@@ -15,6 +15,7 @@
 #include "core/integrator/make_integrator.h"
 #include "core/maintenance/fusion_scheduler.h"
 #include "core/mapping/memory_cap.h"
+#include "core/mapping/mesh_stream_config.h"
 #include "core/mapping/planning_config.h"
 #include "core/mapping/pose_buffer.h"
 #include "core/mesh/mesh_integrator.h"
@@ -118,6 +119,10 @@ struct MapperConfig {
   /// The planning map: a distance field per subvolume, queried by planners (the `planning`
   /// part of config/mapper.yaml; planning_map.h).
   PlanningConfig planning;
+  /// The incremental mesh stream for live viewers (the `mesh_stream` part of
+  /// config/mapper.yaml; mesh_streamer.h). With it enabled, layer.voxels_per_side is at most
+  /// 16 (a block's mesh is sent with 16-bit vertex indices).
+  MeshStreamConfig mesh_stream;
   /// The clock of map maintenance (kInput for deterministic replay; not a YAML key).
   MaintenanceClock maintenance_clock = MaintenanceClock::kSteady;
 

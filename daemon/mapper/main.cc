@@ -13,7 +13,8 @@
 // (keyframe_pose_batch_t), CBLOX_CMD (command_t).
 // Publishes: CBLOX_MAP_STATUS (map_status_t) and CBLOX_HEARTBEAT (heartbeat_t) every second
 // (with input_silence_s: input_silent / input_age_ms for depth and poses, in the state too),
-// CBLOX_CMD_REPLY (command_reply_t); tracker mode: CBLOX_COV_REQUEST (covariance_request_t)
+// CBLOX_CMD_REPLY (command_reply_t); with mesh_stream.enabled, CBLOX_SUBVOLUMES
+// (subvolume_list_t) and CBLOX_MESH_UPDATE (mesh_update_t) every mesh_stream.period_s; tracker mode: CBLOX_COV_REQUEST (covariance_request_t)
 // for the map maintenance's fusion candidates.
 // Poses on CBLOX_GT_POSE / CBLOX_FRAME_POSE are of the body (primary camera) frame B; a depth
 // frame's camera is placed at T_G_B * calibration.T_B_C.
@@ -91,6 +92,8 @@ int run(const Args& args) {
       std::fflush(stdout);
     }
   }
+  MapperNode node(config, &lcm, &mapper);
+  node.attachMeshStream();  // before start: the worker's periodic tasks are fixed then
   std::string error;
   if (!mapper.start(&error)) {
     std::fprintf(stderr, "cblox-mapper: %s\n", error.c_str());
@@ -117,7 +120,6 @@ int run(const Args& args) {
   input_watch.watch(config.depth_channel);
   input_watch.watch(m.pose_source == PoseSource::kGroundTruth ? config.ground_truth_channel
                                                               : config.frame_pose_channel);
-  MapperNode node(config, &lcm, &mapper);
   node.messageGuard().setInputWatch(&input_watch);
   node.subscribe();
 

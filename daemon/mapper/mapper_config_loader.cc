@@ -105,7 +105,7 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
   requireKnownKeys(root, top,
                    {"pose_source", "lcm_url", "output_dir", "input_silence_s", "channels", "layer",
                     "integrator", "mesh", "fusion", "maintenance", "subvolumes", "poses", "queues",
-                    "worker", "status", "checkpoint", "memory", "planning"});
+                    "worker", "status", "checkpoint", "memory", "planning", "mesh_stream"});
   if (isAbsent(root)) return config;
 
   if (root["pose_source"]) {
@@ -129,7 +129,7 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
       channels, "channels",
       {"depth", "ground_truth_pose", "frame_pose", "keyframe", "keyframe_poses", "command",
        "command_reply", "map_status", "heartbeat", "covariance_request", "covariance_reply",
-       "distance_request", "distance_reply", "local_grid"});
+       "distance_request", "distance_reply", "local_grid", "mesh_update", "subvolumes"});
   if (!isAbsent(channels)) {
     readOptional(channels, "channels", "depth", &config.depth_channel);
     readOptional(channels, "channels", "ground_truth_pose", &config.ground_truth_channel);
@@ -145,6 +145,8 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
     readOptional(channels, "channels", "distance_request", &config.distance_request_channel);
     readOptional(channels, "channels", "distance_reply", &config.distance_reply_channel);
     readOptional(channels, "channels", "local_grid", &config.local_grid_channel);
+    readOptional(channels, "channels", "mesh_update", &config.mesh_update_channel);
+    readOptional(channels, "channels", "subvolumes", &config.subvolumes_channel);
   }
 
   m.layer = loadMapperLayer(root["layer"], m.layer);
@@ -270,6 +272,20 @@ MapperProcessConfig loadMapperConfig(const YAML::Node& root) {
       }
       service.grid_size_m = Eigen::Vector3d(size[0], size[1], size[2]);
     }
+  }
+
+  const YAML::Node stream = root["mesh_stream"];
+  requireKnownKeys(stream, "mesh_stream",
+                   {"enabled", "period_s", "max_bytes_per_period", "max_message_bytes",
+                    "refresh_period_s", "use_color"});
+  if (!isAbsent(stream)) {
+    MeshStreamConfig& s = m.mesh_stream;
+    readOptional(stream, "mesh_stream", "enabled", &s.enabled);
+    readOptional(stream, "mesh_stream", "period_s", &s.period_s);
+    readOptional(stream, "mesh_stream", "max_bytes_per_period", &s.max_bytes_per_period);
+    readOptional(stream, "mesh_stream", "max_message_bytes", &s.max_message_bytes);
+    readOptional(stream, "mesh_stream", "refresh_period_s", &s.refresh_period_s);
+    readOptional(stream, "mesh_stream", "use_color", &s.use_color);
   }
 
   if (const std::string e = config.validate(); !e.empty()) throw ConfigError(top + ": " + e);

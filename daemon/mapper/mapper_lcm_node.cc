@@ -115,6 +115,7 @@ void MapperNode::publishHeartbeat(const MapperStatus& s, const char* state) {
            s.problems[i]);
   }
   if (planning_) planning_->addTo(&hb);
+  if (config_.mapper.mesh_stream.enabled) mesh_stream_.addTo(&hb, s.mesh_stream);
   guard_.addTo(&hb);
   const heartbeat_t msg = hb.build();
   std::lock_guard<std::mutex> lock(publish_mutex_);

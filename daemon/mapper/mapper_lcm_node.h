@@ -26,6 +26,7 @@
 #include "core/mapping/mapper.h"
 #include "daemon/common/message_guard.h"
 #include "daemon/mapper/mapper_process_config.h"
+#include "daemon/mapper/mesh_stream_node.h"
 #include "daemon/mapper/planning_node.h"
 
 namespace cblox {
@@ -42,6 +43,9 @@ class MapperNode {
   MapperNode(const MapperProcessConfig& config, lcm::LCM* lcm, Mapper* mapper)
       : config_(config), lcm_(lcm), mapper_(mapper), guard_(lcm) {}
 
+  /// Gives the Mapper the mesh stream's sinks (mesh_stream_node.h). Call before
+  /// Mapper::start().
+  void attachMeshStream() { mesh_stream_.attach(mapper_); }
   /// Subscribes the channels of the configured pose source and sets the Mapper's covariance
   /// requester (tracker mode); starts the planner interface (planning_node.h) and subscribes
   /// its request channel.
@@ -77,6 +81,7 @@ class MapperNode {
   static constexpr size_t kMaxRequestsRemembered = 64;
   std::map<int64_t, std::vector<bool>> older_epoch_pairs_;
   std::unique_ptr<PlanningNode> planning_;  // from subscribe()
+  MeshStreamNode mesh_stream_{config_, lcm_};
 };
 
 }  // namespace cblox

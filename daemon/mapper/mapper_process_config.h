@@ -30,6 +30,8 @@ struct MapperProcessConfig {
   std::string distance_request_channel = "CBLOX_DISTANCE_REQUEST";  ///< planners ask
   std::string distance_reply_channel = "CBLOX_DISTANCE_REPLY";      ///< the mapper answers
   std::string local_grid_channel = "CBLOX_LOCAL_GRID";              ///< planning.local_grid_*
+  std::string mesh_update_channel = "CBLOX_MESH_UPDATE";  ///< mesh_stream: changed blocks
+  std::string subvolumes_channel = "CBLOX_SUBVOLUMES";    ///< mesh_stream: subvolume poses
   /// CBLOX_MAP_STATUS and CBLOX_HEARTBEAT period, seconds (> 0).
   double status_period_s = 1.0;
   /// Progress lines on stdout every this many seconds (> 0).

@@ -496,7 +496,8 @@ int main(int argc, char** argv) {
                  "distance X Y Z [X Y Z ...]: the planning map's state, distance and gradient\n"
                  "at points of G; grid --box x0,y0,z0,x1,y1,z1 --out FILE: the distance field\n"
                  "over a box as a PLY point cloud (observed cells, coloured by distance);\n"
-                 "esdf-slice --z H --out FILE: a PNG slice of the distance field at height H")
+                 "esdf-slice --z H --out FILE: a PNG slice of the distance field at height H;\n"
+                 "mesh-refresh: the mesh stream resends every block (for live viewers)")
       ->required()
       ->type_name("COMMAND");
   CLI::Option* operand_option =
@@ -590,6 +591,8 @@ int main(int argc, char** argv) {
   }
   if (verb == "status" && !has_path) {
     command.name = "status";
+  } else if (verb == "mesh-refresh" && operand_option->count() == 0) {
+    command.name = "mesh_refresh";
   } else if (verb == "export-mesh" && has_path) {
     command.name = "export_mesh";
     command.arg_keys = {"path"};

@@ -103,6 +103,14 @@ TEST(MapperConfigTest, ShippedYamlMatchesTheCodeDefaults) {
   EXPECT_EQ(a.planning.service.grid_period_s, b.planning.service.grid_period_s);
   EXPECT_EQ(a.planning.service.grid_size_m, b.planning.service.grid_size_m);
   EXPECT_EQ(a.planning.service.grid_resolution_m, b.planning.service.grid_resolution_m);
+  EXPECT_EQ(shipped.mesh_update_channel, defaults.mesh_update_channel);
+  EXPECT_EQ(shipped.subvolumes_channel, defaults.subvolumes_channel);
+  EXPECT_EQ(a.mesh_stream.enabled, b.mesh_stream.enabled);
+  EXPECT_EQ(a.mesh_stream.period_s, b.mesh_stream.period_s);
+  EXPECT_EQ(a.mesh_stream.max_bytes_per_period, b.mesh_stream.max_bytes_per_period);
+  EXPECT_EQ(a.mesh_stream.max_message_bytes, b.mesh_stream.max_message_bytes);
+  EXPECT_EQ(a.mesh_stream.refresh_period_s, b.mesh_stream.refresh_period_s);
+  EXPECT_EQ(a.mesh_stream.use_color, b.mesh_stream.use_color);
   EXPECT_TRUE(defaults.validate().empty()) << defaults.validate();
 }
 
@@ -240,6 +248,25 @@ TEST(MapperConfigTest, ReadsThePlanningSectionAndItsChannels) {
             PlanningConfig::kBandAuto);
 }
 
+TEST(MapperConfigTest, ReadsTheMeshStreamSectionAndItsChannels) {
+  const MapperProcessConfig config = loadMapperConfig(YAML::Load(
+      "mesh_stream: {enabled: false, period_s: 0.5, max_bytes_per_period: 1000000,\n"
+      "  max_message_bytes: 65536, refresh_period_s: 30, use_color: false}\n"
+      "channels: {mesh_update: MU, subvolumes: SV}\n"));
+  const MeshStreamConfig& s = config.mapper.mesh_stream;
+  EXPECT_FALSE(s.enabled);
+  EXPECT_EQ(s.period_s, 0.5);
+  EXPECT_EQ(s.max_bytes_per_period, 1000000u);
+  EXPECT_EQ(s.max_message_bytes, 65536u);
+  EXPECT_EQ(s.refresh_period_s, 30.0);
+  EXPECT_FALSE(s.use_color);
+  EXPECT_EQ(config.mesh_update_channel, "MU");
+  EXPECT_EQ(config.subvolumes_channel, "SV");
+  // 32-voxel blocks need the stream off.
+  EXPECT_NO_THROW(loadMapperConfig(
+      YAML::Load("layer: {voxels_per_side: 32}\nmesh_stream: {enabled: false}\n")));
+}
+
 TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
   struct Case {
     const char* yaml;
@@ -277,6 +304,12 @@ TEST(MapperConfigTest, RejectsBadKeysAndValuesNamingThem) {
       {"output_dir: ''\n", "output_dir"},
       {"integrator: {num_threads: two}\n", "integrator.num_threads"},
       {"checkpoint: {period_s: -1}\n", "checkpoint.period_s"},
+      {"mesh_stream: {period_s: 0}\n", "mesh_stream.period_s"},
+      {"mesh_stream: {max_message_bytes: 100}\n", "mesh_stream.max_message_bytes"},
+      {"mesh_stream: {max_bytes_per_period: 5000}\n", "mesh_stream.max_bytes_per_period"},
+      {"mesh_stream: {refresh_period_s: 0.2}\n", "mesh_stream.refresh_period_s"},
+      {"mesh_stream: {colour: true}\n", "colour"},
+      {"layer: {voxels_per_side: 32}\n", "needs voxels_per_side <= 16"},
       {"checkpoint: {period_s: .nan}\n", "checkpoint.period_s"},
       {"checkpoint: {period_s: .inf}\n", "checkpoint.period_s"},
       {"checkpoint: {interval_s: 5}\n", "interval_s"},

@@ -1,6 +1,8 @@
 // Multi-process test: cblox-capture plays the simulated room over LCM, cblox-mapper
 // integrates it with ground-truth poses, cblox-ctl asks for the mesh, and the mesh is checked
-// against the scene's exact surface (library evaluation and the cblox-eval tool).
+// against the scene's exact surface (library evaluation and the cblox-eval tool); the live mesh
+// stream (CBLOX_MESH_UPDATE, CBLOX_SUBVOLUMES) applied to a MeshMirror is checked the same
+// way, and after a refresh asked with cblox-ctl mesh-refresh.
 // Must run inside a private network namespace (scripts/netns-run.sh; ctest does this).
 
 #include <signal.h>
@@ -18,10 +20,14 @@
 #include <gtest/gtest.h>
 #include <cblox/heartbeat_t.hpp>
 #include <cblox/map_status_t.hpp>
+#include <cblox/mesh_update_t.hpp>
+#include <cblox/subvolume_list_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 
 #include "core/eval/mesh_accuracy.h"
 #include "core/io/ply_io.h"
+#include "core/mapping/mesh_mirror.h"
+#include "daemon/common/mesh_stream_codec.h"
 #include "core/raycast/triangle_mesh_raycaster.h"
 #include "drivers/open_frame_source.h"
 #include "test/test_support/spawn.h"
@@ -40,6 +46,31 @@ struct Received {
   std::optional<map_status_t> status;
   size_t status_count = 0;
   std::optional<heartbeat_t> mapper_heartbeat;
+  MeshMirror mirror;
+  size_t mesh_updates = 0, mesh_gaps = 0, mesh_refresh_starts = 0;
+  std::string mesh_error;
+  void onMeshUpdate(const lcm::ReceiveBuffer*, const std::string&, const mesh_update_t* m) {
+    MeshUpdate update;
+    std::string error;
+    if (!decodeMeshUpdate(*m, &update, &error)) {
+      mesh_error = error;
+      return;
+    }
+    const MeshMirror::Result r = mirror.apply(update);
+    if (!r.applied) mesh_error = r.error;
+    mesh_gaps += r.gap ? 1 : 0;
+    mesh_refresh_starts += update.refresh_start ? 1 : 0;
+    ++mesh_updates;
+  }
+  void onSubvolumes(const lcm::ReceiveBuffer*, const std::string&, const subvolume_list_t* m) {
+    SubvolumeList list;
+    std::string error;
+    if (decodeSubvolumeList(*m, &list, &error)) {
+      mirror.applySubvolumes(list);
+    } else {
+      mesh_error = error;
+    }
+  }
   void onStatus(const lcm::ReceiveBuffer*, const std::string&, const map_status_t* m) {
     status = *m;
     ++status_count;
@@ -65,6 +96,8 @@ TEST(MapperLcmTest, CaptureMapperCtlEndToEndOnTheSimulatedRoom) {
   Received received;
   lcm.subscribe("CBLOX_MAP_STATUS", &Received::onStatus, &received);
   lcm.subscribe("CBLOX_HEARTBEAT", &Received::onHeartbeat, &received);
+  lcm.subscribe("CBLOX_MESH_UPDATE", &Received::onMeshUpdate, &received);
+  lcm.subscribe("CBLOX_SUBVOLUMES", &Received::onSubvolumes, &received);
 
   const pid_t mapper = spawn({CBLOX_MAPPER_EXE, "--config", config, "--output-dir", out,
                               "--pose-source", "ground_truth", "--lcm-url", kUrl});
@@ -135,7 +168,8 @@ TEST(MapperLcmTest, CaptureMapperCtlEndToEndOnTheSimulatedRoom) {
   EXPECT_EQ(runTool(&lcm, {CBLOX_CTL_EXE, "--lcm-url", kUrl, "status"}, std::chrono::seconds(20)),
             0);
 
-  // Accuracy against the scene's exact surface.
+  // Accuracy against the scene's exact surface: the export, and the live stream's mirror once
+  // a period has passed since the last frame (nothing pending), before and after a refresh.
   std::string error;
   Mesh mesh;
   ASSERT_TRUE(readPly(mesh_path, &mesh, &error)) << error;
@@ -145,18 +179,38 @@ TEST(MapperLcmTest, CaptureMapperCtlEndToEndOnTheSimulatedRoom) {
   ASSERT_NE(raycaster, nullptr) << error;
   MeshAccuracyConfig options;
   options.completeness_threshold_m = 2.0 * kVoxel;
-  const std::optional<MeshAccuracy> accuracy =
-      evaluateMeshAccuracy(*raycaster, mesh, options, &error);
-  ASSERT_TRUE(accuracy.has_value()) << error;
-  const ErrorStatistics& a = accuracy->accuracy_m;
-  std::printf(
-      "mesh: %zu vertices; accuracy median %.2f mm, RMSE %.2f mm, p90 %.2f mm, "
-      "max %.2f mm; completeness %.1f %% within %.0f mm\n",
-      mesh.numVertices(), a.median * 1e3, a.rmse * 1e3, a.p90 * 1e3, a.max * 1e3,
-      100.0 * accuracy->completeness, options.completeness_threshold_m * 1e3);
-  EXPECT_GT(mesh.numVertices(), 1000u);
-  EXPECT_LT(a.median, 0.25 * kVoxel);
-  EXPECT_LT(a.rmse, kVoxel);
+  const auto check = [&](const Mesh& m, const char* what) {
+    const std::optional<MeshAccuracy> accuracy =
+        evaluateMeshAccuracy(*raycaster, m, options, &error);
+    ASSERT_TRUE(accuracy.has_value()) << error;
+    const ErrorStatistics& a = accuracy->accuracy_m;
+    std::printf(
+        "%s: %zu vertices; accuracy median %.2f mm, RMSE %.2f mm, p90 %.2f mm, "
+        "max %.2f mm; completeness %.1f %% within %.0f mm\n",
+        what, m.numVertices(), a.median * 1e3, a.rmse * 1e3, a.p90 * 1e3, a.max * 1e3,
+        100.0 * accuracy->completeness, options.completeness_threshold_m * 1e3);
+    EXPECT_GT(m.numVertices(), 1000u) << what;
+    EXPECT_LT(a.median, 0.25 * kVoxel) << what;
+    EXPECT_LT(a.rmse, kVoxel) << what;
+  };
+  check(mesh, "mesh");
+
+  pumpFor(&lcm, std::chrono::milliseconds(2500));
+  EXPECT_EQ(received.mesh_error, "");
+  EXPECT_EQ(received.mesh_gaps, 0u);
+  EXPECT_TRUE(received.mirror.complete());
+  EXPECT_EQ(received.mesh_refresh_starts, 1u);  // the mapper's first update
+  EXPECT_EQ(received.mirror.subvolumes().subvolumes.size(), 3u);
+  EXPECT_EQ(received.mirror.blocks().size(), 3u);
+  const auto held = received.mirror.blocks();
+  check(received.mirror.meshInG(), "live mesh stream");
+  EXPECT_EQ(runTool(&lcm, {CBLOX_CTL_EXE, "--lcm-url", kUrl, "mesh-refresh"},
+                    std::chrono::seconds(20)),
+            0);
+  pumpFor(&lcm, std::chrono::milliseconds(2500));
+  EXPECT_EQ(received.mesh_refresh_starts, 2u);
+  EXPECT_TRUE(received.mirror.complete());
+  EXPECT_TRUE(received.mirror.blocks() == held) << "a refresh resent other meshes";
 
   // The evaluation tool agrees (exit 0, JSON written).
   const std::string gt_path = dir.file("room_gt.ply");
@@ -176,6 +230,15 @@ TEST(MapperLcmTest, CaptureMapperCtlEndToEndOnTheSimulatedRoom) {
   pumpFor(&lcm, std::chrono::milliseconds(300));
   ASSERT_TRUE(received.mapper_heartbeat.has_value());
   EXPECT_EQ(received.mapper_heartbeat->state, "stopped");
+  const heartbeat_t& hb = *received.mapper_heartbeat;
+  for (size_t i = 0; i < hb.counter_names.size(); ++i) {
+    if (hb.counter_names[i] == "mesh_updates_sent") {
+      EXPECT_GE(hb.counter_values[i], static_cast<int64_t>(received.mesh_updates));
+    }
+    if (hb.counter_names[i] == "mesh_refreshes") {
+      EXPECT_EQ(hb.counter_values[i], 2);
+    }
+  }
   EXPECT_GE(received.status_count, 3u);
 }
 

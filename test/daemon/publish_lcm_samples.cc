@@ -60,6 +60,8 @@ std::vector<Sample> Samples() {
       Make("CBLOX_DISTANCE_REQUEST", "distance_request_t", &t::MakeDistanceRequest),
       Make("CBLOX_DISTANCE_REPLY", "distance_reply_t", &t::MakeDistanceReply),
       Make("CBLOX_LOCAL_GRID", "local_grid_t", &t::MakeLocalGrid),
+      Make("CBLOX_MESH_UPDATE", "mesh_update_t", &t::MakeMeshUpdate),
+      Make("CBLOX_SUBVOLUMES", "subvolume_list_t", &t::MakeSubvolumeList),
   };
 }
 

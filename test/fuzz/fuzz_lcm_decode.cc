@@ -1,6 +1,7 @@
 // Fuzz target: any bytes as a message of every LCM type (lcmtypes/*.lcm) through the wire
 // check and decode the message guard uses (decodeChecked, lcmtypes/wire_check.h), then the
-// conversions the daemons apply to what decoded (daemon/common/lcm_messages.h).
+// conversions the daemons apply to what decoded (daemon/common/lcm_messages.h,
+// daemon/common/mesh_stream_codec.h and a MeshMirror for the mesh stream).
 
 #include <cstddef>
 #include <cstdint>
@@ -8,7 +9,9 @@
 
 #include <cblox/wire_schema.hpp>
 
+#include "core/mapping/mesh_mirror.h"
 #include "daemon/common/lcm_messages.h"
+#include "daemon/common/mesh_stream_codec.h"
 #include "lcmtypes/wire_check.h"
 
 #include <cblox/camera_calibration_t.hpp>
@@ -20,6 +23,9 @@
 #include <cblox/distance_reply_t.hpp>
 #include <cblox/distance_request_t.hpp>
 #include <cblox/local_grid_t.hpp>
+#include <cblox/mesh_block_t.hpp>
+#include <cblox/mesh_update_t.hpp>
+#include <cblox/subvolume_list_t.hpp>
 #include <cblox/heartbeat_t.hpp>
 #include <cblox/map_status_t.hpp>
 
@@ -87,6 +93,25 @@ void convert(const keyframe_t& msg) {
 template <>
 void convert(const keyframe_pose_batch_t& msg) {
   for (const pose_t& pose : msg.poses) convert(pose);
+}
+
+template <>
+void convert(const mesh_update_t& msg) {
+  std::string error;
+  MeshUpdate update;
+  if (!decodeMeshUpdate(msg, &update, &error)) return;
+  MeshMirror mirror;
+  (void)mirror.apply(update);
+  (void)mirror.meshInG();
+}
+template <>
+void convert(const subvolume_list_t& msg) {
+  std::string error;
+  SubvolumeList list;
+  if (!decodeSubvolumeList(msg, &list, &error)) return;
+  MeshMirror mirror;
+  mirror.applySubvolumes(list);
+  (void)mirror.meshInG();
 }
 
 template <typename Msg>

@@ -307,6 +307,33 @@ TEST(lcmtypes_roundtrip, LocalGridT) {
   EXPECT_EQ(d.data, m.data);
 }
 
+TEST(lcmtypes_roundtrip, MeshUpdateT) {
+  const cblox::mesh_update_t m = MakeMeshUpdate();
+  const cblox::mesh_update_t d = RoundTrip(m);
+  EXPECT_EQ(d.sequence, 42);
+  EXPECT_TRUE(d.refresh_start);
+  EXPECT_EQ(d.blocks_pending, 17);
+  EXPECT_EQ(d.block_size, 0.32f);
+  EXPECT_EQ(d.removed_subvolume_ids, (std::vector<int64_t>{1, 5}));
+  ASSERT_EQ(d.num_blocks, 2);
+  EXPECT_EQ(d.blocks[1].subvolume_id, 5);
+  EXPECT_EQ(d.blocks[1].index[0], 2);
+  EXPECT_EQ(d.blocks[1].position[1], (std::vector<int16_t>{32767, -32767, 0}));
+  EXPECT_EQ(d.blocks[1].color[2], (std::vector<uint8_t>{2, 7, 8}));
+  EXPECT_EQ(d.blocks[0].triangle[0], (std::vector<int16_t>{0, 1, 2}));
+}
+
+TEST(lcmtypes_roundtrip, SubvolumeListT) {
+  const cblox::subvolume_list_t m = MakeSubvolumeList();
+  const cblox::subvolume_list_t d = RoundTrip(m);
+  EXPECT_EQ(d.active_subvolume_id, 4);
+  EXPECT_EQ(d.subvolume_ids, (std::vector<int64_t>{3, 4}));
+  EXPECT_EQ(d.poses[0].position[0], m.poses[0].position[0]);
+  EXPECT_EQ(d.anchor_keyframe_ids[1], 4294967296 + 20);
+  EXPECT_EQ(d.num_blocks, (std::vector<int32_t>{120, 7}));
+  EXPECT_EQ(d.bounds_max[0], (std::vector<float>{3.2f, 1.28f, 2.56f}));
+}
+
 TEST(lcmtypes_roundtrip, CovariancePairT) {
   const cblox::covariance_pair_t m = MakeCovariancePair(5, 6, false);
   const cblox::covariance_pair_t d = RoundTrip(m);
@@ -445,12 +472,15 @@ std::vector<TypeOps> AllTypes() {
           MakeOps(MakeHeartbeat()),
           MakeOps(MakeDistanceRequest()),
           MakeOps(MakeDistanceReply()),
-          MakeOps(MakeLocalGrid())};
+          MakeOps(MakeLocalGrid()),
+          MakeOps(MakeMeshBlock(1)),
+          MakeOps(MakeMeshUpdate()),
+          MakeOps(MakeSubvolumeList())};
 }
 
 TEST(lcmtypes_errors, FingerprintsAreUnique) {
   const std::vector<TypeOps> types = AllTypes();
-  ASSERT_EQ(types.size(), 19U);
+  ASSERT_EQ(types.size(), 22U);
   std::set<int64_t> hashes;
   for (const TypeOps& t : types) hashes.insert(t.hash);
   EXPECT_EQ(hashes.size(), types.size());

@@ -20,6 +20,9 @@
 #include <cblox/distance_reply_t.hpp>
 #include <cblox/distance_request_t.hpp>
 #include <cblox/local_grid_t.hpp>
+#include <cblox/mesh_block_t.hpp>
+#include <cblox/mesh_update_t.hpp>
+#include <cblox/subvolume_list_t.hpp>
 #include <cblox/depth_frame_t.hpp>
 #include <cblox/frame_pose_t.hpp>
 #include <cblox/heartbeat_t.hpp>
@@ -170,6 +173,11 @@ cblox::distance_reply_t filled(Tag<cblox::distance_reply_t>) {
   return samples::MakeDistanceReply();
 }
 cblox::local_grid_t filled(Tag<cblox::local_grid_t>) { return samples::MakeLocalGrid(); }
+cblox::mesh_block_t filled(Tag<cblox::mesh_block_t>) { return samples::MakeMeshBlock(1); }
+cblox::mesh_update_t filled(Tag<cblox::mesh_update_t>) { return samples::MakeMeshUpdate(); }
+cblox::subvolume_list_t filled(Tag<cblox::subvolume_list_t>) {
+  return samples::MakeSubvolumeList();
+}
 
 // ---------------------------------------------------------------------------------------
 // One case per schema type.
@@ -242,7 +250,7 @@ TEST(lcm_wire, TheCasesAreExactlyTheSchemaTypes) {
   namespace ws = cblox::wire_schema;
   const std::vector<TypeCase> cases = allCases();
   ASSERT_EQ(cases.size(), ws::kStructs.size());
-  EXPECT_EQ(cases.size(), 19U);  // lcmtypes/*.lcm; update with the folder
+  EXPECT_EQ(cases.size(), 22U);  // lcmtypes/*.lcm; update with the folder
   std::set<int64_t> hashes;
   for (size_t i = 0; i < cases.size(); ++i) {
     EXPECT_EQ(cases[i].name, ws::kStructs[i].name);

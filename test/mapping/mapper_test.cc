@@ -29,6 +29,8 @@
 #include "core/esdf/esdf_query.h"
 #include "core/io/ply_io.h"
 #include "core/mapping/map_epoch_key.h"
+#include "core/mapping/mesh_mirror.h"
+#include "core/mesh/block_mesher.h"
 #include "drivers/synthetic/scenes.h"
 #include "drivers/synthetic/synthetic_frame_source.h"
 #include "test/mapping/room_frames.h"
@@ -436,6 +438,115 @@ TEST(MapperTest, KeyframePoseBatchMovesSubvolumesWithoutTouchingVoxels) {
   EXPECT_EQ(s.problem(InputProblem::kKeyframePoseUnknown), 1u);
   EXPECT_EQ(s.problem(InputProblem::kKeyframePoseInvalid), 1u);
   EXPECT_EQ(s.num_blocks, blocks);
+}
+
+// The mesh stream through a Mapper: a mirror of what its sinks got holds every subvolume's
+// block meshes once the frames are integrated and a period passed; a pose batch moves a
+// subvolume in the next list without a mesh message; mesh_refresh resends; without sinks
+// mesh_refresh is refused.
+TEST(MapperTest, TheMeshStreamMirrorsTheMapAndFollowsPoseBatches) {
+  test::TempDir dir("mapper");
+  MapperConfig config = testConfig(dir.path());
+  config.mesh_stream.period_s = 0.05;
+  {
+    Mapper without(config);
+    const MapperReply refused = runCommand(&without, "mesh_refresh");
+    EXPECT_FALSE(refused.ok);
+    EXPECT_NE(refused.message.find("no mesh stream"), std::string::npos) << refused.message;
+  }
+  Mapper mapper(config);
+  std::mutex mutex;
+  MeshMirror mirror;
+  size_t updates = 0, refreshes = 0, gaps = 0;
+  std::vector<SubvolumeList> lists;
+  mapper.setMeshStreamSinks(
+      [&](const MeshUpdate& u) {
+        std::lock_guard<std::mutex> lock(mutex);
+        const MeshMirror::Result r = mirror.apply(u);
+        EXPECT_TRUE(r.applied) << r.error;
+        gaps += r.gap ? 1 : 0;
+        refreshes += u.refresh_start ? 1 : 0;
+        ++updates;
+      },
+      [&](const SubvolumeList& l) {
+        std::lock_guard<std::mutex> lock(mutex);
+        mirror.applySubvolumes(l);
+        lists.push_back(l);
+      });
+  std::string error;
+  ASSERT_TRUE(mapper.start(&error)) << error;
+  feed(&mapper, 0, 12);
+  const auto settled = [&](size_t lists_before) {
+    for (int i = 0; i < 400; ++i) {
+      std::this_thread::sleep_for(milliseconds(10));
+      std::lock_guard<std::mutex> lock(mutex);
+      if (lists.size() >= lists_before + 2 && mirror.complete()) return true;
+    }
+    return false;
+  };
+  size_t before = 0;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    before = lists.size();
+  }
+  ASSERT_TRUE(settled(before));
+
+  // Against a full meshing of the layers (the mapper is idle: no frame is being integrated).
+  const auto expect_mirror_is_the_map = [&] {
+    MeshConfig mesh_config;
+    mesh_config.compute_normals = false;
+    BlockMesher mesher(mesh_config);
+    std::lock_guard<std::mutex> lock(mutex);
+    size_t expected_blocks = 0;
+    for (const auto& submap : mapper.collection().submaps()) {
+      const auto lock_layer = submap->lockLayer();
+      for (const auto& [key, block] : submap->layer().blocks()) {
+        Mesh mesh;
+        mesher.meshBlock(submap->layer(), *block, &mesh);
+        if (mesh.empty()) continue;
+        ++expected_blocks;
+        const auto held = mirror.blocks().find(submap->id());
+        ASSERT_NE(held, mirror.blocks().end()) << "subvolume " << submap->id();
+        const auto it = held->second.find(key);
+        ASSERT_NE(it, held->second.end());
+        EXPECT_EQ(it->second.positions.size(), mesh.numVertices());
+        EXPECT_EQ(it->second.triangles.size(), mesh.numTriangles());
+      }
+    }
+    EXPECT_EQ(mirror.numBlocks(), expected_blocks);
+    EXPECT_GT(expected_blocks, 50u);
+  };
+  expect_mirror_is_the_map();
+
+  const Transformationd moved =
+      Transformationd(Eigen::Quaterniond(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ())),
+                      Eigen::Vector3d(1.0, 0.0, 0.0)) *
+      roomFrames()[6].T_G_C;
+  size_t updates_before = 0;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    before = lists.size();
+    updates_before = updates;
+  }
+  mapper.onKeyframePoses({{6, moved}});
+  ASSERT_TRUE(mapper.waitUntilIdle(kIdleTimeout));
+  ASSERT_TRUE(settled(before));
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    EXPECT_EQ(updates, updates_before) << "a pose batch resent meshes";
+    ASSERT_EQ(lists.back().subvolumes.size(), 2u);
+    EXPECT_TRUE(lists.back().subvolumes[1].T_G_S.isApprox(moved, 1e-12));
+    before = lists.size();
+  }
+
+  const MapperReply refresh = runCommand(&mapper, "mesh_refresh");
+  EXPECT_TRUE(refresh.ok) << refresh.message;
+  ASSERT_TRUE(settled(before));
+  expect_mirror_is_the_map();
+  mapper.stop();
+  EXPECT_EQ(refreshes, 2u);  // the first period and the one asked for
+  EXPECT_EQ(gaps, 0u);
+  EXPECT_EQ(mapper.status().mesh_stream.refreshes, 2u);
 }
 
 TEST(MapperTest, FrameWithoutPoseIsRejectedAfterTheWait) {

@@ -22,9 +22,12 @@
 #include <cblox/keyframe_t.hpp>
 #include <cblox/local_grid_t.hpp>
 #include <cblox/map_status_t.hpp>
+#include <cblox/mesh_block_t.hpp>
+#include <cblox/mesh_update_t.hpp>
 #include <cblox/pose_stamped_t.hpp>
 #include <cblox/pose_t.hpp>
 #include <cblox/stereo_pair_t.hpp>
+#include <cblox/subvolume_list_t.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -292,6 +295,55 @@ inline cblox::local_grid_t MakeLocalGrid() {
   m.data = {cblox::local_grid_t::FREE, cblox::local_grid_t::UNKNOWN, 0xF4, 0x01, 0x00, 0x80};
   m.raw_size = static_cast<int32_t>(m.data.size());
   m.num_bytes = m.raw_size;
+  return m;
+}
+
+// One triangle with colours in block (seed, -1, 2) of subvolume 3 + seed.
+inline cblox::mesh_block_t MakeMeshBlock(int seed) {
+  cblox::mesh_block_t b{};
+  b.subvolume_id = 3 + seed;
+  b.index[0] = seed;
+  b.index[1] = -1;
+  b.index[2] = 2;
+  b.num_vertices = 3;
+  b.position = {{-100, 200, 300}, {32767, -32767, 0}, {static_cast<int16_t>(seed), 5, -6}};
+  b.num_colors = 3;
+  b.color = {{255, 0, 1}, {2, 254, 3}, {static_cast<uint8_t>(seed), 7, 8}};
+  b.num_triangles = 1;
+  b.triangle = {{0, 1, 2}};
+  return b;
+}
+
+inline cblox::mesh_update_t MakeMeshUpdate() {
+  cblox::mesh_update_t m{};
+  m.utime = 1'700'000'000'000'020;
+  m.map_epoch = 1'700'000'000'000'000;
+  m.sequence = 42;
+  m.refresh_start = true;
+  m.blocks_pending = 17;
+  m.block_size = 0.32f;
+  m.num_removed = 2;
+  m.removed_subvolume_ids = {1, 5};
+  m.blocks = {MakeMeshBlock(1), MakeMeshBlock(2)};
+  m.num_blocks = 2;
+  return m;
+}
+
+inline cblox::subvolume_list_t MakeSubvolumeList() {
+  cblox::subvolume_list_t m{};
+  m.utime = 1'700'000'000'000'021;
+  m.map_epoch = 1'700'000'000'000'000;
+  m.active_subvolume_id = 4;
+  m.block_size = 0.32f;
+  m.num_subvolumes = 2;
+  m.subvolume_ids = {3, 4};
+  cblox::pose_t identity{};
+  identity.orientation[0] = 1.0;
+  m.poses = {MakePose(0.5), identity};
+  m.anchor_keyframe_ids = {4294967296 + 10, 4294967296 + 20};
+  m.num_blocks = {120, 7};
+  m.bounds_min = {{-1.0f, -2.0f, 0.0f}, {0.32f, 0.0f, 0.0f}};
+  m.bounds_max = {{3.2f, 1.28f, 2.56f}, {0.96f, 0.64f, 0.32f}};
   return m;
 }
 

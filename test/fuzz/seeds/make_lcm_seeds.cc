@@ -217,6 +217,8 @@ int main(int argc, char** argv) {
   write(decode / "camera_calibration", encode(toCalibrationMsg("c", intrinsics(), pose(1.0))));
   write(decode / "pose", encode(toPoseMsg(pose(2.0))));
   write(decode / "distance_request", distance_request);
+  write(decode / "mesh_update", encode(test::MakeMeshUpdate()));
+  write(decode / "subvolume_list", encode(test::MakeSubvolumeList()));
   write(decode / "invalid_truncated_stereo_pair", truncated(stereo));
   write(decode / "invalid_count_keyframe", corruptCount(keyframe, keyframe.size() - 5 * 8 - 4));
 

@@ -13,6 +13,7 @@ packages=(
   openjdk-17-jre libjchart2d-java xvfb
   libembree-dev libceres-dev libsuitesparse-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libcivetweb-dev libjs-three chromium python3-websocket  # cblox-viewer and its browser test
   libsystemd-dev libcli11-dev nlohmann-json3-dev libzstd-dev zlib1g-dev libxxhash-dev libxml2-dev
   libv4l-dev libturbojpeg0-dev v4l-utils
   libcamera-dev opencv-doc

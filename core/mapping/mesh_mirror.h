@@ -39,6 +39,10 @@ class MeshMirror {
   /// True when everything since the last refresh start arrived in order and the last message
   /// said nothing is pending: the blocks are the map as meshed at that message.
   bool complete() const { return synced_ && pending_ == 0; }
+  /// True when everything since the last refresh start arrived in order (blocks may still
+  /// be pending): false before the first refresh start and after a gap, when a receiver
+  /// asks for a refresh.
+  bool synced() const { return synced_; }
   int64_t mapEpoch() const { return epoch_; }
   int64_t lastSequence() const { return last_sequence_; }
   float blockSize() const { return block_size_; }

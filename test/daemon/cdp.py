@@ -82,6 +82,8 @@ def main():
     args = parser.parse_args()
     try:
         page = Page(args.port)
+        if args.command != "wait":
+            page.ws.settimeout(args.timeout)
         if args.command == "navigate":
             page.call("Page.navigate", url=args.url)
         elif args.command == "eval":

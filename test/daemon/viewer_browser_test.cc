@@ -15,9 +15,11 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <cblox/heartbeat_t.hpp>
 #include <cblox/keyframe_pose_batch_t.hpp>
 #include <cblox/subvolume_list_t.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -69,7 +71,7 @@ class ViewerBrowserTest : public ::testing::Test {
     chromium_ = test::spawnProcess(
         {"/usr/bin/chromium", "--headless=new", "--no-sandbox", "--use-angle=swiftshader",
          "--enable-unsafe-swiftshader", "--window-size=1280,800", "--hide-scrollbars",
-         "--no-first-run", "--user-data-dir=" + dir_->file("chromium"),
+         "--no-first-run", "--log-level=3", "--user-data-dir=" + dir_->file("chromium"),
          "--remote-debugging-port=" + std::to_string(kDevToolsPort), "about:blank"});
     pumpFor(lcm_, std::chrono::milliseconds(1500));
     capture_status_ = runTool(lcm_,
@@ -79,12 +81,18 @@ class ViewerBrowserTest : public ::testing::Test {
   }
   static void TearDownTestSuite() {
     for (pid_t* pid : {&chromium_, &viewer_, &mapper_}) {
-      if (*pid > 0) {
-        kill(*pid, SIGTERM);
-        int status = 0;
-        waitpid(*pid, &status, 0);
-        *pid = -1;
+      if (*pid <= 0) continue;
+      kill(*pid, SIGTERM);
+      int status = 0;
+      for (int i = 0; i < 100 && waitpid(*pid, &status, WNOHANG) == 0; ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
       }
+      if (waitpid(*pid, &status, WNOHANG) == 0) {
+        std::printf("pid %d did not stop within 10 s of SIGTERM: killed\n", *pid);
+        kill(*pid, SIGKILL);
+        waitpid(*pid, &status, 0);
+      }
+      *pid = -1;
     }
     delete lcm_;
     delete dir_;
@@ -98,8 +106,10 @@ class ViewerBrowserTest : public ::testing::Test {
     ASSERT_EQ(capture_status_, 0);
   }
 
-  static void startViewer() {
-    viewer_ = test::spawnProcess({CBLOX_VIEWER_EXE, "--lcm-url", kUrl, "--quiet"});
+  static void startViewer(bool allow_export = false) {
+    std::vector<std::string> args = {CBLOX_VIEWER_EXE, "--lcm-url", kUrl, "--quiet"};
+    if (allow_export) args.push_back("--allow-export");
+    viewer_ = test::spawnProcess(args);
   }
   // cdp.py ARGS...: its exit status; its output (stdout and stderr) in *out.
   static int cdp(const std::vector<std::string>& args, std::string* out = nullptr) {
@@ -174,8 +184,9 @@ TEST_F(ViewerBrowserTest, ThePageShowsEverySubvolumesBlocksAndFollowsAPoseCorrec
 
   // A pose correction of subvolume 0's anchor keyframe moves its blocks by exactly it.
   Received received;
-  lcm_->subscribe("CBLOX_SUBVOLUMES", &Received::onSubvolumes, &received);
+  lcm::Subscription* sub = lcm_->subscribe("CBLOX_SUBVOLUMES", &Received::onSubvolumes, &received);
   pumpFor(lcm_, std::chrono::milliseconds(1200));
+  lcm_->unsubscribe(sub);
   ASSERT_TRUE(received.subvolumes.has_value());
   const subvolume_list_t& list = *received.subvolumes;
   ASSERT_GE(list.num_subvolumes, 1);
@@ -206,6 +217,52 @@ TEST_F(ViewerBrowserTest, ThePageShowsEverySubvolumesBlocksAndFollowsAPoseCorrec
   EXPECT_TRUE(waitFor("window.cbloxViewer.events.some((e) => e.kind === 'loop')", 5));
 }
 
+// What browsers send is bounded and ignored unless it is an allowed export request; more
+// browsers than max_clients are refused; both counted in the viewer's heartbeat.
+TEST_F(ViewerBrowserTest, BrowserInputIsIgnoredAndCountedAndExtraBrowsersAreRefused) {
+  ASSERT_EQ(cdp({"navigate", kPage}), 0);
+  ASSERT_TRUE(waitFor(kAllBlocksArrived, 90));
+  // From the page: junk, an oversized message, binary bytes and an export request (the
+  // viewer is read-only), then five more sockets (max_clients is 4 with the page's).
+  const Json opened = eval(
+      "new Promise((resolve) => {"
+      "  const url = 'ws://' + location.host + '/ws';"
+      "  const s = new WebSocket(url);"
+      "  s.onopen = () => {"
+      "    s.send('not json'); s.send('x'.repeat(100000)); s.send(new Uint8Array([1, 2, 3]));"
+      "    s.send(JSON.stringify({type: 'export'}));"
+      "    const more = []; let settled = 0;"
+      "    for (let i = 0; i < 5; ++i) more.push(new WebSocket(url));"
+      "    setTimeout(() => resolve(more.filter((x) => x.readyState === 1).length), 3000);"
+      "  };"
+      "})");
+  ASSERT_TRUE(opened.is_number()) << opened.dump();
+  EXPECT_EQ(opened.get<int>(), 2);  // the page's, the junk sender's and 2 of the 5
+  // The viewer's heartbeat counts them and it still serves the page.
+  struct Heard {
+    std::optional<heartbeat_t> viewer;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const heartbeat_t* m) {
+      if (m->process == "cblox-viewer") viewer = *m;
+    }
+  } heard;
+  lcm::Subscription* sub = lcm_->subscribe("CBLOX_HEARTBEAT", &Heard::on, &heard);
+  const auto counter = [&](const std::string& name) -> int64_t {
+    for (size_t i = 0; i < heard.viewer->counter_names.size(); ++i) {
+      if (heard.viewer->counter_names[i] == name) return heard.viewer->counter_values[i];
+    }
+    return -1;
+  };
+  for (int i = 0; i < 20 && !(heard.viewer && counter("clients_refused") >= 3); ++i) {
+    pumpFor(lcm_, std::chrono::milliseconds(500));
+  }
+  lcm_->unsubscribe(sub);
+  ASSERT_TRUE(heard.viewer.has_value());
+  EXPECT_EQ(counter("browser_messages_ignored"), 4);
+  EXPECT_EQ(counter("clients_refused"), 3);
+  EXPECT_EQ(counter("export_requests"), 0);
+  EXPECT_TRUE(waitFor("window.cbloxViewer.connected", 5));
+}
+
 TEST_F(ViewerBrowserTest, ThePageReconnectsWhenTheViewerRestarts) {
   ASSERT_EQ(cdp({"navigate", kPage}), 0);
   ASSERT_TRUE(waitFor(kAllBlocksArrived, 90));
@@ -218,11 +275,22 @@ TEST_F(ViewerBrowserTest, ThePageReconnectsWhenTheViewerRestarts) {
   ASSERT_EQ(waitpid(viewer_, &status, 0), viewer_);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
   ASSERT_TRUE(waitFor("!window.cbloxViewer.connected", 20));
-  startViewer();
+  startViewer(/*allow_export=*/true);
   // The new viewer asks the mapper for a refresh; the page reconnects and gets it all.
   ASSERT_TRUE(waitFor("window.cbloxViewer.connections > " + connections.dump(), 30));
   ASSERT_TRUE(waitFor(kAllBlocksArrived, 60));
   EXPECT_EQ(eval("window.cbloxViewer.blockCount"), blocks);
+
+  // This viewer allows exports: the page's button asks the mapper and offers the PLY.
+  ASSERT_TRUE(waitFor("!document.getElementById('export').hidden", 10));
+  eval("document.getElementById('export').click()");
+  ASSERT_TRUE(waitFor("window.cbloxViewer.lastExport && window.cbloxViewer.lastExport.ok", 60));
+  const Json head = eval(
+      "fetch(window.cbloxViewer.lastExport.url).then((r) => r.arrayBuffer()).then((b) =>"
+      " [b.byteLength, new TextDecoder().decode(new Uint8Array(b, 0, 3))])");
+  ASSERT_TRUE(head.is_array()) << head.dump();
+  EXPECT_GT(head[0].get<int>(), 10000);
+  EXPECT_EQ(head[1], "ply");
 }
 
 }  // namespace

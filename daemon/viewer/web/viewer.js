@@ -459,6 +459,7 @@
     };
     socket.onmessage = (e) => {
       view.messages += 1;
+      draw();
       if (typeof e.data === 'string') {
         view.bytes += e.data.length;
         const m = JSON.parse(e.data);
@@ -489,6 +490,8 @@
   }
 
   // ---- Controls.
+  document.getElementById('controls').addEventListener('change', draw);
+  document.getElementById('controls').addEventListener('click', draw);
   document.getElementById('color-mode').addEventListener('change', (e) => {
     view.colorMode = Number(e.target.value);
     for (const s of subvolumes.values()) s.material.uniforms.mode.value = view.colorMode;
@@ -574,11 +577,20 @@
   }
   window.addEventListener('resize', resize);
   resize();
-  function frame() {
-    requestAnimationFrame(frame);
-    controls.update();
-    renderer.render(scene, camera);
+  // Drawn when something changed (a message, the camera, the window), not every frame:
+  // an idle page costs no CPU.
+  let drawPending = false;
+  function draw() {
+    if (drawPending) return;
+    drawPending = true;
+    requestAnimationFrame(() => {
+      drawPending = false;
+      renderer.render(scene, camera);
+    });
   }
-  frame();
+  view.draw = draw;
+  controls.addEventListener('change', draw);
+  window.addEventListener('resize', draw);
+  draw();
   connect();
 })();

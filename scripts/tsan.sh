@@ -3,7 +3,8 @@
 # them: the integrators (ray casting with per-block spin locks and lock-free hash sets,
 # the projective integrator's block partition), the mesher, and the submap collection's
 # thread-safety rule (integration, pose updates and fusion on concurrent threads), and the
-# mapper's threads (integrator, maintenance, export worker fed from several threads), and
+# mapper's threads (integrator, maintenance, export worker fed from several threads; the mesh
+# stream's copy thread), and
 # the sparse SLAM's threads (tracking, local mapping with triangulation and local BA, loop
 # closing) on the real 7-Scenes RGB-D frames when ../shared/data has them, and
 # cblox-capture's dense-stereo thread. The vocabulary
@@ -28,12 +29,14 @@ cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   >/dev/null
 cmake --build "$BUILD_DIR" --target test_integrator test_mesh test_submap test_mapper test_tracking \
   test_stereo_depth_worker test_tracker_node test_planning_map test_planning_service \
-  test_planner_example -j"$(nproc)"
+  test_planner_example test_mesh_streamer -j"$(nproc)"
 export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/scripts/tsan.supp"
 "$BUILD_DIR/test/integrator/test_integrator" --gtest_brief=1
 "$BUILD_DIR/test/mesh/test_mesh" --gtest_brief=1
 "$BUILD_DIR/test/submap/test_submap" --gtest_brief=1
 "$BUILD_DIR/test/mapping/test_mapper" --gtest_brief=1
+# The mesh stream's copy thread beside integration (the mapper's worker and its runner).
+"$BUILD_DIR/test/mapping/test_mesh_streamer" --gtest_brief=1
 # The planning map's fields refreshed beside queries, its query thread, and a Mapper with
 # planning on (the worker's and the cblox-esdf thread's refreshes beside integration).
 "$BUILD_DIR/test/mapping/test_planning_map" --gtest_brief=1

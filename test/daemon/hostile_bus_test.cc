@@ -1,9 +1,10 @@
-// The bus is hostile: cblox-mapper (tracker mode) and cblox-tracker are sent valid messages of
+// The bus is hostile: cblox-mapper (tracker mode), cblox-tracker and cblox-viewer are sent
+// valid messages of
 // every channel they read, then copies of them with a few bytes changed after the 8-byte
 // fingerprint (array and string lengths set to -1, 0x7fffffff, 0x80000000, 0; payloads cut
 // short; another type's bytes; random flips). Before the message guard a corrupt length
 // ended both processes (std::length_error from the generated decode) and lost the map.
-// Both must keep running, count what they refused, and still answer afterwards.
+// All must keep running, count what they refused, and still answer afterwards.
 // Runs in a private network namespace (scripts/netns-run.sh; ctest does this).
 
 #include <signal.h>
@@ -26,11 +27,13 @@
 #include <cblox/distance_request_t.hpp>
 #include <cblox/covariance_request_t.hpp>
 #include <cblox/heartbeat_t.hpp>
+#include <cblox/mesh_update_t.hpp>
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
 #include "daemon/common/lcm_messages.h"
 #include "drivers/open_frame_source.h"
+#include "test/test_support/lcm_samples.h"
 #include "test/test_support/spawn.h"
 #include "test/test_support/temp_dir.h"
 
@@ -101,7 +104,7 @@ bool alive(pid_t pid) {
   return ::waitpid(pid, &status, WNOHANG) == 0;
 }
 
-TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
+TEST(HostileBusTest, MapperTrackerAndViewerSurviveMutatedMessagesOnEveryChannel) {
   test::TempDir dir("cblox_hostile_bus");
   const pid_t mapper = test::spawnProcess({CBLOX_MAPPER_EXE, "--pose-source", "tracker",
                                            "--output-dir", dir.path().string(), "--lcm-url",
@@ -109,8 +112,10 @@ TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
   const pid_t tracker = test::spawnProcess({CBLOX_TRACKER_EXE, "--vocabulary", "none",
                                             "--initial-pose-from-gt", "--lcm-url", kUrl,
                                             "--quiet"});
+  const pid_t viewer = test::spawnProcess({CBLOX_VIEWER_EXE, "--lcm-url", kUrl, "--quiet"});
   ASSERT_GT(mapper, 0);
   ASSERT_GT(tracker, 0);
+  ASSERT_GT(viewer, 0);
   // On a failed assertion the processes must not outlive the test.
   struct KillOnExit {
     std::vector<pid_t> pids;
@@ -119,7 +124,7 @@ TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
         if (::kill(pid, SIGKILL) == 0) ::waitpid(pid, nullptr, 0);
       }
     }
-  } kill_on_exit{{mapper, tracker}};
+  } kill_on_exit{{mapper, tracker, viewer}};
   std::this_thread::sleep_for(std::chrono::milliseconds(1000));
 
   lcm::LCM lcm(kUrl);
@@ -173,6 +178,11 @@ TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
   distance.num_points = 2;
   distance.points = {{0.5, 0.5, 0.5}, {1.0, 0.0, 1.0}};
   valid["CBLOX_DISTANCE_REQUEST"] = encode(distance);
+  // The viewer's own channels.
+  valid["CBLOX_MESH_UPDATE"] = encode(test::MakeMeshUpdate());
+  valid["CBLOX_SUBVOLUMES"] = encode(test::MakeSubvolumeList());
+  valid["CBLOX_MAP_STATUS"] = encode(test::MakeMapStatus());
+  valid["CBLOX_LOCAL_GRID"] = encode(test::MakeLocalGrid());
 
   std::mt19937 rng(5);
   size_t sent = 0;
@@ -189,7 +199,12 @@ TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     ASSERT_TRUE(alive(mapper)) << "cblox-mapper died on mutated " << channel << " messages";
     ASSERT_TRUE(alive(tracker)) << "cblox-tracker died on mutated " << channel << " messages";
+    ASSERT_TRUE(alive(viewer)) << "cblox-viewer died on mutated " << channel << " messages";
   }
+  // Well-formed on the wire, wrong inside: a triangle naming a vertex the block lacks.
+  mesh_update_t broken = test::MakeMeshUpdate();
+  broken.blocks[0].triangle[0][2] = 3;
+  lcm.publish("CBLOX_MESH_UPDATE", &broken);
   std::printf("sent %zu mutated messages over %zu channels\n", sent, valid.size());
 
   // Both still serve: the mapper answers a command, both send heartbeats that count refusals.
@@ -208,7 +223,7 @@ TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   auto next_send = std::chrono::steady_clock::now();
   while (std::chrono::steady_clock::now() < deadline &&
-         (!listener.reply || listener.heartbeats.size() < 2)) {
+         (!listener.reply || listener.heartbeats.size() < 3)) {
     if (!listener.reply && std::chrono::steady_clock::now() >= next_send) {
       lcm.publish("CBLOX_CMD", &command);
       next_send += std::chrono::seconds(1);
@@ -219,6 +234,11 @@ TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
   EXPECT_TRUE(listener.reply->ok);
   ASSERT_EQ(listener.heartbeats.count("cblox-mapper"), 1u);
   ASSERT_EQ(listener.heartbeats.count("cblox-tracker"), 1u);
+  ASSERT_EQ(listener.heartbeats.count("cblox-viewer"), 1u);
+  const heartbeat_t& v = listener.heartbeats["cblox-viewer"];
+  EXPECT_GT(counter(v, "messages_refused_length_out_of_bounds"), 0);
+  EXPECT_GT(counter(v, "messages_refused_fingerprint_mismatch"), 0);
+  EXPECT_GT(counter(v, "mesh_updates_refused"), 0);
   const heartbeat_t& m = listener.heartbeats["cblox-mapper"];
   const heartbeat_t& t = listener.heartbeats["cblox-tracker"];
   EXPECT_GT(counter(m, "messages_refused_length_out_of_bounds"), 0);
@@ -232,8 +252,9 @@ TEST(HostileBusTest, MapperAndTrackerSurviveMutatedMessagesOnEveryChannel) {
 
   ASSERT_EQ(::kill(mapper, SIGTERM), 0);
   ASSERT_EQ(::kill(tracker, SIGTERM), 0);
+  ASSERT_EQ(::kill(viewer, SIGTERM), 0);
   kill_on_exit.pids.clear();  // reaped here
-  for (const pid_t pid : {mapper, tracker}) {
+  for (const pid_t pid : {mapper, tracker, viewer}) {
     int status = 0;
     ASSERT_EQ(::waitpid(pid, &status, 0), pid);
     EXPECT_TRUE(WIFEXITED(status));

@@ -37,7 +37,7 @@ namespace {
 struct Args {
   DaemonOptions daemon;
   std::optional<int> port;
-  std::optional<std::string> bind, web_root;
+  std::optional<std::string> bind, web_root, up;
   bool allow_export = false;
 };
 
@@ -47,6 +47,7 @@ int run(const Args& args) {
   if (args.bind) config.bind_address = *args.bind;
   if (args.web_root) config.web_root = *args.web_root;
   if (args.allow_export) config.allow_export = true;
+  if (args.up) config.up_axis = *args.up;
   if (const std::string e = config.validate(); !e.empty()) throw ConfigError(e);
 
   lcm::LCM lcm(config.lcm_url);
@@ -117,6 +118,10 @@ int main(int argc, char** argv) {
       ->type_name("ADDR");
   app.add_option("--web-root", args.web_root, "the page's files (over web_root)")
       ->type_name("DIR");
+  app.add_option("--up", args.up,
+                 "the up axis of the map's frame (over up_axis): z for ground-truth poses, -y\n"
+                 "for the tracker's (its frame is its first camera's, y down)")
+      ->type_name("AXIS");
   app.add_flag("--allow-export", args.allow_export,
                "the page's Export button asks the mapper for a mesh (over allow_export)");
   if (const std::optional<int> code = cblox::parseCommandLine(app, argc, argv)) return *code;

@@ -68,9 +68,8 @@ class ViewerServer {
   mg_context* context_ = nullptr;
   std::map<std::string, std::pair<std::string, std::string>> files_;  // url -> (path, mime)
 
-  mutable std::mutex mutex_;  // guards clients_ and connecting_
+  mutable std::mutex mutex_;  // guards clients_
   std::map<const mg_connection*, std::unique_ptr<Client>> clients_;
-  int connecting_ = 0;
 
   std::atomic<uint64_t> accepted_{0}, refused_{0}, dropped_{0}, ignored_{0}, exports_{0},
       not_found_{0}, messages_{0}, bytes_{0};

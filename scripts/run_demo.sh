@@ -18,6 +18,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-bash scripts/build.sh
+# Only what the demo runs (and the vocabulary the tracker loads): a first mesh without
+# building every test and bench (scripts/test.sh builds everything).
+CBLOX_TARGETS="cblox-capture cblox-tracker cblox-mapper cblox-ctl cblox-eval cblox_vocabulary_file" \
+  bash scripts/build.sh
 bash scripts/run_pipeline.sh --scene room --trajectory orbit --rate 20 --out out \
   --name demo_room --slice 1.0 --query "2.5 3.4 1.0 0.5 3.4 1.0" "$@"

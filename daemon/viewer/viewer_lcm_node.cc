@@ -1,6 +1,7 @@
 #include "daemon/viewer/viewer_lcm_node.h"
 
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <vector>
 
@@ -21,15 +22,24 @@ int upAxisIndex(const std::string& up) { return up.back() - 'x'; }
 }  // namespace
 
 ViewerLcmNode::ViewerLcmNode(const ViewerConfig& config, lcm::LCM* lcm, ViewerModel* model)
-    : config_(config), lcm_(lcm), model_(model), guard_(lcm), id_base_(wallUtime() * 1000) {}
+    : config_(config),
+      lcm_(lcm),
+      model_(model),
+      guard_(lcm),
+      refusal_log_(2, std::chrono::seconds(10),
+                   [](const std::string& line) {
+                     std::fprintf(stderr, "cblox-viewer: %s\n", line.c_str());
+                   }),
+      id_base_(wallUtime() * 1000) {}
 
-void ViewerLcmNode::bad(const std::string& what) {
-  bad_messages_.fetch_add(1, std::memory_order_relaxed);
-  (void)what;
+void ViewerLcmNode::refuse(bool mesh, const std::string& why) {
+  (mesh ? mesh_refused_ : bad_messages_).fetch_add(1, std::memory_order_relaxed);
+  refusal_log_.report(mesh ? 0 : 1, std::string(mesh ? "mesh update" : "message") +
+                                        " refused: " + why);
 }
 
 void ViewerLcmNode::subscribe() {
-  const auto refused = [this](const std::string&) { /* counted by the guard */ };
+  const MessageGuard::RefusedCallback refused = nullptr;  // the guard counts and logs them
   guard_.subscribe<mesh_update_t>(
       config_.mesh_update_channel,
       [this](const mesh_update_t& m, const std::string&) { onMeshUpdate(m); }, refused);
@@ -66,15 +76,9 @@ void ViewerLcmNode::subscribe() {
 void ViewerLcmNode::onMeshUpdate(const mesh_update_t& msg) {
   MeshUpdate update;
   std::string error;
-  if (!decodeMeshUpdate(msg, &update, &error)) {
-    mesh_refused_.fetch_add(1, std::memory_order_relaxed);
-    return;
-  }
+  if (!decodeMeshUpdate(msg, &update, &error)) return refuse(true, error);
   const MeshMirror::Result r = model_->applyMeshUpdate(update);
-  if (!r.applied) {
-    mesh_refused_.fetch_add(1, std::memory_order_relaxed);
-    return;
-  }
+  if (!r.applied) return refuse(true, r.error);
   mesh_updates_.fetch_add(1, std::memory_order_relaxed);
   if (r.gap) mesh_gaps_.fetch_add(1, std::memory_order_relaxed);
 }
@@ -82,7 +86,7 @@ void ViewerLcmNode::onMeshUpdate(const mesh_update_t& msg) {
 void ViewerLcmNode::onSubvolumes(const subvolume_list_t& msg) {
   SubvolumeList list;
   std::string error;
-  if (!decodeSubvolumeList(msg, &list, &error)) return bad(error);
+  if (!decodeSubvolumeList(msg, &list, &error)) return refuse(false, error);
   model_->applySubvolumes(list, msg.utime);
 }
 
@@ -93,14 +97,14 @@ void ViewerLcmNode::onFramePose(const frame_pose_t& msg) {
   }
   std::string error;
   const std::optional<Transformationd> T = fromPoseMsg(msg.T_G_C, &error);
-  if (!T) return bad(error);
+  if (!T) return refuse(false, error);
   model_->addVehiclePose(msg.utime, *T, true, msg.map_epoch);
 }
 
 void ViewerLcmNode::onGroundTruth(const pose_stamped_t& msg) {
   std::string error;
   const std::optional<Transformationd> T = fromPoseMsg(msg.T_G_C, &error);
-  if (!T) return bad(error);
+  if (!T) return refuse(false, error);
   model_->addVehiclePose(msg.utime, *T, false, 0);
 }
 
@@ -108,7 +112,7 @@ void ViewerLcmNode::onKeyframe(const keyframe_t& msg) {
   std::string error;
   const std::optional<Transformationd> T = fromPoseMsg(msg.T_G_K, &error);
   const std::optional<int64_t> key = epochKey(msg.map_epoch, msg.keyframe_id);
-  if (!T || !key) return bad(error);
+  if (!T || !key) return refuse(false, error.empty() ? "keyframe id or epoch out of range" : error);
   model_->addKeyframe(*key, *T);
 }
 
@@ -119,7 +123,7 @@ void ViewerLcmNode::onKeyframePoses(const keyframe_pose_batch_t& msg) {
     const std::optional<Transformationd> T = fromPoseMsg(msg.poses[i], &error);
     const std::optional<int64_t> key = epochKey(msg.map_epoch, msg.keyframe_ids[i]);
     if (!T || !key) {
-      bad(error);
+      refuse(false, error.empty() ? "keyframe id or epoch out of range" : error);
       continue;
     }
     poses.emplace_back(*key, *T);
@@ -146,7 +150,7 @@ void ViewerLcmNode::onHeartbeat(const heartbeat_t& msg) {
 void ViewerLcmNode::onLocalGrid(const local_grid_t& msg) {
   LocalGridSample sample;
   std::string error;
-  if (!decodeLocalGrid(msg, &sample, &error)) return bad(error);
+  if (!decodeLocalGrid(msg, &sample, &error)) return refuse(false, error);
   const LocalGrid& g = sample.grid;
   const int up = upAxisIndex(config_.up_axis);
   const int u = up == 0 ? 1 : 0, v = up == 2 ? 1 : 2;

@@ -22,6 +22,7 @@
 #include <cblox/subvolume_list_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 
+#include "core/common/rate_limited_log.h"
 #include "daemon/common/heartbeat.h"
 #include "daemon/common/message_guard.h"
 #include "daemon/viewer/viewer_config.h"
@@ -67,12 +68,15 @@ class ViewerLcmNode {
   void onLocalGrid(const local_grid_t& msg);
   void onCommandReply(const command_reply_t& msg);
   void publishCommand(int64_t id, const std::string& name, const std::string& path);
-  void bad(const std::string& what);
+  // Counts a message whose content was refused (kind: mesh update or other) and logs why, at
+  // most once per 10 s per kind with the count of those not logged.
+  void refuse(bool mesh, const std::string& why);
 
   const ViewerConfig& config_;
   lcm::LCM* lcm_;
   ViewerModel* model_;
   MessageGuard guard_;
+  RateLimitedLog refusal_log_;
   std::mutex publish_mutex_;
   std::chrono::steady_clock::time_point last_refresh_request_{};
   bool asked_once_ = false;
